@@ -1,0 +1,11 @@
+/* cli.h -- the subcommands of the mfkit command line. Each returns the process exit code. */
+#ifndef MF_CLI_H
+#define MF_CLI_H
+
+#include <stdio.h>
+
+int cli_eval(int argc, char **argv);     /* argv[0] = "eval" */
+int cli_validate(int argc, char **argv); /* argv[0] = "validate" */
+void cli_eval_usage(FILE *f);
+
+#endif /* MF_CLI_H */

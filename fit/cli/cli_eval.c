@@ -1,0 +1,293 @@
+/*
+ * cli_eval.c -- `mfkit eval FUNCTION [options]`: CSV on stdin -> CSV on stdout.
+ *
+ * Every input column is echoed as read, then the outputs (%.17g).  Rows whose inputs are
+ * outside the domain give nan outputs.  A missing required column, a field that is not a
+ * number, or a bad option is an error: one line on stderr, exit code 2, nothing on stdout
+ * (output is buffered until the whole input has been processed).  docs/cli.md lists the
+ * functions; their names and columns are a public interface.
+ */
+#include "cli.h"
+#include "cli_util.h"
+
+#include "mfkit/mfkit.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct {
+    mf_ndf_type ndf;
+    int have_ndf;
+    mf_fresnel_type fresnel;
+    mf_g2_form g2;
+    long points;
+} eval_opts;
+
+typedef void (*eval_fn)(const eval_opts *o, const double *in, double *out);
+
+typedef struct {
+    const char *name;
+    const char *summary;
+    int needs_ndf;
+    const char *inputs[12];
+    const char *outputs[6];            /* outputs for GGX (or the only ones) */
+    const char *outputs_beckmann[6];   /* when they differ for Beckmann, else {NULL} */
+    eval_fn fn;
+} eval_function;
+
+static mf_vec3 v3(const double *p) { return mf_vec3_make(p[0], p[1], p[2]); }
+
+static void fn_ndf(const eval_opts *o, const double *in, double *out)
+{
+    out[0] = mf_ndf_d(mf_ndf_make(o->ndf, in[0], in[1]), v3(in + 2));
+}
+
+static void fn_slope_pdf(const eval_opts *o, const double *in, double *out)
+{
+    out[0] = mf_ndf_p22(mf_ndf_make(o->ndf, in[0], in[1]), in[2], in[3]);
+}
+
+static void fn_lambda(const eval_opts *o, const double *in, double *out)
+{
+    mf_vec3 w = v3(in + 2);
+    out[0] = mf_smith_lambda(mf_ndf_make(o->ndf, in[0], in[1]), w);
+    if (o->ndf == MF_NDF_BECKMANN)
+        out[1] = mf_smith_lambda_beckmann_walter(in[0], in[1], w);
+}
+
+static void fn_lambda_gaussian(const eval_opts *o, const double *in, double *out)
+{
+    (void)o;
+    mf_gaussian_slopes g = {in[0], in[1], in[2], in[3], in[4]};
+    mf_vec3 w = v3(in + 5);
+    out[0] = mf_smith_lambda_gaussian(&g, w);
+    out[1] = mf_smith_lambda_gaussian_walter(&g, w);
+}
+
+static void fn_g2(const eval_opts *o, const double *in, double *out)
+{
+    mf_ndf ndf = mf_ndf_make(o->ndf, in[0], in[1]);
+    mf_vec3 wo = v3(in + 2), wi = v3(in + 5);
+    out[0] = mf_smith_g1(ndf, wo);
+    out[1] = mf_smith_g1(ndf, wi);
+    out[2] = mf_smith_g2(ndf, MF_G2_JOINT, wo, wi);
+    out[3] = mf_smith_g2(ndf, MF_G2_SEPARABLE, wo, wi);
+}
+
+static void fn_brdf(const eval_opts *o, const double *in, double *out)
+{
+    mf_microfacet m = {mf_ndf_make(o->ndf, in[0], in[1]), o->g2, {o->fresnel, 0.0, 0.0, 0.0}};
+    if (o->fresnel == MF_FRESNEL_SCHLICK)
+        m.fresnel.f0 = in[8];
+    out[0] = mf_brdf_microfacet(&m, v3(in + 2), v3(in + 5));
+}
+
+static void fn_albedo(const eval_opts *o, const double *in, double *out)
+{
+    double c = in[1];
+    mf_microfacet m = {mf_ndf_make(o->ndf, in[0], in[0]), o->g2, {MF_FRESNEL_NONE, 0.0, 0.0, 0.0}};
+    mf_result r;
+    if (!(c > 0.0 && c <= 1.0) || mf_brdf_microfacet_albedo(&m, mf_vec3_make(sqrt(1.0 - c * c), 0.0, c),
+                                                            (int)o->points, &r) != MF_OK) {
+        out[0] = out[1] = NAN;
+        return;
+    }
+    out[0] = r.val;
+    out[1] = r.err;
+}
+
+#define WO "wo_x", "wo_y", "wo_z"
+#define WI "wi_x", "wi_y", "wi_z"
+static const eval_function k_functions[] = {
+    {"ndf", "D(wm), per steradian of micro-normal", 1, {"alpha_x", "alpha_y", "m_x", "m_y", "m_z"}, {"D"}, {NULL}, fn_ndf},
+    {"slope-pdf", "P22(slope), per unit slope area", 1, {"alpha_x", "alpha_y", "slope_x", "slope_y"}, {"P22"}, {NULL},
+     fn_slope_pdf},
+    {"lambda", "Smith Lambda(w) (Beckmann: also Walter's rational form)", 1, {"alpha_x", "alpha_y", "w_x", "w_y", "w_z"},
+     {"Lambda"}, {"Lambda", "Lambda_approx"}, fn_lambda},
+    {"lambda-gaussian", "Lambda of non-centred anisotropic Gaussian slopes (exact, Walter)", 0,
+     {"mean_x", "mean_y", "var_x", "var_y", "cov_xy", "w_x", "w_y", "w_z"}, {"Lambda", "Lambda_approx"}, {NULL},
+     fn_lambda_gaussian},
+    {"g2", "G1 of each direction and both masking-shadowing forms", 1, {"alpha_x", "alpha_y", WO, WI},
+     {"G1_o", "G1_i", "G2_joint", "G2_separable"}, {NULL}, fn_g2},
+    {"brdf", "microfacet reflection BRDF f(wo, wi), without the cosine", 1, {"alpha_x", "alpha_y", WO, WI}, {"f"},
+     {NULL}, fn_brdf},
+    {"albedo", "directional albedo (no Fresnel) by quadrature, with its error estimate", 1, {"alpha", "cos_theta_o"},
+     {"albedo", "albedo_err"}, {NULL}, fn_albedo},
+};
+#define N_FUNCTIONS ((int)(sizeof k_functions / sizeof k_functions[0]))
+
+static int count(const char *const *list, int max)
+{
+    int n = 0;
+    while (n < max && list[n])
+        ++n;
+    return n;
+}
+
+void cli_eval_usage(FILE *f)
+{
+    fprintf(f,
+            "usage: mfkit eval FUNCTION [--ndf ggx|beckmann] [--fresnel none|schlick] [--g2 joint|separable]\n"
+            "                           [--points N] < in.csv > out.csv\n\n"
+            "Reads CSV with a header from stdin and writes CSV to stdout: every input column echoed,\n"
+            "then the outputs (%%.17g). Rows outside the domain give nan. Directions are unit vectors in\n"
+            "the z-up shading frame, pointing away from the surface.\n\n"
+            "options:\n"
+            "  --ndf ggx|beckmann      the NDF (required where marked *)\n"
+            "  --fresnel none|schlick  brdf only; schlick adds the input column f0 (default none)\n"
+            "  --g2 joint|separable    masking-shadowing of brdf and albedo (default joint)\n"
+            "  --points N              albedo only: quadrature points per axis, a multiple of 8 in [16, 2048]\n"
+            "                          (default 256)\n\n"
+            "functions (inputs -> outputs):\n");
+    for (int i = 0; i < N_FUNCTIONS; ++i) {
+        const eval_function *e = &k_functions[i];
+        fprintf(f, "  %-16s%s %s\n    ", e->name, e->needs_ndf ? "*" : " ", e->summary);
+        for (int k = 0; k < count(e->inputs, 12); ++k)
+            fprintf(f, "%s%s", k ? "," : "", e->inputs[k]);
+        if (strcmp(e->name, "brdf") == 0)
+            fprintf(f, "[,f0]");
+        fprintf(f, " -> ");
+        for (int k = 0; k < count(e->outputs, 6); ++k)
+            fprintf(f, "%s%s", k ? "," : "", e->outputs[k]);
+        if (e->outputs_beckmann[0]) {
+            fprintf(f, " (beckmann: ");
+            for (int k = 0; k < count(e->outputs_beckmann, 6); ++k)
+                fprintf(f, "%s%s", k ? "," : "", e->outputs_beckmann[k]);
+            fprintf(f, ")");
+        }
+        fprintf(f, "\n");
+    }
+}
+
+int cli_eval(int argc, char **argv)
+{
+    const char *cmd = "eval";
+    if (argc < 2)
+        return cli_error(cmd, "missing FUNCTION (see 'mfkit eval --help')");
+    if (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0) {
+        cli_eval_usage(stdout);
+        return 0;
+    }
+    const eval_function *e = NULL;
+    for (int i = 0; i < N_FUNCTIONS; ++i)
+        if (strcmp(argv[1], k_functions[i].name) == 0)
+            e = &k_functions[i];
+    if (!e)
+        return cli_error(cmd, "unknown function '%s' (see 'mfkit eval --help')", argv[1]);
+
+    eval_opts o = {MF_NDF_GGX, 0, MF_FRESNEL_NONE, MF_G2_JOINT, 256};
+    int fresnel_given = 0, g2_given = 0, points_given = 0;
+    for (int i = 2; i < argc; ++i) {
+        const char *a = argv[i];
+        if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
+            cli_eval_usage(stdout);
+            return 0;
+        }
+        int takes_value = !strcmp(a, "--ndf") || !strcmp(a, "--fresnel") || !strcmp(a, "--g2") || !strcmp(a, "--points");
+        if (!takes_value)
+            return cli_error(cmd, "%s: unknown option '%s' (see 'mfkit eval --help')", e->name, a);
+        if (i + 1 >= argc)
+            return cli_error(cmd, "%s: option %s needs a value", e->name, a);
+        const char *v = argv[++i];
+        if (!strcmp(a, "--ndf")) {
+            if (mf_ndf_type_parse(v, &o.ndf) != 0)
+                return cli_error(cmd, "--ndf: unknown NDF '%s' (expected ggx or beckmann)", v);
+            o.have_ndf = 1;
+        } else if (!strcmp(a, "--fresnel")) {
+            if (!strcmp(v, "none"))
+                o.fresnel = MF_FRESNEL_NONE;
+            else if (!strcmp(v, "schlick"))
+                o.fresnel = MF_FRESNEL_SCHLICK;
+            else
+                return cli_error(cmd, "--fresnel: unknown value '%s' (expected none or schlick)", v);
+            fresnel_given = 1;
+        } else if (!strcmp(a, "--g2")) {
+            if (!strcmp(v, "joint"))
+                o.g2 = MF_G2_JOINT;
+            else if (!strcmp(v, "separable"))
+                o.g2 = MF_G2_SEPARABLE;
+            else
+                return cli_error(cmd, "--g2: unknown value '%s' (expected joint or separable)", v);
+            g2_given = 1;
+        } else {
+            if (cli_parse_int(v, 16, 2048, &o.points) != 0 || o.points % 8 != 0)
+                return cli_error(cmd, "--points: '%s' is not a multiple of 8 in [16, 2048]", v);
+            points_given = 1;
+        }
+    }
+    if (e->needs_ndf && !o.have_ndf)
+        return cli_error(cmd, "%s: --ndf ggx|beckmann is required", e->name);
+    if (!e->needs_ndf && o.have_ndf)
+        return cli_error(cmd, "%s: does not take --ndf", e->name);
+    if (fresnel_given && strcmp(e->name, "brdf") != 0)
+        return cli_error(cmd, "%s: does not take --fresnel", e->name);
+    if (g2_given && strcmp(e->name, "brdf") != 0 && strcmp(e->name, "albedo") != 0)
+        return cli_error(cmd, "%s: does not take --g2", e->name);
+    if (points_given && strcmp(e->name, "albedo") != 0)
+        return cli_error(cmd, "%s: does not take --points", e->name);
+
+    /* required input columns */
+    const char *inputs[13];
+    int nin = count(e->inputs, 12);
+    memcpy(inputs, e->inputs, sizeof(char *) * (size_t)nin);
+    if (!strcmp(e->name, "brdf") && o.fresnel == MF_FRESNEL_SCHLICK)
+        inputs[nin++] = "f0";
+    const char *const *outputs = (o.ndf == MF_NDF_BECKMANN && e->outputs_beckmann[0]) ? e->outputs_beckmann : e->outputs;
+    int nout = count(outputs, 6);
+
+    cli_csv csv;
+    char msg[256];
+    if (cli_csv_read(stdin, &csv, msg, sizeof msg) != 0)
+        return cli_error(cmd, "%s: stdin: %s", e->name, msg);
+    int col[13];
+    for (int k = 0; k < nin; ++k) {
+        col[k] = cli_csv_column(&csv, inputs[k]);
+        if (col[k] < 0) {
+            cli_csv_free(&csv);
+            return cli_error(cmd, "%s: stdin: missing required column '%s'", e->name, inputs[k]);
+        }
+    }
+    for (int k = 0; k < nout; ++k)
+        if (cli_csv_column(&csv, outputs[k]) >= 0) {
+            cli_csv_free(&csv);
+            return cli_error(cmd, "%s: stdin: input already has a column named '%s' (an output)", e->name, outputs[k]);
+        }
+
+    cli_buf out = {0};
+    for (int c = 0; c < csv.ncols; ++c)
+        cli_buf_printf(&out, "%s%s", c ? "," : "", csv.header[c]);
+    for (int k = 0; k < nout; ++k)
+        cli_buf_printf(&out, ",%s", outputs[k]);
+    cli_buf_printf(&out, "\n");
+    int status = 0;
+    for (int r = 0; r < csv.nrows && status == 0; ++r) {
+        double in[13], res[6];
+        for (int k = 0; k < nin; ++k) {
+            const char *s = csv.cells[r][col[k]];
+            if (cli_parse_double(s, &in[k]) != 0) {
+                status = cli_error(cmd, "%s: stdin: data row %d, column '%s': '%s' is not a number", e->name, r + 1,
+                                   inputs[k], s);
+                break;
+            }
+        }
+        if (status)
+            break;
+        for (int k = 0; k < nout; ++k)
+            res[k] = NAN;
+        e->fn(&o, in, res);
+        for (int c = 0; c < csv.ncols; ++c)
+            cli_buf_printf(&out, "%s%s", c ? "," : "", csv.cells[r][c]);
+        for (int k = 0; k < nout; ++k) {
+            cli_buf_printf(&out, ",");
+            cli_buf_double(&out, res[k]);
+        }
+        cli_buf_printf(&out, "\n");
+    }
+    cli_csv_free(&csv);
+    if (status == 0 && out.failed)
+        status = cli_error(cmd, "%s: out of memory", e->name);
+    if (status == 0 && cli_buf_write(&out, stdout) != 0)
+        status = cli_error(cmd, "%s: stdout: write failed", e->name);
+    cli_buf_free(&out);
+    return status;
+}

@@ -1,0 +1,294 @@
+/* cli_util.c -- see cli_util.h. */
+#define _POSIX_C_SOURCE 200809L
+#include "cli_util.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+int cli_error(const char *cmd, const char *fmt, ...)
+{
+    va_list ap;
+    fprintf(stderr, "mfkit%s%s: ", cmd ? " " : "", cmd ? cmd : "");
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+    return 2;
+}
+
+int cli_parse_double(const char *s, double *out)
+{
+    if (!s || !*s)
+        return -1;
+    char *end;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (end == s || *end != '\0')
+        return -1;
+    if (errno == ERANGE && isinf(v))
+        return -1; /* overflow: 1e999 is not a number we can hold */
+    *out = v;
+    return 0;
+}
+
+int cli_parse_int(const char *s, long lo, long hi, long *out)
+{
+    if (!s || !*s)
+        return -1;
+    char *end;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (end == s || *end != '\0' || errno == ERANGE || v < lo || v > hi)
+        return -1;
+    *out = v;
+    return 0;
+}
+
+void cli_buf_printf(cli_buf *b, const char *fmt, ...)
+{
+    if (b->failed)
+        return;
+    for (;;) {
+        va_list ap;
+        va_start(ap, fmt);
+        size_t room = b->cap - b->len;
+        int n = vsnprintf(b->data ? b->data + b->len : NULL, room, fmt, ap);
+        va_end(ap);
+        if (n < 0) {
+            b->failed = 1;
+            return;
+        }
+        if ((size_t)n < room) {
+            b->len += (size_t)n;
+            return;
+        }
+        size_t cap = b->cap ? b->cap * 2 : 4096;
+        while (cap < b->len + (size_t)n + 1)
+            cap *= 2;
+        char *p = realloc(b->data, cap);
+        if (!p) {
+            b->failed = 1;
+            return;
+        }
+        b->data = p;
+        b->cap = cap;
+    }
+}
+
+void cli_buf_free(cli_buf *b)
+{
+    free(b->data);
+    b->data = NULL;
+    b->len = b->cap = 0;
+}
+
+int cli_buf_write(const cli_buf *b, FILE *f)
+{
+    if (b->failed)
+        return -1;
+    if (b->len && fwrite(b->data, 1, b->len, f) != b->len)
+        return -1;
+    return fflush(f) == 0 ? 0 : -1;
+}
+
+int cli_buf_write_file_atomic(const cli_buf *b, const char *path, char *msg, size_t msg_size)
+{
+    if (b->failed) {
+        snprintf(msg, msg_size, "%s: out of memory", path);
+        return -1;
+    }
+    size_t n = strlen(path);
+    char *tmp = malloc(n + 16);
+    if (!tmp) {
+        snprintf(msg, msg_size, "%s: out of memory", path);
+        return -1;
+    }
+    snprintf(tmp, n + 16, "%s.tmpXXXXXX", path);
+    int fd = mkstemp(tmp);
+    if (fd < 0) {
+        snprintf(msg, msg_size, "%s: cannot create a temporary file beside it: %s", path, strerror(errno));
+        free(tmp);
+        return -1;
+    }
+    FILE *f = fdopen(fd, "wb");
+    int ok = f && cli_buf_write(b, f) == 0;
+    if (f) {
+        ok = ok && fsync(fileno(f)) == 0;
+        ok = (fclose(f) == 0) && ok;
+    } else {
+        close(fd);
+    }
+    if (!ok || rename(tmp, path) != 0) {
+        snprintf(msg, msg_size, "%s: write failed: %s", path, strerror(errno));
+        remove(tmp);
+        free(tmp);
+        return -1;
+    }
+    free(tmp);
+    return 0;
+}
+
+void cli_buf_double(cli_buf *b, double v)
+{
+    if (isnan(v))
+        cli_buf_printf(b, "nan");
+    else if (isinf(v))
+        cli_buf_printf(b, v > 0 ? "inf" : "-inf");
+    else
+        cli_buf_printf(b, "%.17g", v);
+}
+
+/* ---- CSV ----------------------------------------------------------------------------------- */
+static char *trim(char *s)
+{
+    while (*s == ' ' || *s == '\t')
+        ++s;
+    size_t n = strlen(s);
+    while (n && (s[n - 1] == ' ' || s[n - 1] == '\t' || s[n - 1] == '\r' || s[n - 1] == '\n'))
+        s[--n] = '\0';
+    return s;
+}
+
+static char *dup_str(const char *s)
+{
+    size_t n = strlen(s) + 1;
+    char *p = malloc(n);
+    if (p)
+        memcpy(p, s, n);
+    return p;
+}
+
+/* Splits line in place at commas; returns the number of fields or -1 on allocation failure. */
+static int split(char *line, char ***fields)
+{
+    int n = 1;
+    for (char *p = line; *p; ++p)
+        n += (*p == ',');
+    char **f = malloc(sizeof(char *) * (size_t)n);
+    if (!f)
+        return -1;
+    int i = 0;
+    char *start = line;
+    for (char *p = line;; ++p) {
+        if (*p == ',' || *p == '\0') {
+            int end = (*p == '\0');
+            *p = '\0';
+            f[i] = dup_str(trim(start));
+            if (!f[i]) {
+                for (int k = 0; k < i; ++k)
+                    free(f[k]);
+                free(f);
+                return -1;
+            }
+            ++i;
+            if (end)
+                break;
+            start = p + 1;
+        }
+    }
+    *fields = f;
+    return n;
+}
+
+static void free_fields(char **f, int n)
+{
+    if (!f)
+        return;
+    for (int i = 0; i < n; ++i)
+        free(f[i]);
+    free(f);
+}
+
+int cli_csv_read(FILE *in, cli_csv *csv, char *msg, size_t msg_size)
+{
+    memset(csv, 0, sizeof *csv);
+    char *line = NULL;
+    size_t cap = 0;
+    ssize_t got;
+    long lineno = 0;
+    int cap_rows = 0;
+    while ((got = getline(&line, &cap, in)) >= 0) {
+        ++lineno;
+        if (memchr(line, '\0', (size_t)got) != NULL && strlen(line) < (size_t)got) {
+            snprintf(msg, msg_size, "line %ld: contains a NUL byte (binary input?)", lineno);
+            goto fail;
+        }
+        char *t = trim(line);
+        if (*t == '\0')
+            continue;
+        char **fields;
+        int n = split(t, &fields);
+        if (n < 0) {
+            snprintf(msg, msg_size, "out of memory");
+            goto fail;
+        }
+        if (!csv->header) {
+            csv->header = fields;
+            csv->ncols = n;
+            for (int i = 0; i < n; ++i) {
+                if (!fields[i][0]) {
+                    snprintf(msg, msg_size, "line %ld: header column %d is empty", lineno, i + 1);
+                    goto fail;
+                }
+                for (int j = 0; j < i; ++j)
+                    if (strcmp(fields[i], fields[j]) == 0) {
+                        snprintf(msg, msg_size, "line %ld: header names column '%s' twice", lineno, fields[i]);
+                        goto fail;
+                    }
+            }
+            continue;
+        }
+        if (n != csv->ncols) {
+            snprintf(msg, msg_size, "line %ld: %d fields, but the header has %d", lineno, n, csv->ncols);
+            free_fields(fields, n);
+            goto fail;
+        }
+        if (csv->nrows == cap_rows) {
+            int nc = cap_rows ? 2 * cap_rows : 64;
+            char ***p = realloc(csv->cells, sizeof(char **) * (size_t)nc);
+            if (!p) {
+                free_fields(fields, n);
+                snprintf(msg, msg_size, "out of memory");
+                goto fail;
+            }
+            csv->cells = p;
+            cap_rows = nc;
+        }
+        csv->cells[csv->nrows++] = fields;
+    }
+    if (ferror(in)) {
+        snprintf(msg, msg_size, "read error: %s", strerror(errno));
+        goto fail;
+    }
+    free(line);
+    if (!csv->header) {
+        snprintf(msg, msg_size, "empty input: expected a CSV header line");
+        return -1;
+    }
+    return 0;
+fail:
+    free(line);
+    cli_csv_free(csv);
+    return -1;
+}
+
+void cli_csv_free(cli_csv *csv)
+{
+    for (int r = 0; r < csv->nrows; ++r)
+        free_fields(csv->cells[r], csv->ncols);
+    free(csv->cells);
+    free_fields(csv->header, csv->ncols);
+    memset(csv, 0, sizeof *csv);
+}
+
+int cli_csv_column(const cli_csv *csv, const char *name)
+{
+    for (int i = 0; i < csv->ncols; ++i)
+        if (strcmp(csv->header[i], name) == 0)
+            return i;
+    return -1;
+}

@@ -1,0 +1,57 @@
+/* cli_util.h -- argument parsing, CSV input and buffered output for the mfkit command line. */
+#ifndef MF_CLI_UTIL_H
+#define MF_CLI_UTIL_H
+
+#include <stddef.h>
+#include <stdio.h>
+
+/* Prints "mfkit <cmd>: <message>" on one line of stderr. Always returns 2 (usage/input error). */
+int cli_error(const char *cmd, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+/* Strict number parsing: the whole string must be a finite or NaN/Inf number ("nan", "inf").
+ * Returns 0 on success. */
+int cli_parse_double(const char *s, double *out);
+/* Strict integer parsing in [lo, hi]. Returns 0 on success. */
+int cli_parse_int(const char *s, long lo, long hi, long *out);
+
+/* A growable text buffer: output is written only when a command has fully succeeded. */
+typedef struct {
+    char *data;
+    size_t len, cap;
+    int failed; /* allocation failed */
+} cli_buf;
+
+void cli_buf_printf(cli_buf *b, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+void cli_buf_free(cli_buf *b);
+/* Writes the buffer to f and flushes; returns 0 on success. */
+int cli_buf_write(const cli_buf *b, FILE *f);
+/* Writes the buffer to path atomically (temporary file in the same directory, then rename).
+ * On failure fills msg and returns non-zero; no file is left behind. */
+int cli_buf_write_file_atomic(const cli_buf *b, const char *path, char *msg, size_t msg_size);
+
+/* CSV table read whole from a stream: a header row and data rows of the same width. */
+typedef struct {
+    int ncols, nrows;
+    char **header;   /* ncols names */
+    char ***cells;   /* nrows x ncols strings */
+} cli_csv;
+
+/* Reads a CSV (comma-separated, no quoting; surrounding spaces and CR are trimmed; blank lines
+ * skipped).  On error fills msg ("line N: ...") and returns non-zero. */
+int cli_csv_read(FILE *f, cli_csv *csv, char *msg, size_t msg_size);
+void cli_csv_free(cli_csv *csv);
+/* Index of the column named `name`, or -1. */
+int cli_csv_column(const cli_csv *csv, const char *name);
+
+/* Formats a double with %.17g ("nan", "inf", "-inf" for non-finite values). */
+void cli_buf_double(cli_buf *b, double v);
+
+#endif /* MF_CLI_UTIL_H */

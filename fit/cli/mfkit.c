@@ -1,0 +1,45 @@
+/* mfkit.c -- the mfkit command line: dispatch to subcommands (docs/cli.md). */
+#include "cli.h"
+#include "cli_util.h"
+
+#include <string.h>
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: mfkit COMMAND [options]      (mfkit COMMAND --help for each)\n\n"
+            "commands:\n"
+            "  eval FUNCTION   evaluate a core function on CSV rows from stdin (ndf, slope-pdf, lambda,\n"
+            "                  lambda-gaussian, g2, brdf, albedo)\n"
+            "  validate        run the property checks of the core math and print a report\n\n"
+            "  --version       print the version\n\n"
+            "exit status: 0 success, 1 a validation check failed, 2 usage or input error, 3 I/O error\n");
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        usage(stderr);
+        return 2;
+    }
+    const char *c = argv[1];
+    if (!strcmp(c, "--help") || !strcmp(c, "-h") || !strcmp(c, "help")) {
+        usage(stdout);
+        return 0;
+    }
+    if (!strcmp(c, "--version")) {
+        printf("mfkit %s%s\n", MFKIT_VERSION,
+#ifdef MFKIT_HAVE_CXX_DEPS
+               " (with Ceres and OpenImageIO)"
+#else
+               " (core only: built without Ceres and OpenImageIO)"
+#endif
+        );
+        return 0;
+    }
+    if (!strcmp(c, "eval"))
+        return cli_eval(argc - 1, argv + 1);
+    if (!strcmp(c, "validate"))
+        return cli_validate(argc - 1, argv + 1);
+    return cli_error(NULL, "unknown command '%s' (see 'mfkit --help')", c);
+}

@@ -1,0 +1,72 @@
+/*
+ * mf_image.h -- read and write float images (a C bridge over OpenImageIO 2.4).
+ *
+ * An mf_image is a 2D array of float pixels, row-major from the top row, channels interleaved:
+ * channel c of pixel (x, y) is pixels[((size_t)y * width + x) * channels + c].  Values are
+ * stored and returned as they are: no colour-space conversion and no alpha (un)premultiplication.
+ *
+ * Every function here is plain C; the C++ implementation catches every exception at the
+ * boundary and never prints.  Error messages are written into a caller buffer as
+ * "path: reason" (reason from OpenImageIO's geterror(), or from the C library for file system
+ * errors), NUL-terminated and truncated to fit.  msg may be NULL or msg_size 0 for no message;
+ * on success msg is set to the empty string.
+ */
+#ifndef MF_IMAGE_H
+#define MF_IMAGE_H
+
+#include <stddef.h>
+
+#include <mfkit/mf_core.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct mf_image {
+    int width, height, channels; /* in pixels, pixels and channels per pixel; all >= 1 when valid */
+    float *pixels;               /* width * height * channels floats, row-major, interleaved; owned by
+                                  * the image when filled by mf_image_read (free with mf_image_free) */
+} mf_image;
+
+/*
+ * Read the first subimage (MIP level 0, its data window) of any file OpenImageIO can read, with
+ * every channel converted to float (integer formats map to [0, 1] as OpenImageIO does).
+ *   path          the file name (UTF-8).
+ *   out           out: the image; its previous contents are overwritten, not freed.  On failure
+ *                 *out is zeroed (width = height = channels = 0, pixels = NULL).
+ *   msg, msg_size a buffer for "path: reason" on failure.
+ * Returns MF_OK; MF_ERR_DOMAIN (path or out NULL); MF_ERR_IO (the file cannot be opened, e.g. it
+ * does not exist or is not readable); MF_ERR_FORMAT (OpenImageIO cannot read it: unknown, corrupt
+ * or truncated file); MF_ERR_UNSUPPORTED (a deep or volume image); MF_ERR_ALLOC; MF_ERR_INTERNAL
+ * (an unexpected exception).  Corrupt or truncated files give an error, never a crash.
+ */
+mf_status mf_image_read(const char *path, mf_image *out, char *msg, size_t msg_size) MF_WARN_UNUSED;
+
+/*
+ * Write img to path, the format chosen from the file name's extension (.exr, .tif, .png, ...).
+ *   img           a valid image (width, height, channels >= 1, pixels non-NULL); not modified.
+ *                 Channels are named R, G, B, A for 1 to 4 channels (1 channel: Y), further ones
+ *                 by OpenImageIO's defaults.
+ *   half_float    non-zero: store 16-bit half floats (relative rounding error <= 2^-11 for values
+ *                 of magnitude in [2^-14, 65504]; larger magnitudes become infinite); zero: 32-bit
+ *                 floats (lossless).  Formats without float storage (e.g. PNG) get the nearest pixel
+ *                 type they support and quantise the values.
+ *   msg, msg_size a buffer for "path: reason" on failure.
+ * The write is atomic: the image goes to a temporary file in the same directory
+ * ("<stem>.tmp<pid>_<n><ext>", same extension so the format is the same), which is then renamed
+ * over path.  On failure the temporary file is removed, and path is neither created nor changed.
+ * Returns MF_OK; MF_ERR_DOMAIN (a NULL or invalid argument); MF_ERR_UNSUPPORTED (no writer for
+ * the extension); MF_ERR_IO (the temporary file cannot be created, written or renamed, e.g. the
+ * directory does not exist); MF_ERR_ALLOC; MF_ERR_INTERNAL (an unexpected exception).
+ */
+mf_status mf_image_write(const char *path, const mf_image *img, int half_float, char *msg, size_t msg_size)
+    MF_WARN_UNUSED;
+
+/* Free the pixels of an image filled by mf_image_read and zero it.  NULL and zeroed images are
+ * accepted (no-op); calling it twice is safe. */
+void mf_image_free(mf_image *img);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* MF_IMAGE_H */

@@ -1,0 +1,293 @@
+// mf_image_oiio.cpp -- the C API of mf_image.h over OpenImageIO 2.4.
+//
+// No exception crosses the C boundary; every error becomes a status and a "path: reason" message.
+
+#include "mfkit/mf_image.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <new>
+#include <string>
+
+#if defined(__unix__) || defined(__APPLE__)
+#include <unistd.h>
+#define MF_HAVE_GETPID 1
+#endif
+
+namespace {
+
+// "path: prefix reason" into msg, on one line, truncated to fit.  Never allocates or throws, so
+// it is safe in the catch handlers.
+void set_msg(char *msg, size_t msg_size, const char *path, const char *prefix, const char *reason) noexcept
+{
+    if (msg == nullptr || msg_size == 0)
+        return;
+    if (reason == nullptr || reason[0] == '\0')
+        reason = "unknown error";
+    std::snprintf(msg, msg_size, "%s: %s%s", path ? path : "(null)", prefix, reason);
+    // OIIO joins several errors with newlines: keep one line, without trailing blanks.
+    size_t len = std::strlen(msg);
+    while (len > 0 && (msg[len - 1] == '\n' || msg[len - 1] == '\r' || msg[len - 1] == ' '))
+        msg[--len] = '\0';
+    for (char *c = msg; *c != '\0'; ++c)
+        if (*c == '\n' || *c == '\r')
+            *c = ';';
+}
+
+void set_msg(char *msg, size_t msg_size, const char *path, const std::string &reason)
+{
+    set_msg(msg, msg_size, path, "", reason.c_str());
+}
+
+void clear_msg(char *msg, size_t msg_size)
+{
+    if (msg != nullptr && msg_size > 0)
+        msg[0] = '\0';
+}
+
+// OIIO keeps a per-thread error for failed open/create calls; fetch and clear it.
+std::string global_error()
+{
+    std::string e = OIIO::geterror();
+    return e.empty() ? std::string("unknown OpenImageIO error") : e;
+}
+
+// The error of an ImageInput/ImageOutput (cleared on retrieval, so OIIO never complains
+// about an unretrieved error), or the global one if the object has none.
+template <typename T> std::string object_error(const T &obj)
+{
+    std::string e = obj.geterror();
+    if (e.empty())
+        e = OIIO::geterror();
+    return e.empty() ? std::string("unknown OpenImageIO error") : e;
+}
+
+bool file_is_readable(const char *path)
+{
+    std::FILE *f = std::fopen(path, "rb");
+    if (f == nullptr)
+        return false;
+    std::fclose(f);
+    return true;
+}
+
+// pixels count = w * h * c as size_t, or false if it overflows (or the byte count does).
+bool pixel_count(long long w, long long h, long long c, size_t *n)
+{
+    if (w <= 0 || h <= 0 || c <= 0)
+        return false;
+    const unsigned long long max = std::numeric_limits<size_t>::max() / sizeof(float);
+    const unsigned long long uw = static_cast<unsigned long long>(w), uh = static_cast<unsigned long long>(h),
+                             uc = static_cast<unsigned long long>(c);
+    if (uw > max / uh || uw * uh > max / uc)
+        return false;
+    *n = static_cast<size_t>(uw * uh * uc);
+    return true;
+}
+
+// Temporary name in the same directory as path, with the same extension:
+// "dir/name.exr" -> "dir/name.tmp<pid>_<n>.exr".
+std::string temp_name(const std::string &path, unsigned long n)
+{
+    const size_t slash = path.find_last_of("/\\");
+    const size_t base = (slash == std::string::npos) ? 0 : slash + 1;
+    size_t dot = path.find_last_of('.');
+    if (dot == std::string::npos || dot <= base) // no extension, or a leading-dot name
+        dot = path.size();
+    unsigned long pid = 0;
+#ifdef MF_HAVE_GETPID
+    pid = static_cast<unsigned long>(getpid());
+#endif
+    return path.substr(0, dot) + ".tmp" + std::to_string(pid) + "_" + std::to_string(n) + path.substr(dot);
+}
+
+std::atomic<unsigned long> temp_counter{0};
+
+// Removes the temporary file unless released (every failure path, including exceptions).
+struct TempFile {
+    std::string name;
+    bool armed = false;
+    ~TempFile()
+    {
+        if (armed)
+            std::remove(name.c_str());
+    }
+};
+
+} // namespace
+
+extern "C" void mf_image_free(mf_image *img)
+{
+    if (img == nullptr)
+        return;
+    std::free(img->pixels);
+    img->pixels = nullptr;
+    img->width = img->height = img->channels = 0;
+}
+
+extern "C" mf_status mf_image_read(const char *path, mf_image *out, char *msg, size_t msg_size)
+{
+    clear_msg(msg, msg_size);
+    if (out != nullptr) {
+        out->width = out->height = out->channels = 0;
+        out->pixels = nullptr;
+    }
+    if (path == nullptr || out == nullptr) {
+        set_msg(msg, msg_size, path, "", "invalid argument (NULL path or image)");
+        return MF_ERR_DOMAIN;
+    }
+    float *pixels = nullptr;
+    try {
+        // Return alpha as stored: no premultiplication on read (PNG, TIFF, ...).
+        OIIO::ImageSpec config;
+        config.attribute("oiio:UnassociatedAlpha", 1);
+        auto in = OIIO::ImageInput::open(path, &config);
+        if (!in) {
+            const std::string e = global_error();
+            // OIIO reports "cannot open" and "cannot parse" alike; tell them apart ourselves.
+            if (!file_is_readable(path)) {
+                const int err = errno;
+                set_msg(msg, msg_size, path, e + " (" + std::strerror(err) + ")");
+                return MF_ERR_IO;
+            }
+            set_msg(msg, msg_size, path, e);
+            return MF_ERR_FORMAT;
+        }
+        const OIIO::ImageSpec spec = in->spec();
+        if (spec.deep || spec.depth > 1) {
+            in->close();
+            set_msg(msg, msg_size, path, spec.deep ? "deep images are not supported" : "volume images are not supported");
+            return MF_ERR_UNSUPPORTED;
+        }
+        size_t n = 0;
+        if (!pixel_count(spec.width, spec.height, spec.nchannels, &n)) {
+            in->close();
+            set_msg(msg, msg_size, path,
+                    "invalid image size " + std::to_string(spec.width) + " x " + std::to_string(spec.height) + " x " +
+                        std::to_string(spec.nchannels));
+            return MF_ERR_FORMAT;
+        }
+        pixels = static_cast<float *>(std::malloc(n * sizeof(float)));
+        if (pixels == nullptr) {
+            in->close();
+            set_msg(msg, msg_size, path, "out of memory for " + std::to_string(n) + " floats");
+            return MF_ERR_ALLOC;
+        }
+        if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, pixels)) {
+            const std::string e = object_error(*in);
+            in->close();
+            std::free(pixels);
+            set_msg(msg, msg_size, path, e);
+            return MF_ERR_FORMAT;
+        }
+        if (!in->close()) {
+            const std::string e = object_error(*in);
+            std::free(pixels);
+            set_msg(msg, msg_size, path, e);
+            return MF_ERR_FORMAT;
+        }
+        (void)in->geterror(); // nothing pending when the input is destroyed
+        out->width = spec.width;
+        out->height = spec.height;
+        out->channels = spec.nchannels;
+        out->pixels = pixels;
+        return MF_OK;
+    } catch (const std::bad_alloc &) {
+        std::free(pixels);
+        set_msg(msg, msg_size, path, "", "out of memory");
+        return MF_ERR_ALLOC;
+    } catch (const std::exception &ex) {
+        std::free(pixels);
+        set_msg(msg, msg_size, path, "internal error: ", ex.what());
+        return MF_ERR_INTERNAL;
+    } catch (...) {
+        std::free(pixels);
+        set_msg(msg, msg_size, path, "internal error: ", "unknown exception");
+        return MF_ERR_INTERNAL;
+    }
+}
+
+extern "C" mf_status mf_image_write(const char *path, const mf_image *img, int half_float, char *msg,
+                                    size_t msg_size)
+{
+    clear_msg(msg, msg_size);
+    size_t n = 0;
+    if (path == nullptr || path[0] == '\0' || img == nullptr || img->pixels == nullptr ||
+        !pixel_count(img->width, img->height, img->channels, &n)) {
+        set_msg(msg, msg_size, path, "", "invalid argument (NULL or empty path, NULL image or pixels, or size < 1)");
+        return MF_ERR_DOMAIN;
+    }
+    try {
+        TempFile tmp;
+        // Reserve a fresh temporary name ("x": fail if it exists) so that concurrent writers of the
+        // same path never share a temporary file.  Normal permissions (0666 & ~umask).
+        for (int attempt = 0;; ++attempt) {
+            tmp.name = temp_name(path, temp_counter.fetch_add(1));
+            std::FILE *f = std::fopen(tmp.name.c_str(), "wbx");
+            if (f != nullptr) {
+                std::fclose(f);
+                tmp.armed = true;
+                break;
+            }
+            const int err = errno;
+            if (err != EEXIST || attempt >= 100) {
+                set_msg(msg, msg_size, path,
+                        "cannot create temporary file " + tmp.name + ": " + std::strerror(err));
+                return MF_ERR_IO;
+            }
+        }
+
+        auto out = OIIO::ImageOutput::create(tmp.name);
+        if (!out) {
+            set_msg(msg, msg_size, path, "no image writer for this file extension (" + global_error() + ")");
+            return MF_ERR_UNSUPPORTED;
+        }
+        OIIO::ImageSpec spec(img->width, img->height, img->channels,
+                             half_float ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT);
+        // The pixels are written as given (no un-premultiplication by alpha in PNG, TIFF, ...).
+        spec.attribute("oiio:UnassociatedAlpha", 1);
+        if (!out->open(tmp.name, spec)) {
+            const std::string e = object_error(*out);
+            set_msg(msg, msg_size, path, e);
+            return MF_ERR_IO;
+        }
+        if (!out->write_image(OIIO::TypeDesc::FLOAT, img->pixels)) {
+            const std::string e = object_error(*out);
+            out->close();
+            (void)out->geterror();
+            set_msg(msg, msg_size, path, e);
+            return MF_ERR_IO;
+        }
+        if (!out->close()) {
+            const std::string e = object_error(*out);
+            set_msg(msg, msg_size, path, e);
+            return MF_ERR_IO;
+        }
+        (void)out->geterror();
+        out.reset();
+        if (std::rename(tmp.name.c_str(), path) != 0) {
+            const int err = errno;
+            set_msg(msg, msg_size, path, "cannot rename " + tmp.name + " to it: " + std::strerror(err));
+            return MF_ERR_IO;
+        }
+        tmp.armed = false;
+        return MF_OK;
+    } catch (const std::bad_alloc &) {
+        set_msg(msg, msg_size, path, "", "out of memory");
+        return MF_ERR_ALLOC;
+    } catch (const std::exception &ex) {
+        set_msg(msg, msg_size, path, "internal error: ", ex.what());
+        return MF_ERR_INTERNAL;
+    } catch (...) {
+        set_msg(msg, msg_size, path, "internal error: ", "unknown exception");
+        return MF_ERR_INTERNAL;
+    }
+}

@@ -1,0 +1,15 @@
+/* mfkit.h -- the whole pure C core of mfkit (lib/): include this or the module headers. */
+#ifndef MFKIT_H
+#define MFKIT_H
+
+#include "mfkit/mf_core.h"
+#include "mfkit/mf_rng.h"
+#include "mfkit/mf_quad.h"
+#include "mfkit/mf_ndf.h"
+#include "mfkit/mf_smith.h"
+#include "mfkit/mf_fresnel.h"
+#include "mfkit/mf_brdf.h"
+#include "mfkit/mf_sample.h"
+#include "mfkit/mf_validate.h"
+
+#endif /* MFKIT_H */

@@ -1,0 +1,621 @@
+/*
+ * mf_validate.c -- property checks of the core math (see mf_validate.h, docs/validation.md).
+ *
+ * Integrals over directions are nested adaptive Gauss-Kronrod rules (mf_quad_adaptive) in
+ * polar coordinates around a chosen pole, split at the places where the integrand has a kink
+ * or a narrow peak, so that each piece is smooth and the rules converge to their tolerance.
+ */
+#include "mfkit/mf_validate.h"
+#include "mfkit/mf_brdf.h"
+#include "mfkit/mf_quad.h"
+
+#include <float.h>
+#include <stdlib.h>
+#include <stdio.h>
+#include <string.h>
+
+#define DEG (MF_PI / 180.0)
+
+/* ---- the grid ------------------------------------------------------------------------------ */
+static const double k_alphas[] = {1e-4, 1e-3, 1e-2, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0};
+static const double k_ratios[] = {1.0, 0.1, 0.01}; /* alpha_y / alpha_x, alpha_y clamped >= 1e-4 */
+static const double k_thetas_deg[] = {0.0, 15.0, 30.0, 45.0, 60.0, 75.0, 85.0, 89.0, 89.9, 89.99};
+static const double k_phis[] = {0.0, 0.7, 0.5 * MF_PI, 4.0};
+#define N_ALPHAS ((int)(sizeof k_alphas / sizeof k_alphas[0]))
+#define N_RATIOS ((int)(sizeof k_ratios / sizeof k_ratios[0]))
+#define N_THETAS ((int)(sizeof k_thetas_deg / sizeof k_thetas_deg[0]))
+#define N_PHIS ((int)(sizeof k_phis / sizeof k_phis[0]))
+
+static const double k_means[][2] = {{0.0, 0.0}, {0.3, 0.0}, {0.0, -0.3}, {1.0, -0.5}, {-1.5, 1.3}, {2.0, 0.0}};
+/* var_x, var_y, cov_xy: Beckmann alpha = 0.1 and 1 (var = alpha^2/2), 1:10 anisotropy,
+ * a correlated one (the ERRATA L2 configuration), alpha = 1e-4, and a 1:100 one. */
+static const double k_covs[][3] = {{0.005, 0.005, 0.0}, {0.5, 0.5, 0.0}, {0.5, 0.005, 0.0},
+                                   {2.0, 0.5, -0.9}, {5e-9, 5e-9, 0.0}, {0.02, 2e-6, 0.0}};
+#define N_MEANS ((int)(sizeof k_means / sizeof k_means[0]))
+#define N_COVS ((int)(sizeof k_covs / sizeof k_covs[0]))
+
+static mf_ndf grid_ndf(int type, int ia, int ir)
+{
+    double ax = k_alphas[ia];
+    double ay = fmax(1e-4, ax * k_ratios[ir]);
+    return mf_ndf_make(type ? MF_NDF_BECKMANN : MF_NDF_GGX, ax, ay);
+}
+
+/* 1 if grid_ndf(.., ia, ir) duplicates an earlier ratio (alpha_y clamped to the same value). */
+static int duplicate_ratio(int ia, int ir)
+{
+    if (ir == 0)
+        return 0;
+    double ay = fmax(1e-4, k_alphas[ia] * k_ratios[ir]);
+    double prev = fmax(1e-4, k_alphas[ia] * k_ratios[ir - 1]);
+    return ay == prev;
+}
+
+static mf_gaussian_slopes grid_gaussian(int im, int ic)
+{
+    mf_gaussian_slopes g = {k_means[im][0], k_means[im][1], k_covs[ic][0], k_covs[ic][1], k_covs[ic][2]};
+    return g;
+}
+
+static void check_init(mf_check *c, const char *name, const char *what, double bound)
+{
+    memset(c, 0, sizeof *c);
+    snprintf(c->name, sizeof c->name, "%s", name);
+    snprintf(c->what, sizeof c->what, "%s", what);
+    c->bound = bound;
+    c->worst = 0.0;
+    c->passed = 1;
+}
+
+/* Records value v (NaN counts as a failure and as the worst case). */
+static void check_record(mf_check *c, double v, const char *at)
+{
+    c->cases++;
+    if (isnan(c->worst))
+        return; /* a NaN already decided this check */
+    if (isnan(v) || c->cases == 1 || v > c->worst) {
+        c->worst = v;
+        snprintf(c->worst_at, sizeof c->worst_at, "%s", at);
+    }
+}
+
+static void check_finish(mf_check *c)
+{
+    c->passed = c->passed && !isnan(c->worst) && c->worst <= c->bound;
+}
+
+/* ---- nested adaptive integration over the slope plane ------------------------------------- */
+/* Integrals over micro-normals are taken over their slopes s, with dm = m.z^3 d^2s (the Jacobian
+ * of [Dupuy 2013, Eq. 10]), in polar coordinates of the affine map s = mean + L (r cos p, r sin p)
+ * with L = Cholesky factor of the distribution's covariance (or diag(alpha)): in (r, p) every
+ * NDF of the grid has unit scale, so the rules need no hints about alpha or anisotropy.  The
+ * integrands have one kink, along the line where wo.m = 0 (a0 + a.s = 0): in (r, p) that is at
+ * cos(p - p0) = c / r, and the inner rule is split there. */
+typedef double (*slope_fn)(double sx, double sy, void *user);
+
+typedef struct {
+    slope_fn f;
+    void *user;
+    double mean[2], l[2][2]; /* lower-triangular L */
+    double kink_c, kink_b, kink_p0; /* kink where r kink_b cos(p - p0) = kink_c; kink_b = 0: none */
+    double r;
+    int failed;
+} plane_ctx;
+
+static double plane_inner(double p, void *vctx)
+{
+    plane_ctx *c = vctx;
+    double u = c->r * cos(p), v = c->r * sin(p);
+    double sx = c->mean[0] + c->l[0][0] * u;
+    double sy = c->mean[1] + c->l[1][0] * u + c->l[1][1] * v;
+    return c->f(sx, sy, c->user);
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* Integral over [lo, hi] split at the breakpoints inside it (sorted here). */
+static double integrate_pieces(mf_fn1 f, void *ctx, double lo, double hi, double *pts, int npts, double rel_tol,
+                               double abs_tol, int *failed)
+{
+    qsort(pts, (size_t)npts, sizeof(double), cmp_double);
+    double sum = 0.0, a = lo;
+    for (int i = 0; i <= npts; ++i) {
+        double b = (i < npts) ? pts[i] : hi;
+        if (!(b > a) || b > hi)
+            continue;
+        mf_result r;
+        if (mf_quad_adaptive(f, ctx, a, b, abs_tol, rel_tol, MF_QUAD_MAX_INTERVALS, &r) != MF_OK)
+            *failed = 1;
+        sum += r.val;
+        a = b;
+    }
+    return sum;
+}
+
+static double plane_outer(double r, void *vctx)
+{
+    plane_ctx *c = vctx;
+    c->r = r;
+    double pts[2];
+    int n = 0;
+    if (c->kink_b > 0.0) {
+        double q = c->kink_c / (r * c->kink_b);
+        if (q > -1.0 && q < 1.0) {
+            double d = acos(q);
+            pts[n++] = c->kink_p0 - d;
+            pts[n++] = c->kink_p0 + d;
+        }
+    }
+    for (int i = 0; i < n; ++i) {
+        pts[i] = fmod(pts[i], 2.0 * MF_PI);
+        if (pts[i] < 0.0)
+            pts[i] += 2.0 * MF_PI;
+    }
+    /* Absolute floor: 1e-13 of the unit-mass scale 1/det(L) of the integrand, for pieces that
+     * carry almost nothing (a kink located by acos near +-1 lands a few ulp inside a piece). */
+    double inner = integrate_pieces(plane_inner, c, 0.0, 2.0 * MF_PI, pts, n, 1e-11,
+                                    1e-13 / (c->l[0][0] * c->l[1][1]), &c->failed);
+    return inner * r * c->l[0][0] * c->l[1][1]; /* d^2s = det(L) r dr dp */
+}
+
+/* Integral of f over the slope plane; the kink line is wz - wx sx - wy sy = 0 (pass w = 0 for
+ * none).  Returns NaN if a rule did not converge. */
+static double integrate_slopes(slope_fn f, void *user, double mean_x, double mean_y, double var_x, double var_y,
+                               double cov_xy, mf_vec3 w)
+{
+    plane_ctx c;
+    memset(&c, 0, sizeof c);
+    c.f = f;
+    c.user = user;
+    c.mean[0] = mean_x;
+    c.mean[1] = mean_y;
+    /* Cholesky of [[var_x, cov], [cov, var_y]] (positive definite on the grid) */
+    c.l[0][0] = sqrt(var_x);
+    c.l[1][0] = cov_xy / c.l[0][0];
+    c.l[1][1] = sqrt(var_y - c.l[1][0] * c.l[1][0]);
+    /* wz - wx sx - wy sy = (wz - w.mean) - (L^T (wx, wy)) . (u, v) */
+    c.kink_c = w.z - w.x * mean_x - w.y * mean_y;
+    double bx = c.l[0][0] * w.x + c.l[1][0] * w.y, by = c.l[1][1] * w.y;
+    c.kink_b = hypot(bx, by);
+    c.kink_p0 = atan2(by, bx);
+    /* Outer breakpoints: the scales of the distribution, and the radius r0 = c / b where the
+     * kink line touches the circle (the inner integral is not smooth in r there). */
+    double pts[8] = {0.25, 1.0, 2.0, 4.0, 8.0, 16.0, 64.0, 0.0};
+    int npts = 7;
+    if (c.kink_b > 0.0 && c.kink_c > 0.0 && isfinite(c.kink_c / c.kink_b))
+        pts[npts++] = c.kink_c / c.kink_b;
+    double v = integrate_pieces(plane_outer, &c, 0.0, INFINITY, pts, npts, 1e-10, 1e-14, &c.failed);
+    return c.failed ? NAN : v;
+}
+
+/* ---- check 1: NDF normalisation ------------------------------------------------------------- */
+static double ndf_cos_integrand(double sx, double sy, void *user)
+{
+    const mf_ndf *ndf = user;
+    mf_vec3 m = mf_normal_from_slope(sx, sy);
+    double z3 = m.z * m.z * m.z;
+    return mf_ndf_d(*ndf, m) * m.z * z3; /* D(m) m.z dm, dm = m.z^3 d^2s */
+}
+
+static void check_ndf_normalisation(mf_check *c)
+{
+    check_init(c, "ndf_normalisation", "|integral of D(wm) wm.z dwm - 1|, GGX and Beckmann, every alpha and ratio", 1e-8);
+    for (int t = 0; t < 2; ++t)
+        for (int ia = 0; ia < N_ALPHAS; ++ia)
+            for (int ir = 0; ir < N_RATIOS; ++ir) {
+                if (duplicate_ratio(ia, ir))
+                    continue;
+                mf_ndf ndf = grid_ndf(t, ia, ir);
+                double v = integrate_slopes(ndf_cos_integrand, &ndf, 0, 0, ndf.alpha_x * ndf.alpha_x,
+                                            ndf.alpha_y * ndf.alpha_y, 0, mf_vec3_make(0, 0, 0));
+                char at[200];
+                snprintf(at, sizeof at, "%s alpha=(%g,%g): integral=%.17g", mf_ndf_type_name(ndf.type), ndf.alpha_x,
+                         ndf.alpha_y, v);
+                check_record(c, fabs(v - 1.0), at);
+            }
+    check_finish(c);
+}
+
+/* ---- check 2: projected area, centred NDFs -------------------------------------------------- */
+typedef struct {
+    mf_ndf ndf;
+    mf_vec3 wo;
+    double g1;
+} proj_ctx;
+
+static double proj_integrand(double sx, double sy, void *user)
+{
+    const proj_ctx *p = user;
+    mf_vec3 m = mf_normal_from_slope(sx, sy);
+    double c = mf_vec3_dot(p->wo, m);
+    return c > 0.0 ? p->g1 * c * mf_ndf_d(p->ndf, m) * m.z * m.z * m.z : 0.0;
+}
+
+static void check_projected_area(mf_check *c)
+{
+    check_init(c, "projected_area",
+               "|integral of G1(wo) max(0,wo.wm) D(wm) dwm / wo.z - 1| (Smith), GGX and Beckmann", 1e-8);
+    static const double thetas[] = {0.0, 30.0, 60.0, 85.0, 89.99};
+    static const double phis[] = {0.0, 1.1};
+    for (int t = 0; t < 2; ++t)
+        for (int ia = 0; ia < N_ALPHAS; ++ia)
+            for (int ir = 0; ir < N_RATIOS; ++ir) {
+                if (duplicate_ratio(ia, ir))
+                    continue;
+                for (int it = 0; it < 5; ++it)
+                    for (int ip = 0; ip < 2; ++ip) {
+                        if (it == 0 && ip > 0)
+                            continue;
+                        proj_ctx p;
+                        p.ndf = grid_ndf(t, ia, ir);
+                        p.wo = mf_vec3_spherical(thetas[it] * DEG, phis[ip]);
+                        p.g1 = mf_smith_g1(p.ndf, p.wo);
+                        double v = integrate_slopes(proj_integrand, &p, 0, 0, p.ndf.alpha_x * p.ndf.alpha_x,
+                                                    p.ndf.alpha_y * p.ndf.alpha_y, 0, p.wo);
+                        char at[200];
+                        snprintf(at, sizeof at, "%s alpha=(%g,%g) theta_o=%g deg phi_o=%g: ratio=%.17g",
+                                 mf_ndf_type_name(p.ndf.type), p.ndf.alpha_x, p.ndf.alpha_y, thetas[it], phis[ip],
+                                 v / p.wo.z);
+                        check_record(c, fabs(v / p.wo.z - 1.0), at);
+                    }
+            }
+    check_finish(c);
+}
+
+/* ---- check 3: LEADR normalisation identity (after Eq. 16), non-centred Gaussian ------------ */
+typedef struct {
+    mf_gaussian_slopes g;
+    mf_vec3 wo;
+    double lambda_o;
+} leadr_ctx;
+
+/* Eq. 16's integrand over wi, written over the half vector wh: dwi = 4 (wo.wh) dwh
+ * [Walter 2007, Eq. 14] and dwh = wh.z^3 d^2s.  Every wi of the sphere with D(wh) > 0 is the
+ * mirror of exactly one wh with wo.wh > 0 and wh.z > 0 (ERRATA L5: the full sphere). */
+static double leadr_integrand(double sx, double sy, void *user)
+{
+    const leadr_ctx *p = user;
+    mf_vec3 wh = mf_normal_from_slope(sx, sy);
+    double c = mf_vec3_dot(p->wo, wh);
+    if (!(c > 0.0))
+        return 0.0;
+    double d = mf_gaussian_d(&p->g, wh);
+    return d / (4.0 * (1.0 + p->lambda_o)) * 4.0 * c * wh.z * wh.z * wh.z;
+}
+
+static void check_leadr_identity(mf_check *c)
+{
+    check_init(c, "leadr_normalisation",
+               "|(n.g)/(n.wo) integral over the sphere of D(wh)/(4(1+L(wo))) dwi - 1| [Dupuy 2013, after Eq. 16]",
+               1e-8);
+    static const double thetas[] = {0.0, 45.0, 80.0, 89.99};
+    static const double phis[] = {0.0, 2.5};
+    for (int im = 0; im < N_MEANS; ++im)
+        for (int ic = 0; ic < N_COVS; ++ic)
+            for (int it = 0; it < 4; ++it)
+                for (int ip = 0; ip < 2; ++ip) {
+                    if (it == 0 && ip > 0)
+                        continue;
+                    leadr_ctx p;
+                    p.g = grid_gaussian(im, ic);
+                    p.wo = mf_vec3_spherical(thetas[it] * DEG, phis[ip]);
+                    mf_vec3 n = mf_gaussian_mesonormal(&p.g);
+                    /* A view below the mesosurface is back-facing: no identity.  A view within
+                     * 1e-6 of the mesosurface (n.wo ~ 0, e.g. mean slope 1 at 45 deg) makes the
+                     * prefactor (n.g)/(n.wo) ill-conditioned: skipped, documented. */
+                    if (mf_vec3_dot(n, p.wo) <= 1e-6)
+                        continue;
+                    p.lambda_o = mf_smith_lambda_gaussian(&p.g, p.wo);
+                    double v = integrate_slopes(leadr_integrand, &p, p.g.mean_x, p.g.mean_y, p.g.var_x, p.g.var_y,
+                                                p.g.cov_xy, p.wo);
+                    double ratio = n.z / mf_vec3_dot(n, p.wo) * v;
+                    char at[200];
+                    snprintf(at, sizeof at, "mean=(%g,%g) cov=(%g,%g,%g) theta_o=%g deg phi_o=%g: %.17g", p.g.mean_x,
+                             p.g.mean_y, p.g.var_x, p.g.var_y, p.g.cov_xy, thetas[it], phis[ip], ratio);
+                    check_record(c, fabs(ratio - 1.0), at);
+                }
+    check_finish(c);
+}
+
+/* ---- check 4: closed-form Lambda against Smith's integral ---------------------------------- */
+/* Unit marginal slope densities along a direction: GGX p(x) = (1 + x^2)^(-3/2) / 2 (alpha = 1);
+ * Beckmann p(x) = exp(-x^2) / sqrt(pi) (alpha = 1, sigma = 1/sqrt 2); Gaussian standard normal. */
+typedef struct {
+    int family; /* 0 GGX, 1 Beckmann, 2 standard normal */
+    double a;
+} smith_ctx;
+
+static double unit_marginal(int family, double x)
+{
+    if (family == 0)
+        return 0.5 / ((1.0 + x * x) * sqrt(1.0 + x * x));
+    if (family == 1)
+        return exp(-x * x) * MF_INV_SQRT_PI;
+    return exp(-0.5 * x * x) / sqrt(2.0 * MF_PI);
+}
+
+static double smith_integrand(double y, void *user)
+{
+    const smith_ctx *s = user;
+    return y * unit_marginal(s->family, s->a + y);
+}
+
+/* Smith's Lambda relative to the mean plane (ERRATA L2):
+ * Lambda = 1/(c - mu) * integral_c^inf (x - c) P2(x) dx = (1/a) integral_0^inf y p(a + y) dy
+ * with a = (c - mu)/scale, c = cot(theta), in units of the marginal's scale. */
+static double smith_lambda_integral(int family, double a, int *failed)
+{
+    smith_ctx s = {family, a};
+    mf_result r;
+    /* split at the scale of the integrand's decay so the rules see smooth pieces */
+    double pts[3] = {1.0, 4.0, 16.0};
+    double v = 0.0, lo = 0.0;
+    for (int i = 0; i <= 3; ++i) {
+        double hi = i < 3 ? pts[i] : INFINITY;
+        if (mf_quad_adaptive(smith_integrand, &s, lo, hi, 0.0, 1e-12, MF_QUAD_MAX_INTERVALS, &r) != MF_OK)
+            *failed = 1;
+        v += r.val;
+        lo = hi;
+    }
+    return v / a;
+}
+
+static void check_lambda(mf_check *c)
+{
+    check_init(c, "lambda_closed_form",
+               "max relative |Lambda closed form - Smith integral|: GGX, Beckmann, non-centred Gaussian", 1e-9);
+    char at[200];
+    for (int t = 0; t < 2; ++t)
+        for (int ia = 0; ia < N_ALPHAS; ++ia)
+            for (int ir = 0; ir < N_RATIOS; ++ir) {
+                if (duplicate_ratio(ia, ir))
+                    continue;
+                mf_ndf ndf = grid_ndf(t, ia, ir);
+                for (int it = 1; it < N_THETAS; ++it)
+                    for (int ip = 0; ip < N_PHIS; ++ip) {
+                        double th = k_thetas_deg[it] * DEG, ph = k_phis[ip];
+                        /* independent path: angles, not the vector form of the closed form */
+                        double cot = cos(th) / sin(th);
+                        double alpha_phi = sqrt(pow(cos(ph) * ndf.alpha_x, 2) + pow(sin(ph) * ndf.alpha_y, 2));
+                        int failed = 0;
+                        double ref = smith_lambda_integral(t, cot / alpha_phi, &failed);
+                        double got = mf_smith_lambda(ndf, mf_vec3_spherical(th, ph));
+                        if (ref < 1e-290 && got < 1e-290)
+                            continue; /* both underflow */
+                        double rel = failed ? NAN : fabs(got - ref) / ref;
+                        snprintf(at, sizeof at, "%s alpha=(%g,%g) theta=%g deg phi=%g: closed=%.17g integral=%.17g",
+                                 mf_ndf_type_name(ndf.type), ndf.alpha_x, ndf.alpha_y, k_thetas_deg[it], ph, got, ref);
+                        check_record(c, rel, at);
+                    }
+            }
+    /* non-centred Gaussian, including directions below the geometric horizon but above the
+     * mesosurface (nu > 0, ERRATA L3) */
+    static const double thetas_g[] = {15.0, 45.0, 75.0, 89.0, 89.99, 95.0, 120.0};
+    for (int im = 0; im < N_MEANS; ++im)
+        for (int ic = 0; ic < N_COVS; ++ic)
+            for (int it = 0; it < 7; ++it)
+                for (int ip = 0; ip < N_PHIS; ++ip) {
+                    mf_gaussian_slopes g = grid_gaussian(im, ic);
+                    double th = thetas_g[it] * DEG, ph = k_phis[ip];
+                    double cot = cos(th) / sin(th);
+                    /* [Dupuy 2013, Eq. 14-15] */
+                    double mu = cos(ph) * g.mean_x + sin(ph) * g.mean_y;
+                    double var = cos(ph) * cos(ph) * g.var_x + sin(ph) * sin(ph) * g.var_y + 2.0 * cos(ph) * sin(ph) * g.cov_xy;
+                    /* nu must be > 0 (above the mesosurface), and cot - mu must not be the
+                     * difference of nearly equal numbers (condition number > 1e6). */
+                    if (!(var > 0.0) || !(cot - mu > 1e-6 * (fabs(cot) + fabs(mu))))
+                        continue;
+                    int failed = 0;
+                    double a = (cot - mu) / sqrt(var);
+                    if (a > 30.0)
+                        continue; /* Lambda < 1e-198: relative comparison meaningless in the tail */
+                    double ref = smith_lambda_integral(2, a, &failed);
+                    double got = mf_smith_lambda_gaussian(&g, mf_vec3_spherical(th, ph));
+                    double rel = failed ? NAN : fabs(got - ref) / ref;
+                    snprintf(at, sizeof at, "gaussian mean=(%g,%g) cov=(%g,%g,%g) theta=%g deg phi=%g: %.17g vs %.17g",
+                             g.mean_x, g.mean_y, g.var_x, g.var_y, g.cov_xy, thetas_g[it], ph, got, ref);
+                    check_record(c, rel, at);
+                }
+    check_finish(c);
+}
+
+/* ---- check 5: Walter's approximation ------------------------------------------------------- */
+static void check_walter(mf_check *c)
+{
+    check_init(c, "walter_g1_error",
+               "max relative |G1 Walter - G1 exact| over nu in (0, 10], Beckmann/Gaussian (ERRATA L4: 0.31 %)",
+               3.2e-3);
+    char at[200];
+    for (int i = 1; i <= 20000; ++i) {
+        double nu = 10.0 * i / 20000.0;
+        double g_exact = 1.0 / (1.0 + mf_smith_lambda_beckmann_nu(nu));
+        double l_w = mf_smith_lambda_beckmann_walter_nu(nu);
+        double rel = fabs(1.0 / (1.0 + l_w) - g_exact) / g_exact;
+        if (l_w < 0.0)
+            rel = NAN; /* the clamp must keep G1 <= 1 */
+        snprintf(at, sizeof at, "nu=%g: G1 exact=%.10g walter=%.10g", nu, g_exact, 1.0 / (1.0 + l_w));
+        check_record(c, rel, at);
+    }
+    check_finish(c);
+}
+
+/* ---- check 6: reciprocity ------------------------------------------------------------------ */
+static void record_pair(mf_check *c, double a, double b, const char *what)
+{
+    double m = fmax(fabs(a), fabs(b));
+    if (isnan(a) || isnan(b)) {
+        check_record(c, NAN, what);
+        return;
+    }
+    if (m < 1e-300)
+        return;
+    check_record(c, fabs(a - b) / m, what);
+}
+
+static void check_reciprocity(mf_check *c)
+{
+    check_init(c, "reciprocity",
+               "max relative |f(wo,wi) - f(wi,wo)|: microfacet (2 NDFs x 2 G2 x 4 Fresnel), Lambert, LEADR", 64 * DBL_EPSILON);
+    static const double thetas[] = {0.0, 20.0, 45.0, 70.0, 85.0, 89.99};
+    static const double phis[] = {0.0, 1.0, 2.5, 4.0};
+    mf_vec3 dirs[24];
+    int nd = 0;
+    for (int it = 0; it < 6; ++it)
+        for (int ip = 0; ip < 4; ++ip)
+            dirs[nd++] = mf_vec3_spherical(thetas[it] * DEG, phis[ip]);
+    mf_fresnel fresnels[4] = {{MF_FRESNEL_NONE, 0, 0, 0}, {MF_FRESNEL_SCHLICK, 0.04, 0, 0},
+                              {MF_FRESNEL_DIELECTRIC, 0, 1.5, 0}, {MF_FRESNEL_CONDUCTOR, 0, 0.2, 3.9}};
+    char at[200];
+    for (int t = 0; t < 2; ++t)
+        for (int ia = 0; ia < N_ALPHAS; ia += 3)
+            for (int ir = 0; ir < N_RATIOS; ++ir)
+                for (int form = 0; form < 2; ++form)
+                    for (int fr = 0; fr < 4; ++fr) {
+                        mf_microfacet m = {grid_ndf(t, ia, ir), (mf_g2_form)form, fresnels[fr]};
+                        for (int i = 0; i < nd; ++i)
+                            for (int j = 0; j < nd; ++j) {
+                                double a = mf_brdf_microfacet(&m, dirs[i], dirs[j]);
+                                double b = mf_brdf_microfacet(&m, dirs[j], dirs[i]);
+                                snprintf(at, sizeof at, "%s alpha=(%g,%g) g2=%d fresnel=%d dirs %d,%d: %.17g vs %.17g",
+                                         mf_ndf_type_name(m.ndf.type), m.ndf.alpha_x, m.ndf.alpha_y, form, fr, i, j, a, b);
+                                record_pair(c, a, b, at);
+                            }
+                    }
+    for (int i = 0; i < nd; ++i)
+        for (int j = 0; j < nd; ++j) {
+            snprintf(at, sizeof at, "lambert dirs %d,%d", i, j);
+            record_pair(c, mf_brdf_lambert(0.8, dirs[i], dirs[j]), mf_brdf_lambert(0.8, dirs[j], dirs[i]), at);
+        }
+    /* LEADR: f(wo,wi) (n.wo) wi.z = eq17(wo,wi) (n.wo) is the symmetric form (mf_brdf.h). */
+    for (int im = 0; im < N_MEANS; ++im)
+        for (int ic = 0; ic < N_COVS; ++ic) {
+            mf_gaussian_slopes g = grid_gaussian(im, ic);
+            mf_vec3 n = mf_gaussian_mesonormal(&g);
+            for (int i = 0; i < nd; ++i)
+                for (int j = 0; j < nd; ++j) {
+                    double a = mf_leadr_specular(&g, fresnels[1], dirs[i], dirs[j]) * mf_vec3_dot(n, dirs[i]);
+                    double b = mf_leadr_specular(&g, fresnels[1], dirs[j], dirs[i]) * mf_vec3_dot(n, dirs[j]);
+                    snprintf(at, sizeof at, "leadr mean=(%g,%g) cov=(%g,%g,%g) dirs %d,%d: %.17g vs %.17g", g.mean_x,
+                             g.mean_y, g.var_x, g.var_y, g.cov_xy, i, j, a, b);
+                    record_pair(c, a, b, at);
+                }
+        }
+    check_finish(c);
+}
+
+/* ---- check 7: albedo <= 1 ------------------------------------------------------------------ */
+static void check_albedo(mf_check *c)
+{
+    check_init(c, "albedo_at_most_one",
+               "max (albedo - quadrature error), microfacet without and with Fresnel, joint and separable G2", 1.0);
+    char at[200];
+    mf_fresnel none = {MF_FRESNEL_NONE, 0, 0, 0}, schlick = {MF_FRESNEL_SCHLICK, 0.9, 0, 0};
+    for (int t = 0; t < 2; ++t)
+        for (int ia = 0; ia < N_ALPHAS; ++ia)
+            for (int ir = 0; ir < 2; ++ir)
+                for (int it = 0; it < N_THETAS; ++it)
+                    for (int form = 0; form < 2; ++form) {
+                        mf_microfacet m = {grid_ndf(t, ia, ir), (mf_g2_form)form, none};
+                        mf_vec3 wo = mf_vec3_spherical(k_thetas_deg[it] * DEG, 0.7);
+                        mf_result r, rf;
+                        mf_status st = mf_brdf_microfacet_albedo(&m, wo, 64, &r);
+                        m.fresnel = schlick;
+                        mf_status stf = mf_brdf_microfacet_albedo(&m, wo, 64, &rf);
+                        double v = (st == MF_OK) ? r.val - r.err : NAN;
+                        if (stf != MF_OK || rf.val - rf.err > r.val + r.err)
+                            v = NAN; /* Fresnel <= 1 cannot raise the albedo */
+                        snprintf(at, sizeof at, "%s alpha=(%g,%g) g2=%d theta_o=%g deg: albedo=%.10g +- %.2g",
+                                 mf_ndf_type_name(m.ndf.type), m.ndf.alpha_x, m.ndf.alpha_y, form, k_thetas_deg[it],
+                                 r.val, r.err);
+                        check_record(c, v, at);
+                    }
+    check_finish(c);
+}
+
+/* ---- check 8: no NaN or Inf where the math has a finite value ------------------------------ */
+static void count_bad(mf_check *c, double v, int inf_ok, const char *at, int *bad)
+{
+    c->cases++;
+    if (isnan(v) || (!inf_ok && isinf(v))) {
+        if (*bad == 0)
+            snprintf(c->worst_at, sizeof c->worst_at, "%s = %g", at, v);
+        ++*bad;
+    }
+}
+
+static void check_finite(mf_check *c)
+{
+    check_init(c, "finite_everywhere",
+               "count of NaN/Inf outputs on the grid incl. alpha 1e-4, 89.99 deg, below-horizon directions", 0.0);
+    mf_vec3 dirs[64];
+    int nd = 0;
+    static const double thetas[] = {0.0, 30.0, 60.0, 89.0, 89.99, 89.9999, 90.0, 90.01, 120.0, 180.0};
+    for (int it = 0; it < 10; ++it)
+        for (int ip = 0; ip < N_PHIS; ++ip)
+            dirs[nd++] = mf_vec3_spherical(thetas[it] * DEG, k_phis[ip]);
+    static const double slopes[] = {0.0, 1e-6, 0.3, 5.0, 1e4, 1e8};
+    int bad = 0;
+    mf_fresnel schlick = {MF_FRESNEL_SCHLICK, 0.04, 0, 0};
+    for (int t = 0; t < 2; ++t)
+        for (int ia = 0; ia < N_ALPHAS; ++ia)
+            for (int ir = 0; ir < N_RATIOS; ++ir) {
+                mf_ndf ndf = grid_ndf(t, ia, ir);
+                for (int i = 0; i < 6; ++i)
+                    for (int j = 0; j < 6; ++j)
+                        count_bad(c, mf_ndf_p22(ndf, slopes[i], -slopes[j]), 0, "P22", &bad);
+                for (int i = 0; i < nd; ++i) {
+                    count_bad(c, mf_ndf_d(ndf, dirs[i]), 0, "D", &bad);
+                    count_bad(c, mf_smith_lambda(ndf, dirs[i]), 1, "Lambda", &bad);
+                    count_bad(c, mf_smith_lambda_beckmann_walter(ndf.alpha_x, ndf.alpha_y, dirs[i]), 1, "Lambda_walter", &bad);
+                    count_bad(c, mf_smith_g1(ndf, dirs[i]), 0, "G1", &bad);
+                    for (int j = 0; j < nd; ++j) {
+                        mf_microfacet m = {ndf, MF_G2_JOINT, schlick};
+                        count_bad(c, mf_smith_g2(ndf, MF_G2_JOINT, dirs[i], dirs[j]), 0, "G2 joint", &bad);
+                        count_bad(c, mf_smith_g2(ndf, MF_G2_SEPARABLE, dirs[i], dirs[j]), 0, "G2 separable", &bad);
+                        count_bad(c, mf_brdf_microfacet(&m, dirs[i], dirs[j]), 0, "brdf", &bad);
+                    }
+                }
+            }
+    for (int im = 0; im < N_MEANS; ++im)
+        for (int ic = 0; ic < N_COVS; ++ic) {
+            mf_gaussian_slopes g = grid_gaussian(im, ic);
+            for (int i = 0; i < nd; ++i) {
+                count_bad(c, mf_gaussian_d(&g, dirs[i]), 0, "gaussian D", &bad);
+                count_bad(c, mf_smith_lambda_gaussian(&g, dirs[i]), 1, "gaussian Lambda", &bad);
+                count_bad(c, mf_smith_lambda_gaussian_walter(&g, dirs[i]), 1, "gaussian Lambda_walter", &bad);
+                for (int j = 0; j < nd; ++j)
+                    count_bad(c, mf_leadr_specular(&g, schlick, dirs[i], dirs[j]), 0, "leadr specular", &bad);
+            }
+        }
+    c->worst = bad;
+    if (bad == 0)
+        snprintf(c->worst_at, sizeof c->worst_at, "none");
+    check_finish(c);
+}
+
+/* ---- driver -------------------------------------------------------------------------------- */
+typedef void (*check_fn)(mf_check *c);
+static const check_fn k_checks[] = {check_ndf_normalisation, check_projected_area, check_leadr_identity,
+                                    check_lambda,            check_walter,         check_reciprocity,
+                                    check_albedo,            check_finite};
+#define N_CHECKS ((int)(sizeof k_checks / sizeof k_checks[0]))
+
+int mf_validate_core_count(void) { return N_CHECKS; }
+
+mf_status mf_validate_core(mf_check *checks, int cap, mf_validate_progress_fn progress, void *user)
+{
+    if (!checks || cap < N_CHECKS)
+        return MF_ERR_DOMAIN;
+    int all = 1;
+    for (int i = 0; i < N_CHECKS; ++i) {
+        k_checks[i](&checks[i]);
+        all = all && checks[i].passed;
+        if (progress)
+            progress(user, i + 1, N_CHECKS, &checks[i]);
+    }
+    return all ? MF_OK : MF_ERR_CHECK_FAILED;
+}

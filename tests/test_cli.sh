@@ -1,0 +1,105 @@
+#!/usr/bin/env bash
+# test_cli.sh MFKIT -- the command line end to end: every eval function, and every kind of bad
+# input gives one line on stderr, exit code 2 and nothing on stdout.
+set -u
+mfkit="$1"
+fails=0; checks=0
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+
+ok() { checks=$((checks+1)); if ! eval "$1"; then echo "FAIL: $2" >&2; fails=$((fails+1)); fi; }
+
+# expect_error DESCRIPTION STDIN ARGS... : exit 2, empty stdout, one stderr line naming the problem
+expect_error() {
+  local desc="$1" input="$2" pattern="$3"; shift 3
+  printf '%s' "$input" | "$mfkit" "$@" >"$tmp/out" 2>"$tmp/err"; local rc=$?
+  checks=$((checks+1))
+  if [ $rc -ne 2 ] || [ -s "$tmp/out" ] || [ "$(wc -l <"$tmp/err")" -ne 1 ] || ! grep -q -- "$pattern" "$tmp/err"; then
+    echo "FAIL: $desc (rc=$rc, stdout=$(head -c 200 "$tmp/out"), stderr=$(cat "$tmp/err"))" >&2; fails=$((fails+1))
+  fi
+}
+
+# --- every function, one row, with the exact output header ---------------------------------
+run() { printf '%s\n%s\n' "$2" "$3" | "$mfkit" eval $1 2>"$tmp/err"; }
+out=$(run "ndf --ndf ggx" "alpha_x,alpha_y,m_x,m_y,m_z" "0.5,0.5,0,0,1")
+ok '[ "$(echo "$out" | head -1)" = "alpha_x,alpha_y,m_x,m_y,m_z,D" ]' "ndf header"
+# D(z) = 1/(pi alpha^2) = 1.2732395447351628 for alpha 0.5
+ok '[ "$(echo "$out" | tail -1)" = "0.5,0.5,0,0,1,1.2732395447351628" ]' "ndf value: $out"
+out=$(run "slope-pdf --ndf beckmann" "alpha_x,alpha_y,slope_x,slope_y" "1,1,0,0")
+ok '[ "$(echo "$out" | tail -1)" = "1,1,0,0,0.31830988618379069" ]' "slope-pdf value: $out"
+out=$(run "lambda --ndf beckmann" "alpha_x,alpha_y,w_x,w_y,w_z" "0.3,0.3,0.6,0,0.8")
+ok '[ "$(echo "$out" | head -1)" = "alpha_x,alpha_y,w_x,w_y,w_z,Lambda,Lambda_approx" ]' "lambda beckmann header"
+out=$(run "lambda --ndf ggx" "alpha_x,alpha_y,w_x,w_y,w_z" "0.3,0.3,0.6,0,-0.8")
+ok '[ "$(echo "$out" | tail -1)" = "0.3,0.3,0.6,0,-0.8,inf" ]' "lambda below horizon is inf: $out"
+out=$(run "lambda-gaussian" "mean_x,mean_y,var_x,var_y,cov_xy,w_x,w_y,w_z" "0,0.3,2,0.5,-0.9,0.4980973490458729,-0.8627299156628209,0.08715574274765814")
+ok 'echo "$out" | tail -1 | grep -q ",1.03105338564"' "lambda-gaussian ERRATA L2 value: $out"
+out=$(run "g2 --ndf ggx" "alpha_x,alpha_y,wo_x,wo_y,wo_z,wi_x,wi_y,wi_z" "0.3,0.3,0,0,1,0,0,1")
+ok '[ "$(echo "$out" | tail -1)" = "0.3,0.3,0,0,1,0,0,1,1,1,1,1" ]' "g2 at normal incidence: $out"
+out=$(printf 'alpha_x,alpha_y,wo_x,wo_y,wo_z,wi_x,wi_y,wi_z,f0\n0.3,0.3,0,0,1,0,0,1,0.04\n' | "$mfkit" eval brdf --ndf ggx --fresnel schlick)
+ok 'echo "$out" | head -1 | grep -q ",f0,f$"' "brdf schlick header: $out"
+out=$(run "albedo --ndf ggx" "alpha,cos_theta_o" "0.5,0.5")
+ok 'echo "$out" | head -1 | grep -q "alpha,cos_theta_o,albedo,albedo_err"' "albedo header"
+# out-of-domain rows give nan, the other rows are unaffected; extra columns are echoed
+out=$(printf 'id,alpha_x,alpha_y,m_x,m_y,m_z\na,-1,0.5,0,0,1\nb,0.5,0.5,0,0,1\nc,nan,0.5,0,0,1\n' | "$mfkit" eval ndf --ndf ggx)
+ok '[ "$(echo "$out" | sed -n 2p)" = "a,-1,0.5,0,0,1,nan" ]' "negative alpha -> nan: $out"
+ok '[ "$(echo "$out" | sed -n 3p)" = "b,0.5,0.5,0,0,1,1.2732395447351628" ]' "valid row after a bad one"
+ok '[ "$(echo "$out" | sed -n 4p)" = "c,nan,0.5,0,0,1,nan" ]' "nan input -> nan"
+# CRLF input and spaces are accepted
+out=$(printf 'alpha_x, alpha_y ,m_x,m_y,m_z\r\n0.5,0.5,0,0,1\r\n' | "$mfkit" eval ndf --ndf ggx)
+ok 'echo "$out" | tail -1 | grep -q "1.2732395447351628"' "CRLF input"
+# many rows: bounded memory and time
+/usr/bin/env awk 'BEGIN{print "alpha_x,alpha_y,w_x,w_y,w_z"; for(i=0;i<100000;i++) print 0.1+i*1e-6",0.2,0.6,0,0.8"}' >"$tmp/big.csv"
+ok '[ "$("$mfkit" eval lambda --ndf ggx <"$tmp/big.csv" | wc -l)" -eq 100001 ]' "100k rows"
+
+# --- errors: one line, exit 2, no stdout -----------------------------------------------------
+H="alpha_x,alpha_y,m_x,m_y,m_z"
+expect_error "missing column" "alpha_x,alpha_y,m_x,m_y
+1,1,0,0
+" "missing required column 'm_z'" eval ndf --ndf ggx
+expect_error "non-number field" "$H
+0.5,0.5,0,0,1
+0.5,abc,0,0,1
+" "data row 2, column 'alpha_y': 'abc' is not a number" eval ndf --ndf ggx
+expect_error "ragged row" "$H
+0.5,0.5,0,0
+" "line 2: 4 fields, but the header has 5" eval ndf --ndf ggx
+expect_error "empty input" "" "empty input" eval ndf --ndf ggx
+expect_error "unknown function" "" "unknown function 'nope'" eval nope
+expect_error "missing function" "" "missing FUNCTION" eval
+expect_error "unknown option" "" "unknown option '--bogus'" eval ndf --ndf ggx --bogus
+expect_error "missing value" "" "option --ndf needs a value" eval ndf --ndf
+expect_error "bad ndf" "" "unknown NDF 'phong'" eval ndf --ndf phong
+expect_error "ndf required" "" "--ndf ggx|beckmann is required" eval lambda
+expect_error "ndf not taken" "" "does not take --ndf" eval lambda-gaussian --ndf ggx
+expect_error "fresnel on ndf" "" "does not take --fresnel" eval ndf --ndf ggx --fresnel schlick
+expect_error "bad points" "" "--points: 'nan'" eval albedo --ndf ggx --points nan
+expect_error "points not multiple" "" "--points: '100'" eval albedo --ndf ggx --points 100
+expect_error "f0 missing" "alpha_x,alpha_y,wo_x,wo_y,wo_z,wi_x,wi_y,wi_z
+1,1,0,0,1,0,0,1
+" "missing required column 'f0'" eval brdf --ndf ggx --fresnel schlick
+expect_error "duplicate header" "m_x,m_x
+" "names column 'm_x' twice" eval ndf --ndf ggx
+expect_error "output name clash" "$H,D
+0.5,0.5,0,0,1,3
+" "already has a column named 'D'" eval ndf --ndf ggx
+expect_error "unknown command" "" "unknown command 'fitt'" fitt
+expect_error "validate bad option" "" "unknown option '--fast'" validate --fast
+expect_error "validate missing value" "" "--json-file needs a value" validate --json-file
+
+# --- help everywhere ---------------------------------------------------------------------------
+for args in "--help" "eval --help" "eval ndf --help" "validate --help"; do
+  ok '"$mfkit" $args >"$tmp/help" 2>&1 && grep -q usage "$tmp/help"' "--help for '$args'"
+done
+ok '"$mfkit" --version | grep -q "^mfkit "' "--version"
+
+# --- validate: table, JSON, atomic JSON file -------------------------------------------------
+ok '"$mfkit" validate --quiet --json-file "$tmp/report.json" >"$tmp/table"' "validate passes"
+ok 'grep -q "all checks passed" "$tmp/table"' "validate table"
+ok '[ "$(grep -c "\"passed\": true" "$tmp/report.json")" -ge 9 ]' "validate JSON: every check passed"
+ok '[ -z "$(ls "$tmp" | grep tmp)" ]' "no temporary files left"
+ok '! "$mfkit" validate --quiet --json-file /nonexistent-dir/r.json >/dev/null 2>"$tmp/err" && grep -q "nonexistent-dir" "$tmp/err"' "validate JSON to a bad path fails with the path"
+if [ -x /usr/bin/python3 ]; then
+  ok '"$mfkit" validate --quiet --json | /usr/bin/python3 -c "import json,sys; d=json.load(sys.stdin); assert d[\"passed\"] and len(d[\"checks\"])>=8"' "validate --json parses"
+fi
+
+echo "test_cli: $((checks-fails)) passed, $fails failed"
+[ $fails -eq 0 ]
