@@ -3,16 +3,26 @@
 // One parameter block of n_params doubles, one residual block of n_residuals residuals whose
 // cost function calls the C callback with analytic Jacobians.  Dense QR, LM or dogleg, silent.
 // No exception crosses the C boundary.
+//
+// Bounds.  Ceres handles box bounds only by projecting each trust region step onto the box, so
+// once a parameter sits on a bound, steps are clipped and the solver often stops early on the
+// parameter tolerance with the free parameters still far from their optimum (Rosenbrock with
+// x0 <= 0.5 stops with x1 off by 2e-3).  We therefore polish: after a converged solve, the
+// parameters on a bound whose gradient points out of the box are held fixed (SubsetManifold)
+// and the rest re-solved, until the active set no longer changes.  Parameters with
+// lower == upper (which Ceres rejects as infeasible) are held fixed throughout.
 
 #include "mfkit/mf_solver.h"
 
 #include <ceres/ceres.h>
+#include <glog/logging.h>
 
 #include <cfloat>
 #include <climits>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <mutex>
 #include <new>
 #include <string>
 #include <vector>
@@ -32,10 +42,15 @@ public:
 
     bool Evaluate(double const *const *parameters, double *residuals, double **jacobians) const override
     {
-        double *jac = (jacobians != nullptr) ? jacobians[0] : nullptr;
-        if (fn_(user_, parameters[0], residuals, jac) != 0)
+        return evaluate(parameters[0], residuals, (jacobians != nullptr) ? jacobians[0] : nullptr);
+    }
+
+    // The callback, with non-finite outputs counted as a failure (they would poison the trust
+    // region).
+    bool evaluate(const double *x, double *residuals, double *jac) const
+    {
+        if (fn_(user_, x, residuals, jac) != 0)
             return false;
-        // A non-finite value would poison the trust region: treat it as a failed evaluation.
         for (int i = 0; i < n_residuals_; ++i)
             if (!std::isfinite(residuals[i]))
                 return false;
@@ -53,6 +68,34 @@ private:
     int n_residuals_;
     mf_solver_residual_fn fn_;
     void *user_;
+};
+
+// Ceres logs every FAILURE termination with glog's LOG(ERROR) whatever its logging_type, and
+// glog then writes to stderr.  While any solve runs, raise glog's minloglevel to FATAL (never
+// lower it), and restore the caller's value when the last concurrent solve ends.
+std::mutex quiet_mutex;
+int quiet_users = 0;
+int quiet_saved_level = 0;
+
+class QuietGlog {
+public:
+    QuietGlog()
+    {
+        std::lock_guard<std::mutex> lock(quiet_mutex);
+        if (quiet_users++ == 0) {
+            quiet_saved_level = FLAGS_minloglevel;
+            if (FLAGS_minloglevel < google::GLOG_FATAL)
+                FLAGS_minloglevel = google::GLOG_FATAL;
+        }
+    }
+    ~QuietGlog()
+    {
+        std::lock_guard<std::mutex> lock(quiet_mutex);
+        if (--quiet_users == 0)
+            FLAGS_minloglevel = quiet_saved_level;
+    }
+    QuietGlog(const QuietGlog &) = delete;
+    QuietGlog &operator=(const QuietGlog &) = delete;
 };
 
 void set_message(mf_solver_summary *summary, const char *text)
@@ -132,6 +175,60 @@ const char *check_arguments(int n_params, int n_residuals, mf_solver_residual_fn
     return nullptr;
 }
 
+// The problem and the options shared by every phase of one solve.
+struct Solve {
+    int n_params, n_residuals;
+    mf_solver_residual_fn fn;
+    void *user;
+    const double *lower, *upper;
+    ceres::Solver::Options options;
+};
+
+// One Ceres solve from x (updated in place if the result is usable) with the parameters whose
+// `fixed` flag is set held constant.  At least one parameter must be free.
+ceres::Solver::Summary run_phase(const Solve &s, std::vector<double> &x, const std::vector<char> &fixed,
+                                 int max_iterations)
+{
+    std::vector<double> y = x;
+    ceres::Problem::Options problem_options;
+    problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+    problem_options.manifold_ownership = ceres::TAKE_OWNERSHIP;
+    ceres::Problem problem(problem_options);
+    problem.AddResidualBlock(new CallbackCost(s.n_params, s.n_residuals, s.fn, s.user), nullptr, y.data());
+    std::vector<int> constant;
+    for (int j = 0; j < s.n_params; ++j) {
+        if (fixed[j]) {
+            constant.push_back(j);
+            continue;
+        }
+        // Ceres's own "unbounded" is +-DBL_MAX; keep infinities out of its arithmetic.
+        if (s.lower != nullptr && s.lower[j] > -DBL_MAX)
+            problem.SetParameterLowerBound(y.data(), j, s.lower[j]);
+        if (s.upper != nullptr && s.upper[j] < DBL_MAX)
+            problem.SetParameterUpperBound(y.data(), j, s.upper[j]);
+    }
+    if (!constant.empty())
+        problem.SetManifold(y.data(), new ceres::SubsetManifold(s.n_params, constant));
+
+    ceres::Solver::Options options = s.options;
+    options.max_num_iterations = max_iterations;
+    ceres::Solver::Summary cs;
+    ceres::Solve(options, &problem, &cs);
+    // A usable solution (CONVERGENCE, NO_CONVERGENCE, USER_SUCCESS) is the last accepted point;
+    // after a FAILURE Ceres's parameters are undefined, so x keeps its value.
+    if (cs.IsSolutionUsable())
+        x = y;
+    return cs;
+}
+
+// Trust region steps of a Ceres solve (its iteration list starts with the start point).
+int steps_of(const ceres::Summary_dummy_guard *);
+
+int steps_taken(const ceres::Solver::Summary &cs)
+{
+    return cs.iterations.empty() ? 0 : static_cast<int>(cs.iterations.size()) - 1;
+}
+
 } // namespace
 
 extern "C" void mf_solver_options_default(mf_solver_options *o)
@@ -161,59 +258,110 @@ extern "C" mf_status mf_solver_least_squares(int n_params, int n_residuals, mf_s
             return MF_ERR_DOMAIN;
         }
 
-        // Work on a copy: params changes only when Ceres returns.
-        std::vector<double> x(params, params + n_params);
-
-        ceres::Problem::Options problem_options;
-        problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
-        ceres::Problem problem(problem_options);
-        problem.AddResidualBlock(new CallbackCost(n_params, n_residuals, fn, user), nullptr, x.data());
-        for (int j = 0; j < n_params; ++j) {
-            // Ceres's own "unbounded" is +-DBL_MAX; keep infinities out of its arithmetic.
-            if (lower != nullptr && lower[j] > -DBL_MAX)
-                problem.SetParameterLowerBound(x.data(), j, lower[j]);
-            if (upper != nullptr && upper[j] < DBL_MAX)
-                problem.SetParameterUpperBound(x.data(), j, upper[j]);
-        }
-
-        ceres::Solver::Options so;
-        so.minimizer_type = ceres::TRUST_REGION;
-        so.trust_region_strategy_type =
+        Solve s{n_params, n_residuals, fn, user, lower, upper, ceres::Solver::Options()};
+        s.options.minimizer_type = ceres::TRUST_REGION;
+        s.options.trust_region_strategy_type =
             (o.trust_region == MF_SOLVER_DOGLEG) ? ceres::DOGLEG : ceres::LEVENBERG_MARQUARDT;
-        so.linear_solver_type = ceres::DENSE_QR;
-        so.max_num_iterations = o.max_iterations;
-        so.function_tolerance = o.function_tolerance;
-        so.gradient_tolerance = o.gradient_tolerance;
-        so.parameter_tolerance = o.parameter_tolerance;
-        so.num_threads = o.num_threads;
-        so.minimizer_progress_to_stdout = false;
-        so.logging_type = ceres::SILENT;
+        s.options.linear_solver_type = ceres::DENSE_QR;
+        s.options.max_num_iterations = o.max_iterations;
+        s.options.function_tolerance = o.function_tolerance;
+        s.options.gradient_tolerance = o.gradient_tolerance;
+        s.options.parameter_tolerance = o.parameter_tolerance;
+        s.options.num_threads = o.num_threads;
+        s.options.minimizer_progress_to_stdout = false;
+        s.options.logging_type = ceres::SILENT;
         std::string why;
-        if (!so.IsValid(&why)) {
+        if (!s.options.IsValid(&why)) {
             summary_not_run(summary, why.c_str());
             return MF_ERR_DOMAIN;
         }
 
-        ceres::Solver::Summary cs;
-        ceres::Solve(so, &problem, &cs);
+        // Work on a copy: params changes only at the end.
+        std::vector<double> x(params, params + n_params);
+        std::vector<char> fixed(static_cast<size_t>(n_params), 0);
+        int n_fixed = 0;
+        for (int j = 0; j < n_params; ++j)
+            if (lower != nullptr && upper != nullptr && lower[j] == upper[j]) {
+                fixed[j] = 1;
+                ++n_fixed;
+            }
 
-        const int termination = map_termination(cs.termination_type);
-        const bool converged = termination == MF_SOLVER_CONVERGENCE || termination == MF_SOLVER_USER_SUCCESS;
+        const CallbackCost cost(n_params, n_residuals, fn, user);
+        std::vector<double> r(static_cast<size_t>(n_residuals));
+        std::vector<double> jac(static_cast<size_t>(n_residuals) * static_cast<size_t>(n_params));
 
-        // A usable solution (CONVERGENCE, NO_CONVERGENCE, USER_SUCCESS) is the last accepted point;
-        // after a FAILURE Ceres's x is undefined, so params keeps the start point.
-        if (cs.IsSolutionUsable())
-            std::memcpy(params, x.data(), sizeof(double) * static_cast<size_t>(n_params));
-        if (summary != nullptr) {
-            const int steps = (cs.num_successful_steps > 0 ? cs.num_successful_steps : 0) +
-                              (cs.num_unsuccessful_steps > 0 ? cs.num_unsuccessful_steps : 0);
-            summary->iterations = steps;
+        int termination, iterations = 0;
+        double initial_cost, final_cost;
+        std::string message;
+        if (n_fixed == n_params) {
+            // Nothing to optimise: report the cost at the (only feasible) start point.
+            if (cost.evaluate(x.data(), r.data(), nullptr)) {
+                double c = 0.0;
+                for (double v : r)
+                    c += v * v;
+                initial_cost = final_cost = 0.5 * c;
+                termination = MF_SOLVER_CONVERGENCE;
+                message = "every parameter is fixed by lower == upper";
+            } else {
+                initial_cost = final_cost = NAN;
+                termination = MF_SOLVER_FAILURE;
+                message = "the residual callback failed at the start point";
+            }
+        } else {
+            QuietGlog quiet;
+            ceres::Solver::Summary cs = run_phase(s, x, fixed, o.max_iterations);
+            iterations = steps_taken(cs);
+            termination = map_termination(cs.termination_type);
             // Ceres reports -1 for costs it could not evaluate.
-            summary->initial_cost = cs.initial_cost >= 0.0 ? cs.initial_cost : NAN;
-            summary->final_cost = cs.final_cost >= 0.0 ? cs.final_cost : NAN;
+            initial_cost = cs.initial_cost >= 0.0 ? cs.initial_cost : NAN;
+            final_cost = cs.final_cost >= 0.0 ? cs.final_cost : NAN;
+            message = cs.message;
+
+            // Polish a converged bounded solve (see the top of this file).
+            std::vector<char> active = fixed;
+            for (int round = 0; (lower != nullptr || upper != nullptr) && termination == MF_SOLVER_CONVERGENCE &&
+                                round <= n_params;
+                 ++round) {
+                const int budget = o.max_iterations - iterations;
+                if (budget <= 0 || !cost.evaluate(x.data(), r.data(), jac.data()))
+                    break;
+                std::vector<char> next = fixed;
+                int n_next = 0;
+                for (int j = 0; j < n_params; ++j) {
+                    double g = 0.0; // d cost / d x_j = sum_i r_i J_ij
+                    for (int i = 0; i < n_residuals; ++i)
+                        g += r[i] * jac[static_cast<size_t>(i) * n_params + j];
+                    if ((lower != nullptr && x[j] <= lower[j] && g > 0.0) ||
+                        (upper != nullptr && x[j] >= upper[j] && g < 0.0))
+                        next[j] = 1;
+                    n_next += next[j] ? 1 : 0;
+                }
+                // Stop when the active set is stable, or every parameter is held by a bound
+                // whose gradient points outwards (a vertex satisfying the optimality conditions).
+                if (next == active || n_next == n_params)
+                    break;
+                std::vector<double> y = x;
+                ceres::Solver::Summary ps = run_phase(s, y, next, budget);
+                if (!ps.IsSolutionUsable() || !(ps.final_cost <= final_cost))
+                    break;
+                x = y;
+                iterations += steps_taken(ps);
+                termination = map_termination(ps.termination_type);
+                final_cost = ps.final_cost;
+                message = ps.message + " (after holding parameters on active bounds fixed)";
+                active = next;
+            }
+        }
+
+        const bool converged = termination == MF_SOLVER_CONVERGENCE || termination == MF_SOLVER_USER_SUCCESS;
+        std::memcpy(params, x.data(), sizeof(double) * static_cast<size_t>(n_params));
+        if (summary != nullptr) {
+            summary->iterations = iterations;
+            summary->initial_cost = initial_cost;
+            summary->final_cost = final_cost;
             summary->converged = converged ? 1 : 0;
             summary->termination = termination;
-            set_message(summary, cs.message.c_str());
+            set_message(summary, message.c_str());
         }
         return converged ? MF_OK : MF_ERR_NO_CONVERGENCE;
     } catch (const std::bad_alloc &) {
