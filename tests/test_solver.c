@@ -194,6 +194,34 @@ static void test_bounds(void)
         CHECK_ABS(s.final_cost, 0.125, 1e-9);
     }
 
+    /* An active lower bound: x0 in [2, 3] (unconstrained optimum x0 = 1 is below), best point
+     * x0 = 2, x1 = 4, cost 1/2 (1 - 2)^2 = 0.5.  Ceres alone crawls along the bound here and
+     * stops at max_iterations with x1 ~ 3.9987; the bridge's re-solve with x0 held must finish. */
+    {
+        const double lo[2] = {2.0, -5.0}, hi[2] = {3.0, 5.0};
+        double p[2] = {2.5, 0.0};
+        rosen_state rs = {0, 0, lo, hi};
+        mf_solver_summary s;
+        mf_status st = mf_solver_least_squares(2, 2, rosen_residuals, &rs, p, lo, hi, &o, &s);
+        CHECK(st == MF_OK);
+        CHECK(rs.out_of_bounds == 0);
+        CHECK(p[0] == 2.0); /* on the bound exactly: Ceres clamps steps onto the box */
+        CHECK_ABS(p[1], 4.0, 1e-9);
+        CHECK_ABS(s.final_cost, 0.5, 1e-9);
+    }
+
+    /* Every parameter fixed by lower == upper: nothing to solve, the cost is reported. */
+    {
+        const double lo[2] = {0.3, 0.2}, hi[2] = {0.3, 0.2};
+        double p[2] = {0.3, 0.2};
+        mf_solver_summary s;
+        mf_status st = mf_solver_least_squares(2, 2, rosen_residuals, NULL, p, lo, hi, &o, &s);
+        CHECK(st == MF_OK);
+        CHECK(p[0] == 0.3 && p[1] == 0.2);
+        CHECK(s.iterations == 0);
+        CHECK_REL(s.final_cost, 0.5 * (1.1 * 1.1 + 0.7 * 0.7), 1e-14); /* r = (10 (0.2 - 0.09), 0.7) */
+    }
+
     /* A start point on the bound, and a degenerate box lower == upper that fixes x0. */
     double lo2[2] = {0.3, -10.0}, hi2[2] = {0.3, 10.0};
     double p2[2] = {0.3, 0.0};

@@ -226,7 +226,13 @@ extern "C" mf_status mf_image_write(const char *path, const mf_image *img, int h
         return MF_ERR_DOMAIN;
     }
     try {
-        TempFile tmp;
+        TempFile tmp; // declared first: destroyed (file removed) after the writer has closed it
+        // The writer is chosen by the extension of path; the temporary name has the same one.
+        auto out = OIIO::ImageOutput::create(path);
+        if (!out) {
+            set_msg(msg, msg_size, path, global_error());
+            return MF_ERR_UNSUPPORTED;
+        }
         // Reserve a fresh temporary name ("x": fail if it exists) so that concurrent writers of the
         // same path never share a temporary file.  Normal permissions (0666 & ~umask).
         for (int attempt = 0;; ++attempt) {
@@ -245,19 +251,16 @@ extern "C" mf_status mf_image_write(const char *path, const mf_image *img, int h
             }
         }
 
-        auto out = OIIO::ImageOutput::create(tmp.name);
-        if (!out) {
-            set_msg(msg, msg_size, path, "no image writer for this file extension (" + global_error() + ")");
-            return MF_ERR_UNSUPPORTED;
-        }
         OIIO::ImageSpec spec(img->width, img->height, img->channels,
                              half_float ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT);
         // The pixels are written as given (no un-premultiplication by alpha in PNG, TIFF, ...).
         spec.attribute("oiio:UnassociatedAlpha", 1);
         if (!out->open(tmp.name, spec)) {
+            // The temporary file could be created, so this is (nearly always) the format refusing
+            // the image, e.g. more channels than it stores.
             const std::string e = object_error(*out);
             set_msg(msg, msg_size, path, e);
-            return MF_ERR_IO;
+            return MF_ERR_UNSUPPORTED;
         }
         if (!out->write_image(OIIO::TypeDesc::FLOAT, img->pixels)) {
             const std::string e = object_error(*out);

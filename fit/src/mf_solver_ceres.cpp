@@ -7,9 +7,10 @@
 // Bounds.  Ceres handles box bounds only by projecting each trust region step onto the box, so
 // once a parameter sits on a bound, steps are clipped and the solver often stops early on the
 // parameter tolerance with the free parameters still far from their optimum (Rosenbrock with
-// x0 <= 0.5 stops with x1 off by 2e-3).  We therefore polish: after a converged solve, the
-// parameters on a bound whose gradient points out of the box are held fixed (SubsetManifold)
-// and the rest re-solved, until the active set no longer changes.  Parameters with
+// x0 <= 0.5 stops with x1 off by 2e-3), or crawls along the bound until max_iterations.  We
+// therefore polish: after a solve that ends with a usable point, the parameters on a bound
+// whose gradient points out of the box are held fixed (SubsetManifold) and the rest re-solved,
+// until the active set no longer changes.  Parameters with
 // lower == upper (which Ceres rejects as infeasible) are held fixed throughout.
 
 #include "mfkit/mf_solver.h"
@@ -222,8 +223,6 @@ ceres::Solver::Summary run_phase(const Solve &s, std::vector<double> &x, const s
 }
 
 // Trust region steps of a Ceres solve (its iteration list starts with the start point).
-int steps_of(const ceres::Summary_dummy_guard *);
-
 int steps_taken(const ceres::Solver::Summary &cs)
 {
     return cs.iterations.empty() ? 0 : static_cast<int>(cs.iterations.size()) - 1;
@@ -317,13 +316,14 @@ extern "C" mf_status mf_solver_least_squares(int n_params, int n_residuals, mf_s
             final_cost = cs.final_cost >= 0.0 ? cs.final_cost : NAN;
             message = cs.message;
 
-            // Polish a converged bounded solve (see the top of this file).
+            // Polish a bounded solve (see the top of this file): at most n_params + 1 more Ceres
+            // solves, each with its own max_iterations budget.
             std::vector<char> active = fixed;
-            for (int round = 0; (lower != nullptr || upper != nullptr) && termination == MF_SOLVER_CONVERGENCE &&
+            for (int round = 0; (lower != nullptr || upper != nullptr) && o.max_iterations > 0 &&
+                                (termination == MF_SOLVER_CONVERGENCE || termination == MF_SOLVER_NO_CONVERGENCE) &&
                                 round <= n_params;
                  ++round) {
-                const int budget = o.max_iterations - iterations;
-                if (budget <= 0 || !cost.evaluate(x.data(), r.data(), jac.data()))
+                if (!cost.evaluate(x.data(), r.data(), jac.data()))
                     break;
                 std::vector<char> next = fixed;
                 int n_next = 0;
@@ -341,7 +341,7 @@ extern "C" mf_status mf_solver_least_squares(int n_params, int n_residuals, mf_s
                 if (next == active || n_next == n_params)
                     break;
                 std::vector<double> y = x;
-                ceres::Solver::Summary ps = run_phase(s, y, next, budget);
+                ceres::Solver::Summary ps = run_phase(s, y, next, o.max_iterations);
                 if (!ps.IsSolutionUsable() || !(ps.final_cost <= final_cost))
                     break;
                 x = y;

@@ -47,17 +47,19 @@ mf_status mf_image_read(const char *path, mf_image *out, char *msg, size_t msg_s
  *   img           a valid image (width, height, channels >= 1, pixels non-NULL); not modified.
  *                 Channels are named R, G, B, A for 1 to 4 channels (1 channel: Y), further ones
  *                 by OpenImageIO's defaults.
- *   half_float    non-zero: store 16-bit half floats (relative rounding error <= 2^-11 for values
- *                 of magnitude in [2^-14, 65504]; larger magnitudes become infinite); zero: 32-bit
- *                 floats (lossless).  Formats without float storage (e.g. PNG) get the nearest pixel
- *                 type they support and quantise the values.
+ *   half_float    non-zero: store 16-bit half floats where the format has them (OpenEXR; relative
+ *                 rounding error <= 2^-11 for magnitudes in [2^-14, 65504], larger magnitudes
+ *                 become infinite); zero: 32-bit floats (lossless).  Formats without half storage
+ *                 get the nearest pixel type they support: TIFF stores floats, PNG and JPEG
+ *                 quantise to integers (and JPEG is lossy).
  *   msg, msg_size a buffer for "path: reason" on failure.
  * The write is atomic: the image goes to a temporary file in the same directory
  * ("<stem>.tmp<pid>_<n><ext>", same extension so the format is the same), which is then renamed
  * over path.  On failure the temporary file is removed, and path is neither created nor changed.
  * Returns MF_OK; MF_ERR_DOMAIN (a NULL or invalid argument); MF_ERR_UNSUPPORTED (no writer for
- * the extension); MF_ERR_IO (the temporary file cannot be created, written or renamed, e.g. the
- * directory does not exist); MF_ERR_ALLOC; MF_ERR_INTERNAL (an unexpected exception).
+ * the extension, or the format cannot store this image, e.g. 5 channels in PNG); MF_ERR_IO (the
+ * temporary file cannot be created, written or renamed, e.g. the directory does not exist);
+ * MF_ERR_ALLOC; MF_ERR_INTERNAL (an unexpected exception).
  */
 mf_status mf_image_write(const char *path, const mf_image *img, int half_float, char *msg, size_t msg_size)
     MF_WARN_UNUSED;

@@ -8,13 +8,16 @@
  * dogleg, so the solve is meant for small, dense problems (a handful to a few hundred
  * parameters), such as fitting a BRDF model to a table.
  *
- * Units: the solver adds none.  Parameters, bounds and the parameter tolerance are in the
- * caller's parameter units, residuals in the caller's residual units, and costs in residual
- * units squared (with Ceres's factor 1/2).
+ * Units: the solver adds none.  Parameters and bounds are in the caller's parameter units,
+ * residuals in the caller's residual units, and costs in residual units squared (with Ceres's
+ * factor 1/2).  The function and parameter tolerances are relative (dimensionless).
  *
  * Every function here is plain C; the C++ implementation catches every exception at the
- * boundary.  The solver prints nothing on stdout or stderr.  A solve is bitwise deterministic
- * for a given input, callback, options and machine (same binary, same CPU).
+ * boundary.  The solver prints nothing on stdout or stderr: Ceres logs failures through glog
+ * at ERROR level regardless of its own options, so while a solve runs glog's minloglevel is
+ * raised to FATAL (and restored afterwards; this affects other glog users in the process).
+ * A solve is bitwise deterministic for a given input, callback, options and machine (same
+ * binary, same CPU).
  *
  * Thread safety: independent calls may run concurrently if the callbacks allow it.  With
  * num_threads > 1 the callback may still be called from a thread other than the caller's.
@@ -49,7 +52,8 @@ enum {
 };
 
 typedef struct mf_solver_options {
-    int max_iterations;        /* maximum number of trust region steps (accepted or rejected); >= 0 */
+    int max_iterations;        /* maximum number of trust region steps (accepted or rejected) of one
+                                * Ceres solve (a bounded problem may take several, see below); >= 0 */
     double function_tolerance; /* stop when |delta cost| / cost < this; >= 0, dimensionless */
     double gradient_tolerance; /* stop when max_j |projected gradient_j| < this (in cost / parameter units); >= 0 */
     double parameter_tolerance;/* stop when |delta p| < this * (|p| + this); >= 0, dimensionless */
@@ -73,7 +77,8 @@ enum {
 };
 
 typedef struct mf_solver_summary {
-    int iterations;      /* trust region steps taken (accepted + rejected); 0 if not run */
+    int iterations;      /* trust region steps taken (accepted + rejected, over all bound
+                          * re-solves); 0 if not run or if every parameter is fixed */
     double initial_cost; /* 1/2 sum r^2 at the start point (NaN if not run or not evaluable) */
     double final_cost;   /* 1/2 sum r^2 at the returned parameters (NaN if not run) */
     int converged;       /* 1 if termination is MF_SOLVER_CONVERGENCE (or USER_SUCCESS), else 0 */
@@ -89,8 +94,14 @@ typedef struct mf_solver_summary {
  *   fn, user     the residual callback and its pass-through pointer (user may be NULL).
  *   params       in: the start point (finite, within the bounds); out: the solution.
  *   lower, upper NULL, or n_params bounds each.  -INFINITY / +INFINITY mean unbounded on that
- *                side; NaN bounds and lower[j] > upper[j] are invalid.  The start point must
- *                satisfy lower[j] <= params[j] <= upper[j] (it is not clamped).
+ *                side; lower[j] == upper[j] holds params[j] fixed; NaN bounds and
+ *                lower[j] > upper[j] are invalid.  The start point must satisfy
+ *                lower[j] <= params[j] <= upper[j] (it is not clamped).  Ceres enforces bounds by
+ *                projecting steps onto the box, which tends to stop early (or crawl) once a
+ *                parameter hits a bound; so after a bounded solve that converged or ran out of
+ *                iterations, the parameters resting on a bound that the gradient pushes against
+ *                are held fixed and the others re-solved, until that set is stable (at most
+ *                n_params + 1 re-solves, each with its own max_iterations budget).
  *   opt          NULL for mf_solver_options_default().
  *   summary      NULL, or filled on every return (including errors: termination MF_SOLVER_NOT_RUN).
  * Returns
