@@ -11,5 +11,6 @@
 #include "mfkit/mf_brdf.h"
 #include "mfkit/mf_sample.h"
 #include "mfkit/mf_validate.h"
+#include "mfkit/mf_table.h"
 
 #endif /* MFKIT_H */
