@@ -150,6 +150,58 @@ mf_status mf_brdf_microfacet_albedo(const mf_microfacet *m, mf_vec3 wo, int n, m
 }
 
 typedef struct {
+    const mf_gaussian_slopes *g;
+    mf_fresnel fresnel;
+    mf_vec3 wo;
+    double l00, l10, l11; /* Cholesky factor of the covariance */
+    double prefactor;     /* (n.g)/(n.wo) [Dupuy 2013, Eq. 16] */
+    double lambda_o;
+} leadr_albedo_ctx;
+
+static double leadr_albedo_integrand(const void *vctx, const double u[2])
+{
+    const leadr_albedo_ctx *c = vctx;
+    /* slope ~ P22 exactly: Box-Muller radius, then mean + L (r cos, r sin) */
+    double r = sqrt(-2.0 * log1p(-u[0])), phi = 2.0 * MF_PI * u[1];
+    double a = r * cos(phi), b = r * sin(phi);
+    mf_vec3 wh = mf_normal_from_slope(c->g->mean_x + c->l00 * a, c->g->mean_y + c->l10 * a + c->l11 * b);
+    double cos_oh = mf_vec3_dot(c->wo, wh);
+    if (!(cos_oh > 0.0))
+        return 0.0;
+    mf_vec3 wi = mf_vec3_reflect(c->wo, wh);
+    if (!(wi.z > 0.0))
+        return 0.0;
+    double li = mf_smith_lambda_gaussian(c->g, wi);
+    if (isinf(li))
+        return 0.0;
+    /* Eq. 17 times dwi / pdf: dwi = 4 (wo.wh) dwh, pdf(wh) = D(wh) wh.z; D cancels */
+    double f = mf_fresnel_eval(c->fresnel, cos_oh);
+    return c->prefactor * f * cos_oh / (wh.z * (1.0 + c->lambda_o + li));
+}
+
+mf_status mf_leadr_specular_albedo(const mf_gaussian_slopes *g, mf_fresnel fresnel, mf_vec3 wo, int n,
+                                   mf_result *out)
+{
+    out->val = out->err = NAN;
+    if (!mf_gaussian_valid(g) || !mf_vec3_isfinite(wo) || isnan(mf_fresnel_eval(fresnel, 1.0)))
+        return MF_ERR_DOMAIN;
+    double det = g->var_x * g->var_y - g->cov_xy * g->cov_xy;
+    if (!(g->var_x > 0.0) || !(det > 0.0) || !(mf_smith_gaussian_nu(g, wo) > 0.0))
+        return MF_ERR_DOMAIN;
+    mf_vec3 n_meso = mf_gaussian_mesonormal(g);
+    leadr_albedo_ctx c;
+    c.g = g;
+    c.fresnel = fresnel;
+    c.wo = wo;
+    c.l00 = sqrt(g->var_x);
+    c.l10 = g->cov_xy / c.l00;
+    c.l11 = sqrt(det / g->var_x);
+    c.prefactor = n_meso.z / mf_vec3_dot(n_meso, wo);
+    c.lambda_o = mf_smith_lambda_gaussian(g, wo);
+    return albedo_rule(leadr_albedo_integrand, &c, n, out);
+}
+
+typedef struct {
     double rho;
     mf_vec3 wo;
 } lambert_ctx;

@@ -511,7 +511,7 @@ static void check_reciprocity(mf_check *c)
 static void check_albedo(mf_check *c)
 {
     check_init(c, "albedo_at_most_one",
-               "max (albedo - quadrature error), microfacet without and with Fresnel, joint and separable G2",
+               "max (albedo - quadrature error): microfacet without/with Fresnel, joint/separable G2; LEADR specular",
                1.0 + 1e-12); /* 1e-12: rounding of the n x n weight sum (the integrand is <= 1 pointwise) */
     char at[200];
     mf_fresnel none = {MF_FRESNEL_NONE, 0, 0, 0}, schlick = {MF_FRESNEL_SCHLICK, 0.9, 0, 0};
@@ -534,6 +534,22 @@ static void check_albedo(mf_check *c)
                                  r.val, r.err);
                         check_record(c, v, at);
                     }
+    /* LEADR specular (non-centred slopes), views above the mesosurface */
+    mf_fresnel schlick04 = {MF_FRESNEL_SCHLICK, 0.04, 0, 0};
+    static const double thetas_l[] = {0.0, 45.0, 80.0, 89.99};
+    for (int im = 0; im < N_MEANS; ++im)
+        for (int ic = 0; ic < N_COVS; ++ic)
+            for (int it = 0; it < 4; ++it) {
+                mf_gaussian_slopes g = grid_gaussian(im, ic);
+                mf_vec3 wo = mf_vec3_spherical(thetas_l[it] * DEG, 2.5);
+                if (!(mf_smith_gaussian_nu(&g, wo) > 0.0))
+                    continue;
+                mf_result r;
+                mf_status st = mf_leadr_specular_albedo(&g, schlick04, wo, 64, &r);
+                snprintf(at, sizeof at, "leadr mean=(%g,%g) cov=(%g,%g,%g) theta_o=%g deg: albedo=%.10g +- %.2g",
+                         g.mean_x, g.mean_y, g.var_x, g.var_y, g.cov_xy, thetas_l[it], r.val, r.err);
+                check_record(c, st == MF_OK ? r.val - r.err : NAN, at);
+            }
     check_finish(c);
 }
 

@@ -53,6 +53,14 @@ double mf_brdf_lambert(double rho, mf_vec3 wo, mf_vec3 wi);
  * difference to the 4-point rule): an estimate of the error of Q(n/2), so conservative for Q(n).
  * MF_ERR_DOMAIN for invalid parameters or wo.z <= 0. */
 mf_status mf_brdf_microfacet_albedo(const mf_microfacet *m, mf_vec3 wo, int n, mf_result *out) MF_WARN_UNUSED;
+/* Directional albedo of the LEADR specular model (integral over wi.z > 0 of
+ * mf_leadr_specular(g, fresnel, wo, wi) dwi, i.e. with shadowing), by the same product rule over
+ * the exact sampling map of the Gaussian slopes (Box-Muller radius and the Cholesky factor of
+ * the covariance, [Dupuy 2013, Sec. 5.1]), so the integrand is (n.g)/(n.wo) F (wo.wh) /
+ * (wh.z (1 + L(wo) + L(wi))).  wo must be above the mesosurface (nu > 0); the covariance must be
+ * positive definite.  MF_ERR_DOMAIN otherwise. */
+mf_status mf_leadr_specular_albedo(const mf_gaussian_slopes *g, mf_fresnel fresnel, mf_vec3 wo, int n,
+                                   mf_result *out) MF_WARN_UNUSED;
 /* Lambert albedo by the same quadrature over the cosine map (exactly rho: a pipeline check). */
 mf_status mf_brdf_lambert_albedo(double rho, mf_vec3 wo, int n, mf_result *out) MF_WARN_UNUSED;
 
