@@ -96,6 +96,7 @@ ok '"$mfkit" validate --quiet --json-file "$tmp/report.json" >"$tmp/table"' "val
 ok 'grep -q "all checks passed" "$tmp/table"' "validate table"
 ok '[ "$(grep -c "\"passed\": true" "$tmp/report.json")" -ge 9 ]' "validate JSON: every check passed"
 ok '[ -z "$(ls "$tmp" | grep tmp)" ]' "no temporary files left"
+ok '[ "$(stat -c %a "$tmp/report.json")" = "$(printf %o $((0666 & ~0$(umask))))" ]' "report has the usual permissions, not mkstemp's 0600"
 ok '! "$mfkit" validate --quiet --json-file /nonexistent-dir/r.json >/dev/null 2>"$tmp/err" && grep -q "nonexistent-dir" "$tmp/err"' "validate JSON to a bad path fails with the path"
 if [ -x /usr/bin/python3 ]; then
   ok '"$mfkit" validate --quiet --json | /usr/bin/python3 -c "import json,sys; d=json.load(sys.stdin); assert d[\"passed\"] and len(d[\"checks\"])>=8"' "validate --json parses"

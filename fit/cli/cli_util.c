@@ -7,6 +7,7 @@
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 int cli_error(const char *cmd, const char *fmt, ...)
@@ -114,6 +115,10 @@ int cli_buf_write_file_atomic(const cli_buf *b, const char *path, char *msg, siz
         free(tmp);
         return -1;
     }
+    /* mkstemp creates the file 0600; give it the usual 0666 & ~umask of a new file */
+    mode_t mask = umask(0);
+    umask(mask);
+    (void)fchmod(fd, 0666 & ~mask);
     FILE *f = fdopen(fd, "wb");
     int ok = f && cli_buf_write(b, f) == 0;
     if (f) {
