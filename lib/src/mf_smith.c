@@ -59,23 +59,25 @@ double mf_smith_lambda_ggx(double alpha_x, double alpha_y, mf_vec3 w)
     return t / (2.0 * (1.0 + sqrt(1.0 + t)));
 }
 
-double mf_smith_lambda_beckmann(double alpha_x, double alpha_y, mf_vec3 w)
+/* Lambda of a centred Beckmann NDF through a Lambda(nu) form: nu = cot(theta) / alpha(phi)
+ * = z / sqrt(ax^2 x^2 + ay^2 y^2), +inf at the pole (-> Lambda 0). */
+static double beckmann_lambda_via(double alpha_x, double alpha_y, mf_vec3 w, double (*lambda_of_nu)(double))
 {
     if (!alphas_valid(alpha_x, alpha_y) || !mf_vec3_isfinite(w))
         return NAN;
     if (w.z <= 0.0)
         return INFINITY;
-    /* nu = cot(theta) / alpha(phi) = z / sqrt(ax^2 x^2 + ay^2 y^2); +inf at the pole -> 0 */
-    return mf_smith_lambda_beckmann_nu(w.z / stretched_sin(alpha_x, alpha_y, w));
+    return lambda_of_nu(w.z / stretched_sin(alpha_x, alpha_y, w));
+}
+
+double mf_smith_lambda_beckmann(double alpha_x, double alpha_y, mf_vec3 w)
+{
+    return beckmann_lambda_via(alpha_x, alpha_y, w, mf_smith_lambda_beckmann_nu);
 }
 
 double mf_smith_lambda_beckmann_walter(double alpha_x, double alpha_y, mf_vec3 w)
 {
-    if (!alphas_valid(alpha_x, alpha_y) || !mf_vec3_isfinite(w))
-        return NAN;
-    if (w.z <= 0.0)
-        return INFINITY;
-    return mf_smith_lambda_beckmann_walter_nu(w.z / stretched_sin(alpha_x, alpha_y, w));
+    return beckmann_lambda_via(alpha_x, alpha_y, w, mf_smith_lambda_beckmann_walter_nu);
 }
 
 double mf_smith_lambda(mf_ndf ndf, mf_vec3 w)
