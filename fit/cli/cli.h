@@ -6,6 +6,7 @@
 
 int cli_eval(int argc, char **argv);     /* argv[0] = "eval" */
 int cli_validate(int argc, char **argv); /* argv[0] = "validate" */
+int cli_table(int argc, char **argv);    /* argv[0] = "table"; an error without OpenImageIO */
 void cli_eval_usage(FILE *f);
 
 #endif /* MF_CLI_H */

@@ -6,6 +6,11 @@
  * number, or a bad option is an error: one line on stderr, exit code 2, nothing on stdout
  * (output is buffered until the whole input has been processed).  docs/cli.md lists the
  * functions; their names and columns are a public interface.
+ *
+ * Polygon functions take the vertex count n and the columns v0_x, v0_y, v0_z, ..., v7_z:
+ * v0..v2 are required columns, v3..v7 may be absent; an empty vertex field (or an absent column)
+ * means "unused", so rows with different n can share one file.  A row whose n is not an integer
+ * in [3, 8] or whose first n vertices are not all given gives nan.
  */
 #include "cli.h"
 #include "cli_util.h"
@@ -21,6 +26,7 @@ typedef struct {
     mf_fresnel_type fresnel;
     mf_g2_form g2;
     long points;
+    mf_polygon_sided sided;
 } eval_opts;
 
 typedef void (*eval_fn)(const eval_opts *o, const double *in, double *out);
@@ -33,7 +39,16 @@ typedef struct {
     const char *outputs[6];            /* outputs for GGX (or the only ones) */
     const char *outputs_beckmann[6];   /* when they differ for Beckmann, else {NULL} */
     eval_fn fn;
+    int polygon;                       /* 1: the inputs are followed by the polygon's vertex columns */
 } eval_function;
+
+/* Vertex columns of the polygon functions: the first 3 vertices required, the others optional. */
+#define N_VERTEX_COLS (3 * MF_POLYGON_MAX_VERTICES)
+#define N_REQUIRED_VERTEX_COLS 9
+static const char *const k_vertex_cols[N_VERTEX_COLS] = {
+    "v0_x", "v0_y", "v0_z", "v1_x", "v1_y", "v1_z", "v2_x", "v2_y", "v2_z", "v3_x", "v3_y", "v3_z",
+    "v4_x", "v4_y", "v4_z", "v5_x", "v5_y", "v5_z", "v6_x", "v6_y", "v6_z", "v7_x", "v7_y", "v7_z"};
+#define MAX_INPUTS (13 + N_VERTEX_COLS) /* 12 listed, f0, the vertices */
 
 static mf_vec3 v3(const double *p) { return mf_vec3_make(p[0], p[1], p[2]); }
 
@@ -96,23 +111,73 @@ static void fn_albedo(const eval_opts *o, const double *in, double *out)
     out[1] = r.err;
 }
 
+/* A polygon from in[0] = n and in[1 + 3 i .. 3 + 3 i] = vertex i (NaN where unused); 0 if n is
+ * not an integer in [3, MF_POLYGON_MAX_VERTICES] or a used vertex is missing or invalid. */
+static int read_polygon(const double *in, mf_polygon *p)
+{
+    double n = in[0];
+    if (!(n >= 3.0 && n <= MF_POLYGON_MAX_VERTICES && n == floor(n)))
+        return 0;
+    mf_vec3 v[MF_POLYGON_MAX_VERTICES];
+    for (int i = 0; i < (int)n; ++i)
+        v[i] = v3(in + 1 + 3 * i);
+    *p = mf_polygon_make((int)n, v);
+    return mf_polygon_valid(p);
+}
+
+static void fn_polygon_cosine(const eval_opts *o, const double *in, double *out)
+{
+    mf_polygon p;
+    if (!read_polygon(in, &p))
+        return;
+    out[0] = mf_polygon_integrate_cosine(&p, o->sided);
+    out[1] = mf_polygon_solid_angle(&p);
+}
+
+/* An LTC from in[0..8] = M row-major; 0 if M is not invertible (mf_ltc_init). */
+static int read_ltc(const double *in, mf_ltc *l) { return mf_ltc_init(l, mf_ltc_matrix_general(in)) == MF_OK; }
+
+static void fn_ltc(const eval_opts *o, const double *in, double *out)
+{
+    (void)o;
+    mf_ltc l;
+    if (read_ltc(in, &l))
+        out[0] = mf_ltc_eval(&l, v3(in + 9));
+}
+
+static void fn_ltc_polygon(const eval_opts *o, const double *in, double *out)
+{
+    mf_ltc l;
+    mf_polygon p;
+    if (read_ltc(in, &l) && read_polygon(in + 9, &p))
+        out[0] = mf_ltc_integrate_polygon(&l, &p, o->sided);
+}
+
 #define WO "wo_x", "wo_y", "wo_z"
 #define WI "wi_x", "wi_y", "wi_z"
+#define LTC_M "m00", "m01", "m02", "m10", "m11", "m12", "m20", "m21", "m22"
 static const eval_function k_functions[] = {
-    {"ndf", "D(wm), per steradian of micro-normal", 1, {"alpha_x", "alpha_y", "m_x", "m_y", "m_z"}, {"D"}, {NULL}, fn_ndf},
+    {"ndf", "D(wm), per steradian of micro-normal", 1, {"alpha_x", "alpha_y", "m_x", "m_y", "m_z"}, {"D"}, {NULL},
+     fn_ndf, 0},
     {"slope-pdf", "P22(slope), per unit slope area", 1, {"alpha_x", "alpha_y", "slope_x", "slope_y"}, {"P22"}, {NULL},
-     fn_slope_pdf},
+     fn_slope_pdf, 0},
     {"lambda", "Smith Lambda(w) (Beckmann: also Walter's rational form)", 1, {"alpha_x", "alpha_y", "w_x", "w_y", "w_z"},
-     {"Lambda"}, {"Lambda", "Lambda_approx"}, fn_lambda},
+     {"Lambda"}, {"Lambda", "Lambda_approx"}, fn_lambda, 0},
     {"lambda-gaussian", "Lambda of non-centred anisotropic Gaussian slopes (exact, Walter)", 0,
      {"mean_x", "mean_y", "var_x", "var_y", "cov_xy", "w_x", "w_y", "w_z"}, {"Lambda", "Lambda_approx"}, {NULL},
-     fn_lambda_gaussian},
+     fn_lambda_gaussian, 0},
     {"g2", "G1 of each direction and both masking-shadowing forms", 1, {"alpha_x", "alpha_y", WO, WI},
-     {"G1_o", "G1_i", "G2_joint", "G2_separable"}, {NULL}, fn_g2},
+     {"G1_o", "G1_i", "G2_joint", "G2_separable"}, {NULL}, fn_g2, 0},
     {"brdf", "microfacet reflection BRDF f(wo, wi), without the cosine", 1, {"alpha_x", "alpha_y", WO, WI}, {"f"},
-     {NULL}, fn_brdf},
+     {NULL}, fn_brdf, 0},
     {"albedo", "directional albedo (no Fresnel) by quadrature, with its error estimate", 1, {"alpha", "cos_theta_o"},
-     {"albedo", "albedo_err"}, {NULL}, fn_albedo},
+     {"albedo", "albedo_err"}, {NULL}, fn_albedo, 0},
+    {"polygon-cosine", "integral of max(0,z)/pi over a polygon (Lambert), and its solid angle (sr)", 0, {"n"},
+     {"E", "solid_angle"}, {NULL}, fn_polygon_cosine, 1},
+    {"ltc", "LTC density D(w) of the matrix M (row-major), per steradian", 0, {LTC_M, "w_x", "w_y", "w_z"}, {"D"},
+     {NULL}, fn_ltc, 0},
+    {"ltc-polygon", "integral of the LTC density of M over a polygon", 0, {LTC_M, "n"}, {"integral"}, {NULL},
+     fn_ltc_polygon, 1},
 };
 #define N_FUNCTIONS ((int)(sizeof k_functions / sizeof k_functions[0]))
 
@@ -128,7 +193,7 @@ void cli_eval_usage(FILE *f)
 {
     fprintf(f,
             "usage: mfkit eval FUNCTION [--ndf ggx|beckmann] [--fresnel none|schlick] [--g2 joint|separable]\n"
-            "                           [--points N] < in.csv > out.csv\n\n"
+            "                           [--points N] [--sided one|two] < in.csv > out.csv\n\n"
             "Reads CSV with a header from stdin and writes CSV to stdout: every input column echoed,\n"
             "then the outputs (%%.17g). Rows outside the domain give nan. Directions are unit vectors in\n"
             "the z-up shading frame, pointing away from the surface.\n\n"
@@ -137,7 +202,11 @@ void cli_eval_usage(FILE *f)
             "  --fresnel none|schlick  brdf only; schlick adds the input column f0 (default none)\n"
             "  --g2 joint|separable    masking-shadowing of brdf and albedo (default joint)\n"
             "  --points N              albedo only: quadrature points per axis, a multiple of 8 in [16, 2048]\n"
-            "                          (default 256)\n\n"
+            "                          (default 256)\n"
+            "  --sided one|two         polygon functions: two (default) counts the polygon from either side;\n"
+            "                          one only when it faces the shading point (vertices clockwise seen from it)\n\n"
+            "Polygons: n (3..8) vertices v0..v7 (positions relative to the shading point); columns v3..v7\n"
+            "may be absent and empty vertex fields are unused.\n\n"
             "functions (inputs -> outputs):\n");
     for (int i = 0; i < N_FUNCTIONS; ++i) {
         const eval_function *e = &k_functions[i];
@@ -146,6 +215,8 @@ void cli_eval_usage(FILE *f)
             fprintf(f, "%s%s", k ? "," : "", e->inputs[k]);
         if (strcmp(e->name, "brdf") == 0)
             fprintf(f, "[,f0]");
+        if (e->polygon)
+            fprintf(f, ",v0_x,v0_y,v0_z,...,v2_z[,v3_x,...,v7_z]");
         fprintf(f, " -> ");
         for (int k = 0; k < count(e->outputs, 6); ++k)
             fprintf(f, "%s%s", k ? "," : "", e->outputs[k]);
@@ -175,15 +246,16 @@ int cli_eval(int argc, char **argv)
     if (!e)
         return cli_error(cmd, "unknown function '%s' (see 'mfkit eval --help')", argv[1]);
 
-    eval_opts o = {MF_NDF_GGX, 0, MF_FRESNEL_NONE, MF_G2_JOINT, 256};
-    int fresnel_given = 0, g2_given = 0, points_given = 0;
+    eval_opts o = {MF_NDF_GGX, 0, MF_FRESNEL_NONE, MF_G2_JOINT, 256, MF_POLYGON_TWO_SIDED};
+    int fresnel_given = 0, g2_given = 0, points_given = 0, sided_given = 0;
     for (int i = 2; i < argc; ++i) {
         const char *a = argv[i];
         if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
             cli_eval_usage(stdout);
             return 0;
         }
-        int takes_value = !strcmp(a, "--ndf") || !strcmp(a, "--fresnel") || !strcmp(a, "--g2") || !strcmp(a, "--points");
+        int takes_value = !strcmp(a, "--ndf") || !strcmp(a, "--fresnel") || !strcmp(a, "--g2") ||
+                          !strcmp(a, "--points") || !strcmp(a, "--sided");
         if (!takes_value)
             return cli_error(cmd, "%s: unknown option '%s' (see 'mfkit eval --help')", e->name, a);
         if (i + 1 >= argc)
@@ -209,6 +281,14 @@ int cli_eval(int argc, char **argv)
             else
                 return cli_error(cmd, "--g2: unknown value '%s' (expected joint or separable)", v);
             g2_given = 1;
+        } else if (!strcmp(a, "--sided")) {
+            if (!strcmp(v, "one"))
+                o.sided = MF_POLYGON_ONE_SIDED;
+            else if (!strcmp(v, "two"))
+                o.sided = MF_POLYGON_TWO_SIDED;
+            else
+                return cli_error(cmd, "--sided: unknown value '%s' (expected one or two)", v);
+            sided_given = 1;
         } else {
             if (cli_parse_int(v, 16, 2048, &o.points) != 0 || o.points % 8 != 0)
                 return cli_error(cmd, "--points: '%s' is not a multiple of 8 in [16, 2048]", v);
@@ -225,13 +305,23 @@ int cli_eval(int argc, char **argv)
         return cli_error(cmd, "%s: does not take --g2", e->name);
     if (points_given && strcmp(e->name, "albedo") != 0)
         return cli_error(cmd, "%s: does not take --points", e->name);
+    if (sided_given && !e->polygon)
+        return cli_error(cmd, "%s: does not take --sided", e->name);
 
-    /* required input columns */
-    const char *inputs[13];
+    /* input columns: required ones, then (polygon functions) the vertex columns, of which only the
+     * first N_REQUIRED_VERTEX_COLS are required */
+    const char *inputs[MAX_INPUTS];
+    int required[MAX_INPUTS];
     int nin = count(e->inputs, 12);
     memcpy(inputs, e->inputs, sizeof(char *) * (size_t)nin);
     if (!strcmp(e->name, "brdf") && o.fresnel == MF_FRESNEL_SCHLICK)
         inputs[nin++] = "f0";
+    int first_vertex = nin;
+    if (e->polygon)
+        for (int k = 0; k < N_VERTEX_COLS; ++k)
+            inputs[nin++] = k_vertex_cols[k];
+    for (int k = 0; k < nin; ++k)
+        required[k] = !e->polygon || k < first_vertex + N_REQUIRED_VERTEX_COLS;
     const char *const *outputs = (o.ndf == MF_NDF_BECKMANN && e->outputs_beckmann[0]) ? e->outputs_beckmann : e->outputs;
     int nout = count(outputs, 6);
 
@@ -239,10 +329,10 @@ int cli_eval(int argc, char **argv)
     char msg[256];
     if (cli_csv_read(stdin, &csv, msg, sizeof msg) != 0)
         return cli_error(cmd, "%s: stdin: %s", e->name, msg);
-    int col[13];
+    int col[MAX_INPUTS];
     for (int k = 0; k < nin; ++k) {
         col[k] = cli_csv_column(&csv, inputs[k]);
-        if (col[k] < 0) {
+        if (col[k] < 0 && required[k]) {
             cli_csv_free(&csv);
             return cli_error(cmd, "%s: stdin: missing required column '%s'", e->name, inputs[k]);
         }
@@ -261,9 +351,17 @@ int cli_eval(int argc, char **argv)
     cli_buf_printf(&out, "\n");
     int status = 0;
     for (int r = 0; r < csv.nrows && status == 0; ++r) {
-        double in[13], res[6];
+        double in[MAX_INPUTS], res[6];
         for (int k = 0; k < nin; ++k) {
+            if (col[k] < 0) {
+                in[k] = NAN; /* an absent optional (vertex) column: unused */
+                continue;
+            }
             const char *s = csv.cells[r][col[k]];
+            if (e->polygon && k >= first_vertex && s[0] == '\0') {
+                in[k] = NAN; /* an empty vertex field: unused */
+                continue;
+            }
             if (cli_parse_double(s, &in[k]) != 0) {
                 status = cli_error(cmd, "%s: stdin: data row %d, column '%s': '%s' is not a number", e->name, r + 1,
                                    inputs[k], s);

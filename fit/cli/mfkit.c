@@ -11,7 +11,10 @@ static void usage(FILE *f)
             "commands:\n"
             "  eval FUNCTION   evaluate a core function on CSV rows from stdin (ndf, slope-pdf, lambda,\n"
             "                  lambda-gaussian, g2, brdf, albedo)\n"
-            "  validate        run the property checks of the core math and print a report\n\n"
+            "  validate        run the property checks of the core math and print a report\n"
+            "  table convert IN OUT | table info FILE\n"
+            "                  convert lookup-table files (.exr .dds .json .npy -> also .h .glsl .hlsl\n"
+            "                  .csv) and describe them (needs the OpenImageIO build)\n\n"
             "  --version       print the version\n\n"
             "exit status: 0 success, 1 a validation check failed, 2 usage or input error, 3 I/O error\n");
 }
@@ -41,5 +44,7 @@ int main(int argc, char **argv)
         return cli_eval(argc - 1, argv + 1);
     if (!strcmp(c, "validate"))
         return cli_validate(argc - 1, argv + 1);
+    if (!strcmp(c, "table"))
+        return cli_table(argc - 1, argv + 1);
     return cli_error(NULL, "unknown command '%s' (see 'mfkit --help')", c);
 }

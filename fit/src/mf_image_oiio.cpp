@@ -133,9 +133,71 @@ extern "C" void mf_image_free(mf_image *img)
     img->width = img->height = img->channels = 0;
 }
 
+extern "C" void mf_image_info_free(mf_image_info *info)
+{
+    if (info == nullptr)
+        return;
+    if (info->channel_names != nullptr)
+        for (int c = 0; c < info->nchannels; ++c)
+            std::free(info->channel_names[c]);
+    std::free(info->channel_names);
+    std::free(info->attrib_value);
+    std::memset(info, 0, sizeof *info);
+}
+
+namespace {
+
+char *dup_cstr(const std::string &s)
+{
+    char *p = static_cast<char *>(std::malloc(s.size() + 1));
+    if (p != nullptr)
+        std::memcpy(p, s.c_str(), s.size() + 1);
+    return p;
+}
+
+// Fills info from spec; false on allocation failure (info then zeroed).
+bool fill_info(const OIIO::ImageSpec &spec, const char *attrib_name, mf_image_info *info)
+{
+    std::memset(info, 0, sizeof *info);
+    info->channel_names = static_cast<char **>(std::calloc(static_cast<size_t>(spec.nchannels), sizeof(char *)));
+    if (info->channel_names == nullptr)
+        return false;
+    info->nchannels = spec.nchannels;
+    for (int c = 0; c < spec.nchannels; ++c) {
+        const std::string name = (c < static_cast<int>(spec.channelnames.size())) ? spec.channelnames[c] : std::string();
+        info->channel_names[c] = dup_cstr(name);
+        if (info->channel_names[c] == nullptr) {
+            mf_image_info_free(info);
+            return false;
+        }
+    }
+    if (attrib_name != nullptr) {
+        const OIIO::ParamValue *p = spec.find_attribute(attrib_name, OIIO::TypeDesc::STRING, true);
+        if (p != nullptr && p->nvalues() == 1) {
+            info->attrib_value = dup_cstr(p->get_ustring_indexed(0).string());
+            if (info->attrib_value == nullptr) {
+                mf_image_info_free(info);
+                return false;
+            }
+        }
+    }
+    std::snprintf(info->pixel_type, sizeof info->pixel_type, "%s", spec.format.c_str());
+    return true;
+}
+
+} // namespace
+
 extern "C" mf_status mf_image_read(const char *path, mf_image *out, char *msg, size_t msg_size)
 {
+    return mf_image_read_ex(path, out, nullptr, nullptr, msg, msg_size);
+}
+
+extern "C" mf_status mf_image_read_ex(const char *path, mf_image *out, const char *attrib_name, mf_image_info *info,
+                                      char *msg, size_t msg_size)
+{
     clear_msg(msg, msg_size);
+    if (info != nullptr)
+        std::memset(info, 0, sizeof *info);
     if (out != nullptr) {
         out->width = out->height = out->channels = 0;
         out->pixels = nullptr;
@@ -195,6 +257,11 @@ extern "C" mf_status mf_image_read(const char *path, mf_image *out, char *msg, s
             return MF_ERR_FORMAT;
         }
         (void)in->geterror(); // nothing pending when the input is destroyed
+        if (info != nullptr && !fill_info(spec, attrib_name, info)) {
+            std::free(pixels);
+            set_msg(msg, msg_size, path, "", "out of memory");
+            return MF_ERR_ALLOC;
+        }
         out->width = spec.width;
         out->height = spec.height;
         out->channels = spec.nchannels;
@@ -202,14 +269,17 @@ extern "C" mf_status mf_image_read(const char *path, mf_image *out, char *msg, s
         return MF_OK;
     } catch (const std::bad_alloc &) {
         std::free(pixels);
+        mf_image_info_free(info);
         set_msg(msg, msg_size, path, "", "out of memory");
         return MF_ERR_ALLOC;
     } catch (const std::exception &ex) {
         std::free(pixels);
+        mf_image_info_free(info);
         set_msg(msg, msg_size, path, "internal error: ", ex.what());
         return MF_ERR_INTERNAL;
     } catch (...) {
         std::free(pixels);
+        mf_image_info_free(info);
         set_msg(msg, msg_size, path, "internal error: ", "unknown exception");
         return MF_ERR_INTERNAL;
     }
@@ -218,13 +288,42 @@ extern "C" mf_status mf_image_read(const char *path, mf_image *out, char *msg, s
 extern "C" mf_status mf_image_write(const char *path, const mf_image *img, int half_float, char *msg,
                                     size_t msg_size)
 {
+    mf_image_write_options opt;
+    std::memset(&opt, 0, sizeof opt);
+    opt.half_float = half_float;
+    return mf_image_write_ex(path, img, &opt, msg, msg_size);
+}
+
+extern "C" mf_status mf_image_write_ex(const char *path, const mf_image *img, const mf_image_write_options *options,
+                                       char *msg, size_t msg_size)
+{
     clear_msg(msg, msg_size);
+    mf_image_write_options opt;
+    std::memset(&opt, 0, sizeof opt);
+    if (options != nullptr)
+        opt = *options;
+    const bool use_half_bits = opt.half_float && opt.half_bits != nullptr;
     size_t n = 0;
-    if (path == nullptr || path[0] == '\0' || img == nullptr || img->pixels == nullptr ||
+    if (path == nullptr || path[0] == '\0' || img == nullptr || (img->pixels == nullptr && !use_half_bits) ||
         !pixel_count(img->width, img->height, img->channels, &n)) {
         set_msg(msg, msg_size, path, "", "invalid argument (NULL or empty path, NULL image or pixels, or size < 1)");
         return MF_ERR_DOMAIN;
     }
+    if (opt.channel_names != nullptr)
+        for (int c = 0; c < img->channels; ++c)
+            if (opt.channel_names[c] == nullptr || opt.channel_names[c][0] == '\0') {
+                set_msg(msg, msg_size, path, "", "invalid argument (NULL or empty channel name)");
+                return MF_ERR_DOMAIN;
+            }
+    if (opt.nattribs < 0 || (opt.nattribs > 0 && (opt.attrib_names == nullptr || opt.attrib_values == nullptr))) {
+        set_msg(msg, msg_size, path, "", "invalid argument (attribute arrays)");
+        return MF_ERR_DOMAIN;
+    }
+    for (int a = 0; a < opt.nattribs; ++a)
+        if (opt.attrib_names[a] == nullptr || opt.attrib_names[a][0] == '\0' || opt.attrib_values[a] == nullptr) {
+            set_msg(msg, msg_size, path, "", "invalid argument (NULL or empty attribute name, or NULL value)");
+            return MF_ERR_DOMAIN;
+        }
     try {
         TempFile tmp; // declared first: destroyed (file removed) after the writer has closed it
         // The writer is chosen by the extension of path; the temporary name has the same one.
@@ -252,9 +351,17 @@ extern "C" mf_status mf_image_write(const char *path, const mf_image *img, int h
         }
 
         OIIO::ImageSpec spec(img->width, img->height, img->channels,
-                             half_float ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT);
+                             opt.half_float ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT);
         // The pixels are written as given (no un-premultiplication by alpha in PNG, TIFF, ...).
         spec.attribute("oiio:UnassociatedAlpha", 1);
+        if (opt.channel_names != nullptr) {
+            for (int c = 0; c < img->channels; ++c)
+                spec.channelnames[static_cast<size_t>(c)] = opt.channel_names[c];
+            spec.alpha_channel = -1; // named records, not colour: no channel is alpha
+            spec.z_channel = -1;
+        }
+        for (int a = 0; a < opt.nattribs; ++a)
+            spec.attribute(opt.attrib_names[a], opt.attrib_values[a]);
         if (!out->open(tmp.name, spec)) {
             // The temporary file could be created, so this is (nearly always) the format refusing
             // the image, e.g. more channels than it stores.
@@ -262,7 +369,9 @@ extern "C" mf_status mf_image_write(const char *path, const mf_image *img, int h
             set_msg(msg, msg_size, path, e);
             return MF_ERR_UNSUPPORTED;
         }
-        if (!out->write_image(OIIO::TypeDesc::FLOAT, img->pixels)) {
+        const bool ok = use_half_bits ? out->write_image(OIIO::TypeDesc::HALF, opt.half_bits)
+                                      : out->write_image(OIIO::TypeDesc::FLOAT, img->pixels);
+        if (!ok) {
             const std::string e = object_error(*out);
             out->close();
             (void)out->geterror();

@@ -7,6 +7,7 @@
  */
 #include "mfkit/mf_validate.h"
 #include "mfkit/mf_brdf.h"
+#include "mfkit/mf_ltc.h"
 #include "mfkit/mf_quad.h"
 
 #include <float.h>
@@ -614,11 +615,319 @@ static void check_finite(mf_check *c)
     check_finish(c);
 }
 
+/* ---- checks 9-11: spherical polygons and LTCs (mf_polygon.h, mf_ltc.h) ---------------------- */
+/* Integrals over a planar polygon by a path independent of the library's (no clipping, no edge
+ * formula): over the fan triangles (v0, a, b), each parametrised x(s, t) = v0 + s (a - v0) +
+ * s t (b - a) on [0, 1]^2, where dA = s |n| ds dt with n = (a - v0) x (b - v0), and the solid
+ * angle element is dw = |n.x| dA / (|n| |x|^3); signed, s (n.x) / |x|^3 ds dt, positive when n
+ * points away from the shading point (front-facing, mf_polygon.h).  The integrand f(x / |x|) has
+ * one kink, on the plane k.x = 0 (k = z for the clamped cosine, k = row 2 of M^-1 for an LTC):
+ * k.x is linear in t for fixed s, so the inner rule is split at its root, and the outer rule at
+ * the s where that root enters or leaves [0, 1]. */
+typedef double (*dir_fn)(mf_vec3 w, const void *user);
+
+typedef struct {
+    dir_fn f;
+    const void *user;
+    mf_vec3 v0, ea, eb, n, k; /* ea = a - v0, eb = b - a */
+    int peaked;               /* a narrow lobe: break points around its foot xp */
+    mf_vec3 xp;
+    double s;
+    int failed;
+} tri_ctx;
+
+/* Offsets of the break points around a narrow lobe's foot, from 1e-7 of the parameter range
+ * (a lobe of angular width 1e-3 seen through a triangle 200 times larger than its distance) to
+ * 0.1: the adaptive rules then see the peak at every scale, whatever its width. */
+static const double k_peak_offsets[] = {1e-7, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 0.1};
+#define N_PEAK_OFFSETS ((int)(sizeof k_peak_offsets / sizeof k_peak_offsets[0]))
+
+static int add_peak_points(double centre, double *pts, int np)
+{
+    for (int i = 0; i < N_PEAK_OFFSETS; ++i)
+        for (int sgn = -1; sgn <= 1; sgn += 2) {
+            double x = centre + sgn * k_peak_offsets[i];
+            if (x > 0.0 && x < 1.0)
+                pts[np++] = x;
+        }
+    return np;
+}
+
+static double tri_inner(double t, void *vctx)
+{
+    tri_ctx *q = vctx;
+    mf_vec3 x = mf_vec3_add(q->v0, mf_vec3_scale(mf_vec3_add(q->ea, mf_vec3_scale(q->eb, t)), q->s));
+    double r = mf_vec3_length(x);
+    return q->f(mf_vec3_scale(x, 1.0 / r), q->user) * q->s * mf_vec3_dot(q->n, x) / (r * r * r);
+}
+
+static double tri_outer(double s, void *vctx)
+{
+    tri_ctx *q = vctx;
+    q->s = s;
+    double pts[1 + 2 * N_PEAK_OFFSETS];
+    int np = 0;
+    double ka = mf_vec3_dot(q->k, q->v0) + s * mf_vec3_dot(q->k, q->ea), kb = s * mf_vec3_dot(q->k, q->eb);
+    if (kb != 0.0 && -ka / kb > 0.0 && -ka / kb < 1.0)
+        pts[np++] = -ka / kb;
+    if (q->peaked) {
+        /* the t of this row closest to the foot of the lobe */
+        mf_vec3 d = mf_vec3_sub(q->xp, mf_vec3_add(q->v0, mf_vec3_scale(q->ea, s)));
+        double tp = mf_vec3_dot(d, q->eb) / (s * mf_vec3_dot(q->eb, q->eb));
+        if (isfinite(tp))
+            np = add_peak_points(tp, pts, np);
+    }
+    return integrate_pieces(tri_inner, q, 0.0, 1.0, pts, np, 1e-11, 1e-17, &q->failed);
+}
+
+/* Signed integral of f over the planar polygon p (NaN if a rule did not converge).  peak: the
+ * axis of a narrow lobe of f (or NULL). */
+static double integrate_planar_polygon(const mf_polygon *p, dir_fn f, const void *user, mf_vec3 k, const mf_vec3 *peak)
+{
+    double sum = 0.0;
+    int failed = 0;
+    for (int i = 1; i + 1 < p->n; ++i) {
+        tri_ctx q;
+        memset(&q, 0, sizeof q);
+        q.f = f;
+        q.user = user;
+        q.k = k;
+        q.v0 = p->v[0];
+        q.ea = mf_vec3_sub(p->v[i], p->v[0]);
+        q.eb = mf_vec3_sub(p->v[i + 1], p->v[i]);
+        q.n = mf_vec3_cross(q.ea, mf_vec3_sub(p->v[i + 1], p->v[0]));
+        double pts[2 + 2 * N_PEAK_OFFSETS];
+        int np = 0;
+        if (peak) {
+            /* the foot xp = lambda peak of the lobe's axis on the triangle's plane, and its s:
+             * xp - v0 = s ea + u eb (least squares in the plane) */
+            double lambda = mf_vec3_dot(q.n, q.v0) / mf_vec3_dot(q.n, *peak);
+            if (lambda > 0.0 && isfinite(lambda)) {
+                q.peaked = 1;
+                q.xp = mf_vec3_scale(*peak, lambda);
+                mf_vec3 d = mf_vec3_sub(q.xp, q.v0);
+                double aa = mf_vec3_dot(q.ea, q.ea), ab = mf_vec3_dot(q.ea, q.eb), bb = mf_vec3_dot(q.eb, q.eb);
+                double da = mf_vec3_dot(d, q.ea), db = mf_vec3_dot(d, q.eb);
+                double sp = (da * bb - db * ab) / (aa * bb - ab * ab);
+                if (isfinite(sp))
+                    np = add_peak_points(sp, pts, np);
+            }
+        }
+        /* outer break points: the kink crosses the edge t = 0 (v0 -> a) or t = 1 (v0 -> b) */
+        double k0 = mf_vec3_dot(k, q.v0), k1 = mf_vec3_dot(k, q.ea), k2 = mf_vec3_dot(k, mf_vec3_add(q.ea, q.eb));
+        if (k1 != 0.0 && -k0 / k1 > 0.0 && -k0 / k1 < 1.0)
+            pts[np++] = -k0 / k1;
+        if (k2 != 0.0 && -k0 / k2 > 0.0 && -k0 / k2 < 1.0)
+            pts[np++] = -k0 / k2;
+        sum += integrate_pieces(tri_outer, &q, 0.0, 1.0, pts, np, 1e-11, 1e-16, &failed);
+        failed |= q.failed;
+    }
+    return failed ? NAN : sum;
+}
+
+/* The polygons: planar, at moderate distance; above, across and below the horizon, convex and
+ * not, a vertex and an edge exactly on the horizon, a large one nearly filling the hemisphere,
+ * and a small one (edges 2e-3) at 60 degrees. */
+#define N_VPOLYS 8
+static mf_polygon validate_polygon(int i, char *name, size_t name_size)
+{
+    static const double v[7][8][3] = {
+        {{0.5, -0.5, 1}, {0.5, 0.5, 1}, {-0.5, 0.5, 1}, {-0.5, -0.5, 1}},
+        {{1, 1, -0.5}, {1, 1, 1.2}, {-1, 1, 1.2}, {-1, 1, -0.5}},
+        /* the plane x + y/2 + 2 z = 1 */
+        {{1.2, 0.3, -0.175}, {0.4, 1.0, 0.05}, {-0.6, 0.5, 0.675}, {-0.5, -0.7, 0.925}, {0.6, -1.0, 0.45}},
+        {{0.3, 0.2, -1}, {-0.4, 0.3, -1}, {0.1, -0.5, -1}},
+        /* an L in the plane y = 0.8 */
+        {{-1, 0.8, -0.4}, {1, 0.8, -0.4}, {1, 0.8, 0.2}, {-0.2, 0.8, 0.2}, {-0.2, 0.8, 1.1}, {-1, 0.8, 1.1}},
+        {{0}},
+        /* the plane z = 1.6 (y - 0.5): an edge on the horizon */
+        {{1, 0.5, 0}, {-1, 0.5, 0}, {-1, 1, 0.8}, {1, 1, 0.8}},
+    };
+    static const int nv[7] = {4, 4, 5, 3, 6, 8, 4};
+    static const char *names[N_VPOLYS] = {"zenith square", "vertical quad across the horizon", "tilted pentagon across",
+                                          "triangle below", "L-shaped hexagon across", "octagon r=5 at z=0.05",
+                                          "quad with an edge on the horizon", "triangle 2e-3 at 60 deg"};
+    snprintf(name, name_size, "%s", names[i]);
+    mf_vec3 w[8];
+    if (i == 5) {
+        for (int k = 0; k < 8; ++k)
+            w[k] = mf_vec3_make(5.0 * cos(MF_PI * k / 4), 5.0 * sin(MF_PI * k / 4), 0.05);
+        return mf_polygon_make(8, w);
+    }
+    if (i == 7) {
+        mf_vec3 c = mf_vec3_spherical(60.0 * DEG, 1.0);
+        mf_frame f = mf_frame_from_normal(c);
+        for (int k = 0; k < 3; ++k)
+            w[k] = mf_vec3_add(c, mf_frame_to_world(f, mf_vec3_make(1e-3 * cos(2.1 * k), 1e-3 * sin(2.1 * k), 0.0)));
+        return mf_polygon_make(3, w);
+    }
+    for (int k = 0; k < nv[i]; ++k)
+        w[k] = mf_vec3_make(v[i][k][0], v[i][k][1], v[i][k][2]);
+    return mf_polygon_make(nv[i], w);
+}
+
+static double cosine_dir(mf_vec3 w, const void *user)
+{
+    (void)user;
+    return fmax(0.0, w.z) * MF_INV_PI;
+}
+
+static double ltc_dir(mf_vec3 w, const void *user) { return mf_ltc_eval(user, w); }
+
+/* |a - b| relative to |b|; values below `scale` are compared in absolute terms (in units of
+ * scale), e.g. 0 for polygons below the horizon. */
+static double rel_err(double a, double b, double scale) { return fabs(a - b) / fmax(fabs(b), scale); }
+
+static double one_dir(mf_vec3 w, const void *user)
+{
+    (void)w;
+    (void)user;
+    return 1.0;
+}
+
+static void check_polygon_cosine(mf_check *c)
+{
+    check_init(c, "polygon_cosine",
+               "max relative |Lambert's clipped edge sum - quadrature| of integral max(0,z)/pi dw, and of the solid "
+               "angle, signed, 8 polygons",
+               1e-9);
+    char at[200], name[64];
+    for (int i = 0; i < N_VPOLYS; ++i) {
+        mf_polygon p = validate_polygon(i, name, sizeof name);
+        double q = integrate_planar_polygon(&p, cosine_dir, NULL, mf_vec3_make(0, 0, 1), NULL);
+        double e = mf_polygon_integrate_cosine_signed(&p);
+        snprintf(at, sizeof at, "%s: edge sum %.17g, quadrature %.17g", name, e, q);
+        check_record(c, rel_err(e, q, 1e-15), at);
+        /* the solid angle: the same quadrature of f = 1 (no kink) */
+        double qo = integrate_planar_polygon(&p, one_dir, NULL, mf_vec3_make(0, 0, 0), NULL);
+        double o = mf_polygon_solid_angle_signed(&p);
+        snprintf(at, sizeof at, "%s: solid angle %.17g, quadrature %.17g", name, o, qo);
+        check_record(c, rel_err(o, qo, 1e-15), at);
+    }
+    check_finish(c);
+}
+
+/* The validation matrices: well- and ill-conditioned, det < 0, strong shear, a lobe reaching
+ * below the horizon, anisotropy 1:1000, a near-specular lobe (alpha ~ 1e-3). */
+#define N_VMATS 8
+static mf_mat3 validate_matrix(int i, char *name, size_t name_size)
+{
+    static const double m[N_VMATS][9] = {
+        {1, 0, 0, 0, 1, 0, 0, 0, 1},
+        {0.5, 0, 0.2, 0, 0.5, 0, -0.3, 0, 1},
+        {0.3, 0, 0.9, 0, 0.4, 0, -0.7, 0, 1},
+        {0.8, 0.3, -0.2, -0.1, 0.6, 0.25, 0.3, -0.2, 1.1},
+        {-0.7, 0.1, 0.3, 0.2, 0.9, 0.0, 0.1, 0.2, 1.0},
+        {1.0, 40.0, 0.0, 0.0, 1.0, 25.0, 0.0, 0.0, 1.0},
+        {1e-3, 0, 0, 0, 1, 0, 0, 0.6, 0.8},
+        {-1e-3, 0, 2e-4, 0, 1e-3, 0, 5e-4, 0, 1.0},
+    };
+    static const char *names[N_VMATS] = {"identity", "isotropic (0.5,0.2,0.5,-0.3)", "isotropic grazing (0.3,0.9,0.4,-0.7)",
+                                         "general", "det<0", "shear 40/25", "anisotropic 1:1e3", "near-specular 1e-3 det<0"};
+    snprintf(name, name_size, "%s", names[i]);
+    return mf_ltc_matrix_general(m[i]);
+}
+
+/* Integral of D over the sphere in polar coordinates (t, phi) around the lobe's axis
+ * p = M z / |M z|: the support (M^-1 w).z = r2.w > 0 ends at t = atan2(r2.p, -r2.e(phi)) (r2.p > 0),
+ * where D vanishes linearly, so each inner integrand is smooth; the inner rule is split at
+ * t = 1e-5 ... 2 to find lobes of any width. */
+typedef struct {
+    const mf_ltc *l;
+    mf_vec3 p, e1, e2, r2;
+    double phi;
+    int failed;
+} sph_ctx;
+
+static double sph_inner(double t, void *vctx)
+{
+    sph_ctx *q = vctx;
+    mf_vec3 e = mf_vec3_add(mf_vec3_scale(q->e1, cos(q->phi)), mf_vec3_scale(q->e2, sin(q->phi)));
+    mf_vec3 w = mf_vec3_add(mf_vec3_scale(q->p, cos(t)), mf_vec3_scale(e, sin(t)));
+    return mf_ltc_eval(q->l, w) * sin(t);
+}
+
+static double sph_outer(double phi, void *vctx)
+{
+    sph_ctx *q = vctx;
+    q->phi = phi;
+    mf_vec3 e = mf_vec3_add(mf_vec3_scale(q->e1, cos(phi)), mf_vec3_scale(q->e2, sin(phi)));
+    double tmax = atan2(mf_vec3_dot(q->r2, q->p), -mf_vec3_dot(q->r2, e));
+    static const double scales[] = {1e-5, 1e-4, 1e-3, 1e-2, 0.1, 0.5, 1.0, 2.0};
+    double pts[8];
+    int np = 0;
+    for (int i = 0; i < 8; ++i)
+        if (scales[i] < tmax)
+            pts[np++] = scales[i];
+    return integrate_pieces(sph_inner, q, 0.0, tmax, pts, np, 1e-12, 1e-16, &q->failed);
+}
+
+static void check_ltc_normalisation(mf_check *c)
+{
+    check_init(c, "ltc_normalisation",
+               "|integral of D(w) dw over the sphere - 1| (ERRATA T2 Jacobian), 8 matrices incl. det<0, shear, 1:1e3",
+               1e-9);
+    char at[200], name[64];
+    for (int i = 0; i < N_VMATS; ++i) {
+        mf_ltc l;
+        if (mf_ltc_init(&l, validate_matrix(i, name, sizeof name)) != MF_OK) {
+            check_record(c, NAN, name);
+            continue;
+        }
+        sph_ctx q;
+        memset(&q, 0, sizeof q);
+        q.l = &l;
+        q.p = mf_vec3_normalize(mf_vec3_make(l.m.m[0][2], l.m.m[1][2], l.m.m[2][2]));
+        mf_frame f = mf_frame_from_normal(q.p);
+        q.e1 = f.s;
+        q.e2 = f.t;
+        q.r2 = mf_vec3_make(l.inv.m[2][0], l.inv.m[2][1], l.inv.m[2][2]);
+        double pts[7];
+        for (int k = 0; k < 7; ++k)
+            pts[k] = MF_PI * (k + 1) / 4;
+        double v = integrate_pieces(sph_outer, &q, 0.0, 2.0 * MF_PI, pts, 7, 1e-11, 1e-15, &q.failed);
+        snprintf(at, sizeof at, "%s: integral=%.17g", name, v);
+        check_record(c, q.failed ? NAN : fabs(v - 1.0), at);
+    }
+    check_finish(c);
+}
+
+static void check_ltc_polygon(mf_check *c)
+{
+    check_init(c, "ltc_polygon",
+               "max relative |integral of D over P (clip after M^-1) - quadrature|, one- and two-sided, 8 x 8 cases",
+               1e-9);
+    char at[200], pname[64], mname[64];
+    for (int i = 0; i < N_VMATS; ++i) {
+        mf_ltc l;
+        if (mf_ltc_init(&l, validate_matrix(i, mname, sizeof mname)) != MF_OK) {
+            check_record(c, NAN, mname);
+            continue;
+        }
+        mf_vec3 r2 = mf_vec3_make(l.inv.m[2][0], l.inv.m[2][1], l.inv.m[2][2]);
+        mf_vec3 axis = mf_vec3_normalize(mf_vec3_make(l.m.m[0][2], l.m.m[1][2], l.m.m[2][2])); /* M z */
+        for (int j = 0; j < N_VPOLYS; ++j) {
+            mf_polygon p = validate_polygon(j, pname, sizeof pname);
+            double q = integrate_planar_polygon(&p, ltc_dir, &l, r2, &axis); /* signed by the facing of p */
+            double two = mf_ltc_integrate_polygon(&l, &p, MF_POLYGON_TWO_SIDED);
+            double one = mf_ltc_integrate_polygon(&l, &p, MF_POLYGON_ONE_SIDED);
+            snprintf(at, sizeof at, "%s, %s: %.17g vs quadrature %.17g", mname, pname, two, q);
+            /* values below 1e-6 in absolute terms: far in the tail of a narrow lobe the quadrature's
+             * absolute floor and the edge sum's cancellation (a sliver of M^-1 P near z_o = 0)
+             * leave few relative digits, and nothing depends on them */
+            double err = fmax(rel_err(two, fabs(q), 1e-6), rel_err(one, fmax(0.0, q), 1e-6));
+            check_record(c, isnan(q) ? NAN : err, at);
+        }
+    }
+    check_finish(c);
+}
+
 /* ---- driver -------------------------------------------------------------------------------- */
 typedef void (*check_fn)(mf_check *c);
 static const check_fn k_checks[] = {check_ndf_normalisation, check_projected_area, check_leadr_identity,
                                     check_lambda,            check_walter,         check_reciprocity,
-                                    check_albedo,            check_finite};
+                                    check_albedo,            check_finite,         check_polygon_cosine,
+                                    check_ltc_normalisation, check_ltc_polygon};
 #define N_CHECKS ((int)(sizeof k_checks / sizeof k_checks[0]))
 
 int mf_validate_core_count(void) { return N_CHECKS; }

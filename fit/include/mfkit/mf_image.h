@@ -15,6 +15,7 @@
 #define MF_IMAGE_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 #include <mfkit/mf_core.h>
 
@@ -63,6 +64,55 @@ mf_status mf_image_read(const char *path, mf_image *out, char *msg, size_t msg_s
  */
 mf_status mf_image_write(const char *path, const mf_image *img, int half_float, char *msg, size_t msg_size)
     MF_WARN_UNUSED;
+
+/*
+ * What mf_image_read_ex reports besides the pixels.  Owned by the caller after a successful read;
+ * release with mf_image_info_free.
+ */
+typedef struct mf_image_info {
+    char **channel_names; /* `channels` NUL-terminated names in the order of the returned pixels
+                           * (OpenEXR stores channels sorted by name, and OpenImageIO may reorder
+                           * them, e.g. R, G, B, A first: match channels by name, not position) */
+    int nchannels;        /* entries of channel_names (the image's channel count) */
+    char *attrib_value;   /* the string attribute asked for, or NULL if the file has none */
+    char pixel_type[16];  /* how the file stores samples, OpenImageIO's name: "half", "float", "uint8" */
+} mf_image_info;
+
+/*
+ * mf_image_read, plus the channel names, the stored pixel type and one string attribute of the
+ * file's header (attrib_name, e.g. "mfkit:table"; NULL for none).  info may be NULL (then this is
+ * mf_image_read).  On failure *info is zeroed (nothing to free).  Same status codes as
+ * mf_image_read.
+ */
+mf_status mf_image_read_ex(const char *path, mf_image *out, const char *attrib_name, mf_image_info *info, char *msg,
+                           size_t msg_size) MF_WARN_UNUSED;
+void mf_image_info_free(mf_image_info *info); /* NULL and zeroed infos are accepted */
+
+/*
+ * Options of mf_image_write_ex.  A zeroed struct gives mf_image_write(path, img, 0, ...).
+ */
+typedef struct mf_image_write_options {
+    int half_float;                    /* as mf_image_write */
+    const uint16_t *half_bits;         /* with half_float: NULL, or the IEEE binary16 bit patterns to
+                                        * store (same layout as img->pixels, which may then be NULL),
+                                        * written as given, so the caller controls the float -> half
+                                        * rounding; ignored without half_float */
+    const char *const *channel_names;  /* NULL (defaults as mf_image_write), or img->channels non-empty
+                                        * distinct names; no channel is then treated as alpha */
+    int nattribs;                      /* string attributes for the file header (OpenEXR: string
+                                        * attributes under these names; formats without free-form
+                                        * metadata drop them) */
+    const char *const *attrib_names;   /* nattribs names, e.g. "mfkit:table" (not "oiio:...") */
+    const char *const *attrib_values;  /* nattribs NUL-terminated values */
+} mf_image_write_options;
+
+/*
+ * mf_image_write with channel names, string attributes and exact half bits.  opt may be NULL
+ * (32-bit floats, default names).  Atomic as mf_image_write; same status codes, MF_ERR_DOMAIN also
+ * for NULL or empty channel names and NULL attribute names or values.
+ */
+mf_status mf_image_write_ex(const char *path, const mf_image *img, const mf_image_write_options *opt, char *msg,
+                            size_t msg_size) MF_WARN_UNUSED;
 
 /* Free the pixels of an image filled by mf_image_read and zero it.  NULL and zeroed images are
  * accepted (no-op); calling it twice is safe. */

@@ -10,7 +10,15 @@
 #include "mfkit/mf_fresnel.h"
 #include "mfkit/mf_brdf.h"
 #include "mfkit/mf_sample.h"
+#include "mfkit/mf_polygon.h"
+#include "mfkit/mf_ltc.h"
 #include "mfkit/mf_validate.h"
 #include "mfkit/mf_table.h"
+#include "mfkit/mf_sh.h"
+#include "mfkit/mf_leadr.h"
+#include "mfkit/mf_moments.h"
+#include "mfkit/mf_filter.h"
+
+#include "mfkit/mf_ltc_table.h"
 
 #endif /* MFKIT_H */
