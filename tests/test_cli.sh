@@ -38,6 +38,22 @@ out=$(printf 'alpha_x,alpha_y,wo_x,wo_y,wo_z,wi_x,wi_y,wi_z,f0\n0.3,0.3,0,0,1,0,
 ok 'echo "$out" | head -1 | grep -q ",f0,f$"' "brdf schlick header: $out"
 out=$(run "albedo --ndf ggx" "alpha,cos_theta_o" "0.5,0.5")
 ok 'echo "$out" | head -1 | grep -q "alpha,cos_theta_o,albedo,albedo_err"' "albedo header"
+# issue 4 and 5 functions: closed forms
+out=$(run "ggx-proxy" "alpha,dh" "0.5,0")
+ok '[ "$(echo "$out" | tail -1)" = "0.5,0,0.5,0.5" ]' "ggx-proxy dh=0 is alpha: $out"
+out=$(run "beckmann-filter" "alpha_x,alpha_y,cov_xx,cov_xy,cov_yy" "0.2,0.1,0.01,0.002,0.02")
+ok 'echo "$out" | tail -1 | grep -q ",0.0300*[0-9]*,0.002,0.0250*[0-9]*$"' "beckmann-filter B + P: $out"
+out=$(run "bump-roughness" "var_u,var_v,cov_uv,alpha_u,alpha_v" "0.01,0.01,0,0.1,0.1")
+ok '[ "$(echo "$out" | tail -1)" = "0.01,0.01,0,0.1,0.1,0.17320508075688773,0.17320508075688773,1,0" ]' "bump-roughness sqrt(a^2 + 2 var): $out"
+out=$(run "sh-irradiance" "L00,L1m1,L10,L11,L2m2,L2m1,L20,L21,L22,n_x,n_y,n_z" "3.5449077018110318,0,0,0,0,0,0,0,0,0,0,1")
+ok 'echo "$out" | tail -1 | grep -q ",3.14159265358979"' "sh-irradiance of a constant sky is pi: $out"
+out=$(run "ggx-rect" "alpha_x,alpha_y,x0,x1,y0,y1" "0.3,0.3,-1e-9,1e-9,-1e-9,1e-9")
+ok 'echo "$out" | tail -1 | grep -q ",3.536776513153"' "ggx-rect of a tiny square is the peak 1/(pi a^2): $out"
+out=$(printf 'mean_x,mean_y,var_x,var_y,cov_xy,wo_x,wo_y,wo_z,wi_x,wi_y,wi_z\n0,0,0.02,0.02,0,0,0,1,0.6,0,0.8\n' | "$mfkit" eval leadr --grid 8 --lambda 3 --grid-layout cell-centres)
+ok 'echo "$out" | head -1 | grep -q ",specular,diffuse$"' "leadr header: $out"
+expect_error "grid on ndf" "" "does not take --grid" eval ndf --ndf ggx --grid 3
+expect_error "bad grid" "" "--grid: '0'" eval leadr --grid 0
+expect_error "bad lambda" "" "--lambda: '-1'" eval leadr --lambda -1
 # out-of-domain rows give nan, the other rows are unaffected; extra columns are echoed
 out=$(printf 'id,alpha_x,alpha_y,m_x,m_y,m_z\na,-1,0.5,0,0,1\nb,0.5,0.5,0,0,1\nc,nan,0.5,0,0,1\n' | "$mfkit" eval ndf --ndf ggx)
 ok '[ "$(echo "$out" | sed -n 2p)" = "a,-1,0.5,0,0,1,nan" ]' "negative alpha -> nan: $out"

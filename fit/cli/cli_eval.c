@@ -27,19 +27,32 @@ typedef struct {
     mf_g2_form g2;
     long points;
     mf_polygon_sided sided;
+    long grid;                      /* leadr: N of the N x N grid */
+    double lambda;                  /* leadr: extent of the grid in standard deviations */
+    mf_leadr_grid_layout layout;    /* leadr: end points or cell centres (ERRATA L7) */
 } eval_opts;
+
+/* Options a function accepts (eval_function.options). */
+enum {
+    OPT_NDF = 1,
+    OPT_FRESNEL = 2,
+    OPT_G2 = 4,
+    OPT_POINTS = 8,
+    OPT_SIDED = 16,
+    OPT_GRID = 32 /* --grid, --lambda, --grid-layout */
+};
 
 typedef void (*eval_fn)(const eval_opts *o, const double *in, double *out);
 
 typedef struct {
     const char *name;
     const char *summary;
-    int needs_ndf;
     const char *inputs[12];
     const char *outputs[6];            /* outputs for GGX (or the only ones) */
     const char *outputs_beckmann[6];   /* when they differ for Beckmann, else {NULL} */
     eval_fn fn;
     int polygon;                       /* 1: the inputs are followed by the polygon's vertex columns */
+    unsigned options;                  /* OPT_* the function accepts (OPT_NDF: required) */
 } eval_function;
 
 /* Vertex columns of the polygon functions: the first 3 vertices required, the others optional. */
@@ -153,31 +166,111 @@ static void fn_ltc_polygon(const eval_opts *o, const double *in, double *out)
         out[0] = mf_ltc_integrate_polygon(&l, &p, o->sided);
 }
 
+static void fn_ggx_rect(const eval_opts *o, const double *in, double *out)
+{
+    (void)o;
+    out[0] = (in[3] >= in[2] && in[5] >= in[4])
+                 ? mf_filter_ggx_rect_mean_bounds(in[0], in[1], in[2], in[3], in[4], in[5])
+                 : NAN;
+}
+
+static void fn_ggx_proxy(const eval_opts *o, const double *in, double *out)
+{
+    (void)o;
+    out[0] = mf_filter_ggx_proxy_alpha(in[0], in[1]);
+    out[1] = mf_filter_ggx_proxy_alpha_approx(in[0], in[1]);
+}
+
+static void fn_beckmann_filter(const eval_opts *o, const double *in, double *out)
+{
+    (void)o;
+    mf_sym2 p = {in[2], in[3], in[4]};
+    mf_gaussian_slopes g = mf_filter_beckmann(in[0], in[1], p);
+    out[0] = g.var_x;
+    out[1] = g.cov_xy;
+    out[2] = g.var_y;
+}
+
+static void fn_bump_roughness(const eval_opts *o, const double *in, double *out)
+{
+    (void)o;
+    mf_sym2 cov = {in[0], in[2], in[1]};
+    mf_aniso_roughness r = mf_hery_bump_roughness(in[3], in[4], cov);
+    out[0] = r.alpha1;
+    out[1] = r.alpha2;
+    out[2] = r.dir1[0];
+    out[3] = r.dir1[1];
+}
+
+static void fn_sh_irradiance(const eval_opts *o, const double *in, double *out)
+{
+    (void)o;
+    out[0] = mf_sh_irradiance(in, mf_vec3_make(in[9], in[10], in[11]));
+}
+
+static double leadr_one_light(mf_vec3 wn, void *user)
+{
+    const double *ctx = user; /* g (5), wo (3), wi (3) */
+    mf_gaussian_slopes g = {ctx[0], ctx[1], ctx[2], ctx[3], ctx[4]};
+    mf_leadr_light light = {mf_vec3_make(ctx[8], ctx[9], ctx[10]), 1.0};
+    return mf_leadr_irradiance_lights(&g, mf_vec3_make(ctx[5], ctx[6], ctx[7]), &light, 1, wn);
+}
+
+static void fn_leadr(const eval_opts *o, const double *in, double *out)
+{
+    mf_gaussian_slopes g = {in[0], in[1], in[2], in[3], in[4]};
+    mf_vec3 wo = mf_vec3_make(in[5], in[6], in[7]), wi = mf_vec3_make(in[8], in[9], in[10]);
+    mf_fresnel none = {MF_FRESNEL_NONE, 0.0, 0.0, 0.0};
+    out[0] = mf_leadr_specular(&g, none, wo, wi);
+    mf_leadr_grid grid;
+    double d;
+    if (mf_leadr_grid_init(&grid, (int)o->grid, o->lambda, o->layout) != MF_OK
+        || mf_leadr_diffuse(&grid, &g, wo, leadr_one_light, (void *)in, &d) != MF_OK)
+        d = NAN;
+    out[1] = d;
+}
+
 #define WO "wo_x", "wo_y", "wo_z"
 #define WI "wi_x", "wi_y", "wi_z"
 #define LTC_M "m00", "m01", "m02", "m10", "m11", "m12", "m20", "m21", "m22"
 static const eval_function k_functions[] = {
-    {"ndf", "D(wm), per steradian of micro-normal", 1, {"alpha_x", "alpha_y", "m_x", "m_y", "m_z"}, {"D"}, {NULL},
-     fn_ndf, 0},
-    {"slope-pdf", "P22(slope), per unit slope area", 1, {"alpha_x", "alpha_y", "slope_x", "slope_y"}, {"P22"}, {NULL},
-     fn_slope_pdf, 0},
-    {"lambda", "Smith Lambda(w) (Beckmann: also Walter's rational form)", 1, {"alpha_x", "alpha_y", "w_x", "w_y", "w_z"},
-     {"Lambda"}, {"Lambda", "Lambda_approx"}, fn_lambda, 0},
-    {"lambda-gaussian", "Lambda of non-centred anisotropic Gaussian slopes (exact, Walter)", 0,
+    {"ndf", "D(wm), per steradian of micro-normal", {"alpha_x", "alpha_y", "m_x", "m_y", "m_z"}, {"D"}, {NULL},
+     fn_ndf, 0, OPT_NDF},
+    {"slope-pdf", "P22(slope), per unit slope area", {"alpha_x", "alpha_y", "slope_x", "slope_y"}, {"P22"}, {NULL},
+     fn_slope_pdf, 0, OPT_NDF},
+    {"lambda", "Smith Lambda(w) (Beckmann: also Walter's rational form)", {"alpha_x", "alpha_y", "w_x", "w_y", "w_z"},
+     {"Lambda"}, {"Lambda", "Lambda_approx"}, fn_lambda, 0, OPT_NDF},
+    {"lambda-gaussian", "Lambda of non-centred anisotropic Gaussian slopes (exact, Walter)",
      {"mean_x", "mean_y", "var_x", "var_y", "cov_xy", "w_x", "w_y", "w_z"}, {"Lambda", "Lambda_approx"}, {NULL},
-     fn_lambda_gaussian, 0},
-    {"g2", "G1 of each direction and both masking-shadowing forms", 1, {"alpha_x", "alpha_y", WO, WI},
-     {"G1_o", "G1_i", "G2_joint", "G2_separable"}, {NULL}, fn_g2, 0},
-    {"brdf", "microfacet reflection BRDF f(wo, wi), without the cosine", 1, {"alpha_x", "alpha_y", WO, WI}, {"f"},
-     {NULL}, fn_brdf, 0},
-    {"albedo", "directional albedo (no Fresnel) by quadrature, with its error estimate", 1, {"alpha", "cos_theta_o"},
-     {"albedo", "albedo_err"}, {NULL}, fn_albedo, 0},
-    {"polygon-cosine", "integral of max(0,z)/pi over a polygon (Lambert), and its solid angle (sr)", 0, {"n"},
-     {"E", "solid_angle"}, {NULL}, fn_polygon_cosine, 1},
-    {"ltc", "LTC density D(w) of the matrix M (row-major), per steradian", 0, {LTC_M, "w_x", "w_y", "w_z"}, {"D"},
-     {NULL}, fn_ltc, 0},
-    {"ltc-polygon", "integral of the LTC density of M over a polygon", 0, {LTC_M, "n"}, {"integral"}, {NULL},
-     fn_ltc_polygon, 1},
+     fn_lambda_gaussian, 0, 0},
+    {"g2", "G1 of each direction and both masking-shadowing forms", {"alpha_x", "alpha_y", WO, WI},
+     {"G1_o", "G1_i", "G2_joint", "G2_separable"}, {NULL}, fn_g2, 0, OPT_NDF},
+    {"brdf", "microfacet reflection BRDF f(wo, wi), without the cosine", {"alpha_x", "alpha_y", WO, WI}, {"f"},
+     {NULL}, fn_brdf, 0, OPT_NDF | OPT_FRESNEL | OPT_G2},
+    {"albedo", "directional albedo (no Fresnel) by quadrature, with its error estimate", {"alpha", "cos_theta_o"},
+     {"albedo", "albedo_err"}, {NULL}, fn_albedo, 0, OPT_NDF | OPT_G2 | OPT_POINTS},
+    {"polygon-cosine", "integral of max(0,z)/pi over a polygon (Lambert), and its solid angle (sr)", {"n"},
+     {"E", "solid_angle"}, {NULL}, fn_polygon_cosine, 1, OPT_SIDED},
+    {"ltc", "LTC density D(w) of the matrix M (row-major), per steradian", {LTC_M, "w_x", "w_y", "w_z"}, {"D"},
+     {NULL}, fn_ltc, 0, 0},
+    {"ltc-polygon", "integral of the LTC density of M over a polygon", {LTC_M, "n"}, {"integral"}, {NULL},
+     fn_ltc_polygon, 1, OPT_SIDED},
+    {"ggx-rect", "mean of the GGX slope density P22 over the rectangle [x0,x1] x [y0,y1] (Kaplanyan App. A)",
+     {"alpha_x", "alpha_y", "x0", "x1", "y0", "y1"}, {"mean_P22"}, {NULL}, fn_ggx_rect, 0, 0},
+    {"ggx-proxy", "GGX proxy roughness of the square slope footprint of full width dh (Kaplanyan Eq. 19)",
+     {"alpha", "dh"}, {"alpha_eff", "alpha_eff_sqrt"}, {NULL}, fn_ggx_proxy, 0, 0},
+    {"beckmann-filter", "Beckmann filtered by a slope covariance: B' = diag(alpha^2/2) + P (Kaplanyan Eq. 14-15)",
+     {"alpha_x", "alpha_y", "cov_xx", "cov_xy", "cov_yy"}, {"out_cov_xx", "out_cov_xy", "out_cov_yy"}, {NULL},
+     fn_beckmann_filter, 0, 0},
+    {"bump-roughness", "Hery's bump roughness: base alphas + slope covariance -> two roughnesses, first direction",
+     {"var_u", "var_v", "cov_uv", "alpha_u", "alpha_v"}, {"alpha_1", "alpha_2", "dir_x", "dir_y"}, {NULL},
+     fn_bump_roughness, 0, 0},
+    {"sh-irradiance", "irradiance E(n) from 9 SH radiance coefficients (Ramamoorthi-Hanrahan)",
+     {"L00", "L1m1", "L10", "L11", "L2m2", "L2m1", "L20", "L21", "L22", "n_x", "n_y", "n_z"}, {"E"}, {NULL},
+     fn_sh_irradiance, 0, 0},
+    {"leadr", "LEADR shading, one directional light: specular Eq. 17 (I/L), rough diffuse Eq. 21 by the grid",
+     {"mean_x", "mean_y", "var_x", "var_y", "cov_xy", WO, WI}, {"specular", "diffuse"}, {NULL}, fn_leadr, 0,
+     OPT_GRID},
 };
 #define N_FUNCTIONS ((int)(sizeof k_functions / sizeof k_functions[0]))
 
@@ -193,7 +286,8 @@ void cli_eval_usage(FILE *f)
 {
     fprintf(f,
             "usage: mfkit eval FUNCTION [--ndf ggx|beckmann] [--fresnel none|schlick] [--g2 joint|separable]\n"
-            "                           [--points N] [--sided one|two] < in.csv > out.csv\n\n"
+            "                           [--points N] [--sided one|two] [--grid N] [--lambda L]\n"
+            "                           [--grid-layout end-points|cell-centres] < in.csv > out.csv\n\n"
             "Reads CSV with a header from stdin and writes CSV to stdout: every input column echoed,\n"
             "then the outputs (%%.17g). Rows outside the domain give nan. Directions are unit vectors in\n"
             "the z-up shading frame, pointing away from the surface.\n\n"
@@ -204,13 +298,17 @@ void cli_eval_usage(FILE *f)
             "  --points N              albedo only: quadrature points per axis, a multiple of 8 in [16, 2048]\n"
             "                          (default 256)\n"
             "  --sided one|two         polygon functions: two (default) counts the polygon from either side;\n"
-            "                          one only when it faces the shading point (vertices clockwise seen from it)\n\n"
+            "                          one only when it faces the shading point (vertices clockwise seen from it)\n"
+            "  --grid N                leadr: the N x N Gaussian grid of LEADR Sec. 5.1 (default 5)\n"
+            "  --lambda L              leadr: the grid covers [-L, L] standard deviations (default 1.8)\n"
+            "  --grid-layout end-points|cell-centres\n"
+            "                          leadr: the two readings of Sec. 5.1 (ERRATA L7; default end-points)\n\n"
             "Polygons: n (3..8) vertices v0..v7 (positions relative to the shading point); columns v3..v7\n"
             "may be absent and empty vertex fields are unused.\n\n"
             "functions (inputs -> outputs):\n");
     for (int i = 0; i < N_FUNCTIONS; ++i) {
         const eval_function *e = &k_functions[i];
-        fprintf(f, "  %-16s%s %s\n    ", e->name, e->needs_ndf ? "*" : " ", e->summary);
+        fprintf(f, "  %-16s%s %s\n    ", e->name, (e->options & OPT_NDF) ? "*" : " ", e->summary);
         for (int k = 0; k < count(e->inputs, 12); ++k)
             fprintf(f, "%s%s", k ? "," : "", e->inputs[k]);
         if (strcmp(e->name, "brdf") == 0)
@@ -246,18 +344,28 @@ int cli_eval(int argc, char **argv)
     if (!e)
         return cli_error(cmd, "unknown function '%s' (see 'mfkit eval --help')", argv[1]);
 
-    eval_opts o = {MF_NDF_GGX, 0, MF_FRESNEL_NONE, MF_G2_JOINT, 256, MF_POLYGON_TWO_SIDED};
-    int fresnel_given = 0, g2_given = 0, points_given = 0, sided_given = 0;
+    eval_opts o = {MF_NDF_GGX, 0, MF_FRESNEL_NONE, MF_G2_JOINT, 256, MF_POLYGON_TWO_SIDED,
+                   5, 1.8, MF_LEADR_GRID_END_POINTS};
+    static const struct {
+        const char *name;
+        unsigned opt;
+    } k_options[] = {{"--ndf", OPT_NDF},       {"--fresnel", OPT_FRESNEL}, {"--g2", OPT_G2},
+                     {"--points", OPT_POINTS}, {"--sided", OPT_SIDED},     {"--grid", OPT_GRID},
+                     {"--lambda", OPT_GRID},   {"--grid-layout", OPT_GRID}};
     for (int i = 2; i < argc; ++i) {
         const char *a = argv[i];
         if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
             cli_eval_usage(stdout);
             return 0;
         }
-        int takes_value = !strcmp(a, "--ndf") || !strcmp(a, "--fresnel") || !strcmp(a, "--g2") ||
-                          !strcmp(a, "--points") || !strcmp(a, "--sided");
-        if (!takes_value)
+        unsigned opt = 0;
+        for (size_t k = 0; k < sizeof k_options / sizeof k_options[0]; ++k)
+            if (!strcmp(a, k_options[k].name))
+                opt = k_options[k].opt;
+        if (!opt)
             return cli_error(cmd, "%s: unknown option '%s' (see 'mfkit eval --help')", e->name, a);
+        if (!(e->options & opt))
+            return cli_error(cmd, "%s: does not take %s", e->name, a);
         if (i + 1 >= argc)
             return cli_error(cmd, "%s: option %s needs a value", e->name, a);
         const char *v = argv[++i];
@@ -272,7 +380,6 @@ int cli_eval(int argc, char **argv)
                 o.fresnel = MF_FRESNEL_SCHLICK;
             else
                 return cli_error(cmd, "--fresnel: unknown value '%s' (expected none or schlick)", v);
-            fresnel_given = 1;
         } else if (!strcmp(a, "--g2")) {
             if (!strcmp(v, "joint"))
                 o.g2 = MF_G2_JOINT;
@@ -280,7 +387,6 @@ int cli_eval(int argc, char **argv)
                 o.g2 = MF_G2_SEPARABLE;
             else
                 return cli_error(cmd, "--g2: unknown value '%s' (expected joint or separable)", v);
-            g2_given = 1;
         } else if (!strcmp(a, "--sided")) {
             if (!strcmp(v, "one"))
                 o.sided = MF_POLYGON_ONE_SIDED;
@@ -288,25 +394,26 @@ int cli_eval(int argc, char **argv)
                 o.sided = MF_POLYGON_TWO_SIDED;
             else
                 return cli_error(cmd, "--sided: unknown value '%s' (expected one or two)", v);
-            sided_given = 1;
-        } else {
+        } else if (!strcmp(a, "--points")) {
             if (cli_parse_int(v, 16, 2048, &o.points) != 0 || o.points % 8 != 0)
                 return cli_error(cmd, "--points: '%s' is not a multiple of 8 in [16, 2048]", v);
-            points_given = 1;
+        } else if (!strcmp(a, "--grid")) {
+            if (cli_parse_int(v, 1, MF_LEADR_GRID_MAX, &o.grid) != 0)
+                return cli_error(cmd, "--grid: '%s' is not an integer in [1, %d]", v, MF_LEADR_GRID_MAX);
+        } else if (!strcmp(a, "--lambda")) {
+            if (cli_parse_double(v, &o.lambda) != 0 || !(o.lambda > 0.0) || !isfinite(o.lambda))
+                return cli_error(cmd, "--lambda: '%s' is not a positive number", v);
+        } else { /* --grid-layout */
+            if (!strcmp(v, "end-points"))
+                o.layout = MF_LEADR_GRID_END_POINTS;
+            else if (!strcmp(v, "cell-centres"))
+                o.layout = MF_LEADR_GRID_CELL_CENTRES;
+            else
+                return cli_error(cmd, "--grid-layout: unknown value '%s' (expected end-points or cell-centres)", v);
         }
     }
-    if (e->needs_ndf && !o.have_ndf)
+    if ((e->options & OPT_NDF) && !o.have_ndf)
         return cli_error(cmd, "%s: --ndf ggx|beckmann is required", e->name);
-    if (!e->needs_ndf && o.have_ndf)
-        return cli_error(cmd, "%s: does not take --ndf", e->name);
-    if (fresnel_given && strcmp(e->name, "brdf") != 0)
-        return cli_error(cmd, "%s: does not take --fresnel", e->name);
-    if (g2_given && strcmp(e->name, "brdf") != 0 && strcmp(e->name, "albedo") != 0)
-        return cli_error(cmd, "%s: does not take --g2", e->name);
-    if (points_given && strcmp(e->name, "albedo") != 0)
-        return cli_error(cmd, "%s: does not take --points", e->name);
-    if (sided_given && !e->polygon)
-        return cli_error(cmd, "%s: does not take --sided", e->name);
 
     /* input columns: required ones, then (polygon functions) the vertex columns, of which only the
      * first N_REQUIRED_VERTEX_COLS are required */

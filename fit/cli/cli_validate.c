@@ -1,5 +1,7 @@
 /*
- * cli_validate.c -- `mfkit validate`: the property checks of the core math (mf_validate.h).
+ * cli_validate.c -- `mfkit validate`: the property checks of the core math (mf_validate.h), or,
+ * with a file argument, the LTC gate (mf_ltc_gate.h) on a table file: an mfkit table (EXR, DDS,
+ * JSON, NPY through mf_table_read) or the reference CSV layout (mf_ltc_reference.h).
  * Exit code 0 when every check passes, 1 when one fails, 2 for a usage error, 3 for an I/O error.
  */
 #define _POSIX_C_SOURCE 200809L
@@ -7,6 +9,10 @@
 #include "cli_util.h"
 
 #include "mfkit/mfkit.h"
+#ifdef MFKIT_HAVE_CXX_DEPS
+#include "mfkit/mf_ltc_reference.h"
+#include "mfkit/mf_table_io.h"
+#endif
 
 #include <stdlib.h>
 #include <string.h>
@@ -16,11 +22,22 @@
 static void usage(FILE *f)
 {
     fprintf(f,
-            "usage: mfkit validate [--json] [--json-file PATH] [--quiet]\n\n"
-            "Runs the property checks of the core math over a grid of the whole domain (alpha 1e-4..1,\n"
-            "view angles up to 89.99 deg, anisotropy up to 1:100, non-centred means up to slope 2) and\n"
-            "prints one row per check: name, worst value, bound, pass/FAIL, cases, where the worst was.\n\n"
+            "usage: mfkit validate [--json] [--json-file PATH] [--quiet]\n"
+            "       mfkit validate TABLE [--brdf NAME] [--quick] [--seed S] [--json] [--json-file PATH]\n\n"
+            "Without TABLE: runs the property checks of the core math over a grid of the whole domain\n"
+            "(alpha 1e-4..1, view angles up to 89.99 deg, anisotropy up to 1:100, non-centred means up to\n"
+            "slope 2) and prints one row per check: name, worst value, bound, pass/FAIL, cases, where the\n"
+            "worst was.\n\n"
+            "With TABLE (an LTC table: .exr, .dds, .json, .npy written by mfkit, or a .csv in the layout of\n"
+            "the reference ltc_code table): runs the LTC gate (docs/validation.md): finite values, energy,\n"
+            "normalisation, smoothness and, with the BRDF (--brdf, else the table's \"brdf\" metadata),\n"
+            "albedo by quadrature and Monte Carlo and polygon shading against Monte Carlo.\n\n"
             "options:\n"
+            "  --brdf NAME       the BRDF the table approximates (ggx, beckmann, lambert, ...); 'none':\n"
+            "                    model-free checks only\n"
+            "  --quick           model checks on an 8 x 8 grid of texels (default: every texel for the\n"
+            "                    albedo, a 16 x 16 grid for polygons)\n"
+            "  --seed S          seed of the Monte Carlo checks (default 1)\n"
             "  --json            print the report as JSON on stdout instead of the table\n"
             "  --json-file PATH  also write the JSON report to PATH (atomically)\n"
             "  --quiet           no progress on stderr (progress is shown only on a terminal anyway)\n\n"
@@ -98,11 +115,128 @@ static void report_table(cli_buf *b, const mf_check *c, int n, int all_passed)
     cli_buf_printf(b, "%s\n", all_passed ? "all checks passed" : "SOME CHECKS FAILED");
 }
 
+/* The LTC gate on a table file. */
+static int validate_table(const char *path, const char *brdf, int quick, uint64_t seed, int json, const char *json_file,
+                          int quiet)
+{
+    const char *cmd = "validate";
+#ifndef MFKIT_HAVE_CXX_DEPS
+    (void)path, (void)brdf, (void)quick, (void)seed, (void)json, (void)json_file, (void)quiet;
+    fprintf(stderr, "mfkit validate: reading table files needs a build with MFKIT_WITH_CXX_DEPS=ON\n");
+    return 2;
+#else
+    mf_table t;
+    char msg[1024];
+    mf_status st;
+    int is_ref = 0;
+    mf_table_format fmt = mf_table_format_from_path(path);
+    if (fmt == MF_TABLE_FORMAT_CSV) {
+        is_ref = 1;
+        st = mf_ltc_reference_read_csv(path, &t, msg, sizeof msg);
+    } else if (mf_table_format_readable(fmt)) {
+        st = mf_table_read(path, &t, NULL, msg, sizeof msg);
+    } else {
+        return cli_error(cmd, "%s: not a readable table format (.exr, .dds, .json, .npy, or a reference .csv)", path);
+    }
+    if (st != MF_OK) {
+        cli_error(cmd, "%s", msg[0] ? msg : mf_status_str(st));
+        return st == MF_ERR_DOMAIN || st == MF_ERR_UNSUPPORTED ? 2 : 3;
+    }
+    const mf_brdf_model *model = NULL;
+    const char *name = brdf ? brdf : mf_table_get_meta(&t, "brdf");
+    if (name && strcmp(name, "none") != 0) {
+        model = mf_brdf_model_find(name);
+        if (!model) {
+            mf_table_free(&t);
+            return cli_error(cmd, "unknown BRDF '%s' (see 'mfkit fit ltc --help' for the names)", name);
+        }
+    }
+    mf_ltc_gate_options o;
+    mf_ltc_gate_options_default(&o);
+    o.seed = seed;
+    o.quick = quick;
+    mf_ltc_gate_stats stats;
+    memset(&stats, 0, sizeof stats);
+    o.stats = &stats;
+    mf_check checks[MF_LTC_GATE_MAX_CHECKS];
+    int n = 0;
+    struct timespec t0;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    if (!quiet && isatty(fileno(stderr)))
+        fprintf(stderr, "mfkit validate: running the LTC gate on %s (%s)...\n", path, model ? model->name : "no model");
+    st = mf_ltc_gate_run(&t, model, &o, checks, MF_LTC_GATE_MAX_CHECKS, &n);
+    double secs = elapsed(&t0);
+    int n_r = t.axes[0].size, n_u = t.naxes > 1 ? t.axes[1].size : 0;
+    mf_table_free(&t);
+    if (st == MF_ERR_DOMAIN)
+        return cli_error(cmd, "%s: not an LTC table layout (two axes r: alpha = r^2 and u: cos = 1 - u^2, fields "
+                              "minv_00, minv_20, minv_02, minv_22, magnitude)", path), 3;
+    if (st != MF_OK && st != MF_ERR_CHECK_FAILED)
+        return cli_error(cmd, "%s: %s", path, mf_status_str(st)), 3;
+    int all = (st == MF_OK);
+    cli_buf jb = {0}, tb = {0};
+    cli_buf_printf(&jb, "{\n  \"tool\": \"mfkit validate\",\n  \"version\": \"%s\",\n  \"table\": ", MFKIT_VERSION);
+    json_string(&jb, path);
+    cli_buf_printf(&jb, ",\n  \"layout\": \"%s\",\n  \"size\": [%d, %d],\n  \"brdf\": ",
+                   is_ref ? "reference-csv" : "mfkit", n_r, n_u);
+    if (model)
+        json_string(&jb, model->name);
+    else
+        cli_buf_printf(&jb, "null");
+    cli_buf_printf(&jb, ",\n  \"seed\": %llu,\n  \"quick\": %s,\n  \"seconds\": %.3f,\n", (unsigned long long)seed,
+                   quick ? "true" : "false", secs);
+    if (model) {
+        cli_buf_printf(&jb, "  \"polygon_errors\": {\"polygons\": %ld, \"texels\": %ld, \"mean_abs\": ", stats.polygons,
+                       stats.entries);
+        json_number(&jb, stats.mean_abs);
+        cli_buf_printf(&jb, ", \"p95_abs\": ");
+        json_number(&jb, stats.p95_abs);
+        cli_buf_printf(&jb, ", \"worst_abs\": ");
+        json_number(&jb, stats.worst_abs);
+        cli_buf_printf(&jb, ", \"mean_rel\": ");
+        json_number(&jb, stats.mean_rel);
+        cli_buf_printf(&jb, ", \"p95_rel\": ");
+        json_number(&jb, stats.p95_rel);
+        cli_buf_printf(&jb, ", \"worst_rel\": ");
+        json_number(&jb, stats.worst_rel);
+        cli_buf_printf(&jb, ", \"mean_mc_se\": ");
+        json_number(&jb, stats.mean_se);
+        cli_buf_printf(&jb, "},\n");
+    }
+    /* The checks, as for the core report (drop its opening lines). */
+    cli_buf body = {0};
+    report_json(&body, checks, n, all);
+    const char *p = body.data ? strstr(body.data, "  \"passed\"") : NULL;
+    cli_buf_printf(&jb, "%s", p ? p : "}\n");
+    cli_buf_free(&body);
+
+    cli_buf_printf(&tb, "LTC gate: %s (%d x %d, %s), BRDF %s, seed %llu, %s, %.2f s\n", path, n_r, n_u,
+                   is_ref ? "reference CSV layout" : "mfkit table", model ? model->name : "none (model-free checks)",
+                   (unsigned long long)seed, quick ? "quick" : "full", secs);
+    report_table(&tb, checks, n, all);
+    if (model)
+        cli_buf_printf(&tb,
+                       "polygon shading vs Monte Carlo (%ld polygons at %ld texels): |error| mean %.4g, p95 %.4g, worst "
+                       "%.4g; relative mean %.4g, p95 %.4g, worst %.4g (MC se mean %.2g)\n",
+                       stats.polygons, stats.entries, stats.mean_abs, stats.p95_abs, stats.worst_abs, stats.mean_rel,
+                       stats.p95_rel, stats.worst_rel, stats.mean_se);
+    int rc = all ? 0 : 1;
+    if (json_file && cli_buf_write_file_atomic(&jb, json_file, msg, sizeof msg) != 0)
+        rc = 3, cli_error(cmd, "--json-file %s", msg);
+    if (rc != 3 && cli_buf_write(json ? &jb : &tb, stdout) != 0)
+        rc = 3, cli_error(cmd, "stdout: write failed");
+    cli_buf_free(&jb);
+    cli_buf_free(&tb);
+    return rc;
+#endif
+}
+
 int cli_validate(int argc, char **argv)
 {
     const char *cmd = "validate";
-    int json = 0, quiet = 0;
-    const char *json_file = NULL;
+    int json = 0, quiet = 0, quick = 0;
+    const char *json_file = NULL, *table_path = NULL, *brdf = NULL;
+    unsigned long long seed = 1;
     for (int i = 1; i < argc; ++i) {
         if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
             usage(stdout);
@@ -117,13 +251,32 @@ int cli_validate(int argc, char **argv)
             json_file = argv[++i];
             if (!*json_file)
                 return cli_error(cmd, "--json-file: empty path");
+        } else if (!strcmp(argv[i], "--quick")) {
+            quick = 1;
+        } else if (!strcmp(argv[i], "--brdf")) {
+            if (i + 1 >= argc)
+                return cli_error(cmd, "option --brdf needs a value");
+            brdf = argv[++i];
+        } else if (!strcmp(argv[i], "--seed")) {
+            if (i + 1 >= argc)
+                return cli_error(cmd, "option --seed needs a value");
+            char *end;
+            const char *v = argv[++i];
+            seed = strtoull(v, &end, 10);
+            if (!*v || *end || *v == '-')
+                return cli_error(cmd, "--seed: '%s' is not a non-negative integer", v);
         } else if (argv[i][0] == '-') {
             return cli_error(cmd, "unknown option '%s' (see 'mfkit validate --help')", argv[i]);
+        } else if (!table_path) {
+            table_path = argv[i];
         } else {
-            return cli_error(cmd, "unexpected argument '%s' (checking a table file arrives with the LTC tables)",
-                             argv[i]);
+            return cli_error(cmd, "unexpected argument '%s' (one table at a time)", argv[i]);
         }
     }
+    if (!table_path && (quick || brdf))
+        return cli_error(cmd, "--quick and --brdf need a TABLE argument");
+    if (table_path)
+        return validate_table(table_path, brdf, quick, (uint64_t)seed, json, json_file, quiet);
     int n = mf_validate_core_count();
     mf_check *checks = calloc((size_t)n, sizeof *checks);
     if (!checks)

@@ -14,7 +14,12 @@ static void usage(FILE *f)
             "  validate        run the property checks of the core math and print a report\n"
             "  table convert IN OUT | table info FILE\n"
             "                  convert lookup-table files (.exr .dds .json .npy -> also .h .glsl .hlsl\n"
-            "                  .csv) and describe them (needs the OpenImageIO build)\n\n"
+            "                  .csv) and describe them (needs the OpenImageIO build)\n"
+            "  fit ltc         fit an LTC table to a BRDF, gate it and export it (needs the Ceres build)\n"
+            "  maps lean|leadr|bump-roughness|toksvig INPUT --out PREFIX\n"
+            "                  moment / roughness maps with their MIP chain from a normal or height map\n"
+            "                  (needs the OpenImageIO build)\n"
+            "  sh project ENV  order-2 SH coefficients of a lat-long environment as JSON (OpenImageIO build)\n\n"
             "  --version       print the version\n\n"
             "exit status: 0 success, 1 a validation check failed, 2 usage or input error, 3 I/O error\n");
 }
@@ -46,5 +51,11 @@ int main(int argc, char **argv)
         return cli_validate(argc - 1, argv + 1);
     if (!strcmp(c, "table"))
         return cli_table(argc - 1, argv + 1);
+    if (!strcmp(c, "fit"))
+        return cli_fit(argc - 1, argv + 1);
+    if (!strcmp(c, "maps"))
+        return cli_maps(argc - 1, argv + 1);
+    if (!strcmp(c, "sh"))
+        return cli_sh(argc - 1, argv + 1);
     return cli_error(NULL, "unknown command '%s' (see 'mfkit --help')", c);
 }

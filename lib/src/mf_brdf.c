@@ -82,12 +82,17 @@ static mf_status product_rule(albedo_integrand f, const void *ctx, int n, double
     if (st == MF_OK) {
         double sum = 0.0;
         for (int i = 0; i < n; ++i) {
+            /* u0 = 1 - (1 - s)^4: the samplers map u0 -> 1 to the lobe's tail (micro-normals far
+             * from the mean), where the integrand changes within a layer of width ~ alpha^2 in u0;
+             * the substitution widens it to ~ alpha^(1/2) in s so that the panels resolve it. */
+            double t = 1.0 - x[i], t3 = t * t * t;
+            double u0 = 1.0 - t3 * t, jac = 4.0 * t3;
             double row = 0.0;
             for (int j = 0; j < n; ++j) {
-                double u[2] = {x[i], x[j]};
+                double u[2] = {u0, x[j]};
                 row += w[j] * f(ctx, u);
             }
-            sum += w[i] * row;
+            sum += w[i] * jac * row;
         }
         *out = sum;
     }
@@ -129,14 +134,20 @@ static mf_status albedo_rule(albedo_integrand f, const void *ctx, int n, mf_resu
     out->val = out->err = NAN;
     if (n < 8 || n > 2048 || n % 8 != 0)
         return MF_ERR_DOMAIN;
-    double fine, coarse;
+    double fine, mid, coarse;
     mf_status st = product_rule(f, ctx, n, &fine);
     if (st == MF_OK)
-        st = product_rule(f, ctx, n / 2, &coarse);
+        st = product_rule(f, ctx, n / 2, &mid);
+    if (st == MF_OK)
+        st = product_rule(f, ctx, n / 4, &coarse);
     if (st != MF_OK)
         return st;
     out->val = fine;
-    out->err = fabs(fine - coarse);
+    /* The integrands have kinks (where wi crosses the horizon), so the rule converges
+     * algebraically and not monotonically: one difference |Q(n) - Q(n/2)| can be smaller than
+     * the error (GGX alpha 0.05 at 80 deg: Q(64) - Q(32) = 3.1e-5, Q(64) - Q(512) = 6.1e-5).
+     * The larger of the last two differences covered the error in every case tested. */
+    out->err = fmax(fabs(fine - mid), fabs(mid - coarse));
     return MF_OK;
 }
 

@@ -49,8 +49,11 @@ double mf_brdf_lambert(double rho, mf_vec3 wo, mf_vec3 wi);
 /* Directional albedo of the microfacet BRDF for view wo (wo.z > 0), by a product rule of
  * n x n points (n a multiple of 8 in [8, 2048]: composite 8-point Gauss-Legendre panels) over
  * the sampler's unit square: GGX through the visible-normal map (integrand F G2 / G1(wo), in
- * [0, 1]), Beckmann through the D(wm) wm.z map.  err is |Q(n) - Q(n/2)| (for n = 8, the
- * difference to the 4-point rule): an estimate of the error of Q(n/2), so conservative for Q(n).
+ * [0, 1]), Beckmann through the D(wm) wm.z map, with u0 = 1 - (1 - s)^4 so that the lobe's tail
+ * (a layer of width ~alpha^2 in u0) is resolved.  err is max(|Q(n) - Q(n/2)|, |Q(n/2) - Q(n/4)|):
+ * the integrand has kinks where wi crosses the horizon, so convergence is algebraic and not
+ * monotone and a single difference can underestimate; the two-level estimate is an estimate of the
+ * error of the coarser rules, so conservative for Q(n) (checked against Monte Carlo in tests/).
  * MF_ERR_DOMAIN for invalid parameters or wo.z <= 0. */
 mf_status mf_brdf_microfacet_albedo(const mf_microfacet *m, mf_vec3 wo, int n, mf_result *out) MF_WARN_UNUSED;
 /* Directional albedo of the LEADR specular model (integral over wi.z > 0 of

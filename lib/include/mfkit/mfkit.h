@@ -18,7 +18,10 @@
 #include "mfkit/mf_leadr.h"
 #include "mfkit/mf_moments.h"
 #include "mfkit/mf_filter.h"
+#include "mfkit/mf_maps.h"
 
 #include "mfkit/mf_ltc_table.h"
+#include "mfkit/mf_model.h"
+#include "mfkit/mf_ltc_gate.h"
 
 #endif /* MFKIT_H */

@@ -1,0 +1,390 @@
+/*
+ * cli_fit.c -- `mfkit fit ltc`: fit an isotropic LTC table to a BRDF model (mf_ltcfit.h), run the
+ * gate (mf_ltc_gate.h), and export the table only if every check passed (or --force).
+ * Exit code 0 success, 1 a gate check failed (nothing exported without --force), 2 usage error,
+ * 3 I/O error, 4 fit failure, 130 interrupted (SIGINT/SIGTERM: no table written; the checkpoint
+ * lets --resume continue).
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "cli.h"
+#include "cli_util.h"
+
+#include "mfkit/mfkit.h"
+
+#include <errno.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#ifdef MFKIT_HAVE_CXX_DEPS
+#include "mfkit/mf_ltc_gate.h"
+#include "mfkit/mf_ltcfit.h"
+#include "mfkit/mf_table_io.h"
+#endif
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: mfkit fit ltc [--brdf NAME] [--size N | --size NRxNU] [--threads N] [--seed S]\n"
+            "                     [--samples N] [--out DIR] [--resume] [--force] [--quiet]\n\n"
+            "Fits the isotropic LTC table of a BRDF (Ceres, exact Jacobians, an objective of polygon-lit\n"
+            "shading), runs the gate (energy, normalisation, polygon shading against Monte Carlo,\n"
+            "smoothness), prints its report, and exports the table into DIR only if every check passed.\n\n"
+            "options:\n"
+            "  --brdf NAME     ggx (default), beckmann, lambert, oren-nayar, disney, charlie\n"
+            "  --size N        table size N x N (default 64), or NRxNU (roughness x view)\n"
+            "  --threads N     worker threads (default: the number of online CPUs); the result does\n"
+            "                  not depend on it, bit for bit\n"
+            "  --seed S        scramble of the sample points and seed of the gate (default 1)\n"
+            "  --samples N     directions per texel, a power of two (default 4096)\n"
+            "  --out DIR       output directory (default out/; created if missing)\n"
+            "  --resume        continue from DIR/ltc_<brdf>.checkpoint (same settings) if it exists\n"
+            "  --force         export even if a gate check fails (metadata \"validated\" = \"false\")\n"
+            "  --stop-after K  (testing) stop as if interrupted after fitting K columns\n"
+            "  --quiet         no progress on stderr (shown only on a terminal anyway)\n\n"
+            "files (in DIR, <p> = ltc_<brdf>): <p>.exr, <p>_half.exr (all fields), <p>_1.dds and\n"
+            "<p>_2.dds (RGBA32F: ltc_1 = minv_00 minv_20 minv_02 minv_22, ltc_2 = magnitude fresnel\n"
+            "zero sphere), <p>_1_f16.dds and <p>_2_f16.dds (RGBA16F), <p>.h, <p>.glsl, <p>.hlsl, <p>.json,\n"
+            "<p>.npy, <p>_fit.json (the float64 fit: a b c d, residual, iterations), <p>_gate.json.\n\n"
+            "exit status: 0 exported, 1 a gate check failed, 2 usage error, 3 I/O error, 4 fit failed,\n"
+            "130 interrupted\n");
+}
+
+#ifndef MFKIT_HAVE_CXX_DEPS
+int cli_fit(int argc, char **argv)
+{
+    if (argc >= 2 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))) {
+        usage(stdout);
+        return 0;
+    }
+    return cli_error("fit", "not available: mfkit was built without Ceres and OpenImageIO");
+}
+#else
+
+/* set by the handler; an int is written atomically on every platform mfkit builds on (sig_atomic_t is int) */
+static volatile int g_cancel_int = 0;
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    g_cancel_int = 1;
+}
+
+typedef struct {
+    int show;
+    struct timespec start;
+    int last_pct;
+} progress_state;
+
+static double elapsed(const struct timespec *t0)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)(t.tv_sec - t0->tv_sec) + 1e-9 * (double)(t.tv_nsec - t0->tv_nsec);
+}
+
+static void progress(void *user, int done, int total)
+{
+    progress_state *p = user;
+    if (!p->show)
+        return;
+    int pct = (int)(100.0 * done / total);
+    if (pct == p->last_pct && done != total)
+        return;
+    p->last_pct = pct;
+    int bar = pct / 4;
+    fprintf(stderr, "\rfit [%.*s%*s] %3d%%  %d/%d  %.1f s%s", bar, "#########################", 25 - bar, "", pct,
+            done, total, elapsed(&p->start), done == total ? "\n" : "");
+}
+
+static void json_string(cli_buf *b, const char *s)
+{
+    cli_buf_printf(b, "\"");
+    for (; *s; ++s) {
+        if (*s == '"' || *s == '\\')
+            cli_buf_printf(b, "\\%c", *s);
+        else if ((unsigned char)*s < 0x20)
+            cli_buf_printf(b, "\\u%04x", (unsigned char)*s);
+        else
+            cli_buf_printf(b, "%c", *s);
+    }
+    cli_buf_printf(b, "\"");
+}
+
+static void json_number(cli_buf *b, double v)
+{
+    if (isfinite(v))
+        cli_buf_printf(b, "%.17g", v);
+    else
+        cli_buf_printf(b, "null");
+}
+
+static void gate_json(cli_buf *b, const char *brdf, const mf_check *c, int n, int all, const mf_ltcfit_result *r,
+                      double fit_wall)
+{
+    cli_buf_printf(b, "{\n  \"tool\": \"mfkit fit ltc\",\n  \"version\": \"%s\",\n  \"brdf\": ", MFKIT_VERSION);
+    json_string(b, brdf);
+    cli_buf_printf(b, ",\n  \"passed\": %s,\n  \"fit\": {\"wall_s\": ", all ? "true" : "false");
+    json_number(b, fit_wall);
+    cli_buf_printf(b, ", \"worst_residual\": ");
+    json_number(b, r->worst_residual);
+    cli_buf_printf(b, ", \"max_iterations\": %d, \"total_iterations\": %ld, \"not_converged\": %d},\n  \"checks\": [\n",
+                   r->max_iterations, r->total_iterations, r->not_converged);
+    for (int i = 0; i < n; ++i) {
+        cli_buf_printf(b, "    {\"name\": ");
+        json_string(b, c[i].name);
+        cli_buf_printf(b, ", \"what\": ");
+        json_string(b, c[i].what);
+        cli_buf_printf(b, ", \"worst\": ");
+        json_number(b, c[i].worst);
+        cli_buf_printf(b, ", \"bound\": ");
+        json_number(b, c[i].bound);
+        cli_buf_printf(b, ", \"passed\": %s, \"cases\": %ld, \"worst_at\": ", c[i].passed ? "true" : "false",
+                       c[i].cases);
+        json_string(b, c[i].worst_at);
+        cli_buf_printf(b, "}%s\n", i + 1 < n ? "," : "");
+    }
+    cli_buf_printf(b, "  ]\n}\n");
+}
+
+static int make_dir(const char *dir)
+{
+    if (mkdir(dir, 0777) == 0 || errno == EEXIST)
+        return 0;
+    return -1;
+}
+
+static int export_all(const char *cmd, const char *dir, const char *stem, const mf_table *t, const mf_brdf_model *model,
+                      const mf_ltcfit_options *fo, const mf_ltcfit_result *r, const cli_buf *gate)
+{
+    char path[4096], msg[1024];
+    struct {
+        const char *suffix;
+        int half;
+        int dds_set; /* 0 all fields, 1 ltc_1, 2 ltc_2 */
+    } files[] = {{".exr", 0, 0},     {"_half.exr", 1, 0},   {"_1.dds", 0, 1}, {"_2.dds", 0, 2},
+                 {"_1_f16.dds", 1, 1}, {"_2_f16.dds", 1, 2}, {".h", 0, 0},     {".glsl", 0, 0},
+                 {".hlsl", 0, 0},    {".json", 0, 0},       {".npy", 0, 0}};
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i) {
+        snprintf(path, sizeof path, "%s/%s%s", dir, stem, files[i].suffix);
+        mf_table_write_options wo;
+        mf_table_write_options_default(&wo);
+        wo.half_float = files[i].half;
+        wo.prefix = stem;
+        if (files[i].dds_set) {
+            wo.dds_fields_set = 1;
+            int base = files[i].dds_set == 1 ? MF_LTC_F_MINV_00 : MF_LTC_F_MAGNITUDE;
+            for (int c = 0; c < 4; ++c)
+                wo.dds_fields[c] = base + c;
+        }
+        mf_status st = mf_table_write(path, t, &wo, NULL, msg, sizeof msg);
+        if (st != MF_OK) {
+            cli_error(cmd, "%s (%s)", msg[0] ? msg : path, mf_status_str(st));
+            return 3;
+        }
+    }
+    snprintf(path, sizeof path, "%s/%s_fit.json", dir, stem);
+    mf_status st = mf_ltcfit_write_sidecar(path, model, fo, t, r, msg, sizeof msg);
+    if (st != MF_OK) {
+        cli_error(cmd, "%s", msg);
+        return 3;
+    }
+    snprintf(path, sizeof path, "%s/%s_gate.json", dir, stem);
+    if (cli_buf_write_file_atomic(gate, path, msg, sizeof msg) != 0) {
+        cli_error(cmd, "%s", msg);
+        return 3;
+    }
+    return 0;
+}
+
+int cli_fit(int argc, char **argv)
+{
+    const char *cmd = "fit ltc";
+    if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
+        usage(argc < 2 ? stderr : stdout);
+        return argc < 2 ? 2 : 0;
+    }
+    if (strcmp(argv[1], "ltc"))
+        return cli_error("fit", "unknown table kind '%s' (only 'ltc')", argv[1]);
+    const char *brdf = "ggx", *out = "out";
+    int force = 0, quiet = 0, resume = 0;
+    mf_ltcfit_options fo;
+    mf_ltcfit_options_default(&fo);
+    long online = sysconf(_SC_NPROCESSORS_ONLN);
+    fo.threads = online >= 1 ? (int)(online > 256 ? 256 : online) : 1;
+    for (int i = 2; i < argc; ++i) {
+        const char *a = argv[i];
+        long v;
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            usage(stdout);
+            return 0;
+        } else if (!strcmp(a, "--force")) {
+            force = 1;
+        } else if (!strcmp(a, "--quiet")) {
+            quiet = 1;
+        } else if (!strcmp(a, "--resume")) {
+            resume = 1;
+        } else if (i + 1 >= argc && (!strcmp(a, "--brdf") || !strcmp(a, "--size") || !strcmp(a, "--threads") ||
+                                     !strcmp(a, "--seed") || !strcmp(a, "--out") || !strcmp(a, "--samples") ||
+                                     !strcmp(a, "--stop-after"))) {
+            return cli_error(cmd, "option %s needs a value", a);
+        } else if (!strcmp(a, "--brdf")) {
+            brdf = argv[++i];
+        } else if (!strcmp(a, "--out")) {
+            out = argv[++i];
+            if (!*out)
+                return cli_error(cmd, "--out: empty path");
+        } else if (!strcmp(a, "--size")) {
+            const char *s = argv[++i];
+            const char *x = strchr(s, 'x');
+            if (x) {
+                char buf[32];
+                size_t n = (size_t)(x - s);
+                if (n >= sizeof buf)
+                    return cli_error(cmd, "--size: bad value '%s'", s);
+                memcpy(buf, s, n);
+                buf[n] = '\0';
+                long nu;
+                if (cli_parse_int(buf, 2, 4096, &v) || cli_parse_int(x + 1, 2, 4096, &nu))
+                    return cli_error(cmd, "--size: bad value '%s' (N or NRxNU, 2..4096)", s);
+                fo.n_r = (int)v;
+                fo.n_u = (int)nu;
+            } else {
+                if (cli_parse_int(s, 2, 4096, &v))
+                    return cli_error(cmd, "--size: bad value '%s' (2..4096)", s);
+                fo.n_r = fo.n_u = (int)v;
+            }
+        } else if (!strcmp(a, "--threads")) {
+            if (cli_parse_int(argv[++i], 1, 256, &v))
+                return cli_error(cmd, "--threads: bad value '%s' (1..256)", argv[i]);
+            fo.threads = (int)v;
+        } else if (!strcmp(a, "--samples")) {
+            if (cli_parse_int(argv[++i], 64, 1 << 20, &v) || (v & (v - 1)))
+                return cli_error(cmd, "--samples: bad value '%s' (a power of two, 64..1048576)", argv[i]);
+            fo.samples = (int)v;
+        } else if (!strcmp(a, "--stop-after")) {
+            if (cli_parse_int(argv[++i], 1, 4096, &v))
+                return cli_error(cmd, "--stop-after: bad value '%s'", argv[i]);
+            fo.stop_after_columns = (int)v;
+        } else if (!strcmp(a, "--seed")) {
+            char *end;
+            errno = 0;
+            unsigned long long s = strtoull(argv[++i], &end, 0);
+            if (errno || *end || !*argv[i] || argv[i][0] == '-')
+                return cli_error(cmd, "--seed: bad value '%s'", argv[i]);
+            fo.seed = (uint64_t)s;
+        } else {
+            return cli_error(cmd, "unknown option '%s' (see 'mfkit fit ltc --help')", a);
+        }
+    }
+    const mf_brdf_model *model = mf_brdf_model_find(brdf);
+    if (!model)
+        return cli_error(cmd, "unknown BRDF '%s' (ggx, beckmann, lambert, oren-nayar, disney, charlie)", brdf);
+    if (make_dir(out) != 0) {
+        cli_error(cmd, "%s: cannot create the output directory: %s", out, strerror(errno));
+        return 3;
+    }
+    char stem[96], ckpt[4096];
+    snprintf(stem, sizeof stem, "ltc_%s", model->name);
+    for (char *s = stem; *s; ++s)
+        if (*s == '-')
+            *s = '_';
+    snprintf(ckpt, sizeof ckpt, "%s/%s.checkpoint", out, stem);
+    fo.checkpoint = ckpt;
+    fo.resume = resume;
+    fo.cancel = &g_cancel_int;
+    progress_state ps = {!quiet && isatty(fileno(stderr)), {0, 0}, -1};
+    clock_gettime(CLOCK_MONOTONIC, &ps.start);
+    fo.progress = progress;
+    fo.progress_user = &ps;
+    if (!resume)
+        remove(ckpt); /* a fresh fit never mixes with an old checkpoint */
+
+    struct sigaction sa, old_int, old_term;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &old_int);
+    sigaction(SIGTERM, &sa, &old_term);
+
+    mf_table t;
+    mf_ltcfit_result r;
+    char msg[1024];
+    mf_status st = mf_ltcfit_table(model, &fo, &t, &r, msg, sizeof msg);
+    sigaction(SIGINT, &old_int, NULL);
+    sigaction(SIGTERM, &old_term, NULL);
+    double fit_wall = elapsed(&ps.start);
+    if (st != MF_OK) {
+        mf_ltcfit_result_free(&r);
+        cli_error(cmd, "%s%s%s", mf_status_str(st), msg[0] ? ": " : "", msg);
+        return st == MF_ERR_IO ? 3 : (st == MF_ERR_FORMAT || st == MF_ERR_DOMAIN) ? 2 : 4;
+    }
+    if (r.interrupted) {
+        if (ps.show)
+            fprintf(stderr, "\n");
+        fprintf(stderr, "mfkit fit ltc: interrupted after %d of %d columns; no table written; '--resume' continues from %s\n",
+                r.columns_done, fo.n_r, ckpt);
+        mf_ltcfit_result_free(&r);
+        return 130;
+    }
+    if (!quiet)
+        fprintf(stderr, "fit: %s %dx%d in %.2f s (%d threads); worst residual %.4g; iterations max %d, mean %.1f; %d not converged%s\n",
+                model->name, fo.n_r, fo.n_u, fit_wall, fo.threads, r.worst_residual, r.max_iterations,
+                (double)r.total_iterations / ((double)fo.n_r * fo.n_u), r.not_converged,
+                r.columns_resumed ? " (resumed)" : "");
+
+    /* the gate */
+    mf_ltc_gate_options go;
+    mf_ltc_gate_options_default(&go);
+    go.seed = fo.seed;
+    go.threads = fo.threads;
+    mf_check checks[MF_LTC_GATE_MAX_CHECKS + 4];
+    int nchecks = 0;
+    mf_status gs = mf_ltc_gate_run(&t, model, &go, checks, (int)(sizeof checks / sizeof checks[0]), &nchecks);
+    if (gs != MF_OK && gs != MF_ERR_CHECK_FAILED) {
+        mf_table_free(&t);
+        mf_ltcfit_result_free(&r);
+        cli_error(cmd, "gate: %s", mf_status_str(gs));
+        return 4;
+    }
+    int all = gs == MF_OK;
+    cli_buf tb = {0}, jb = {0};
+    cli_buf_printf(&tb, "%-22s %-12s %-12s %-6s %8s  %s\n", "check", "worst", "bound", "result", "cases", "worst case");
+    for (int i = 0; i < nchecks; ++i)
+        cli_buf_printf(&tb, "%-22s %-12.4g %-12.4g %-6s %8ld  %s\n", checks[i].name, checks[i].worst, checks[i].bound,
+                       checks[i].passed ? "pass" : "FAIL", checks[i].cases, checks[i].worst_at);
+    cli_buf_printf(&tb, "%s\n", all ? "all checks passed" : "SOME CHECKS FAILED");
+    gate_json(&jb, model->name, checks, nchecks, all, &r, fit_wall);
+    int rc = 0;
+    if (cli_buf_write(&tb, stdout) != 0)
+        rc = 3;
+    if (rc == 0 && !all && !force) {
+        fprintf(stderr, "mfkit fit ltc: the gate failed (see the report above); nothing exported (use --force to export "
+                        "anyway, marked unvalidated)\n");
+        rc = 1;
+    }
+    if (rc == 0) {
+        mf_status ms = mf_table_set_meta(&t, "validated", all ? "true" : "false");
+        if (ms != MF_OK) {
+            cli_error(cmd, "metadata: %s", mf_status_str(ms));
+            rc = 4;
+        }
+    }
+    if (rc == 0) {
+        rc = export_all(cmd, out, stem, &t, model, &fo, &r, &jb);
+        if (rc == 0) {
+            remove(ckpt);
+            if (!quiet)
+                fprintf(stderr, "exported %s/%s.* %s\n", out, stem, all ? "(validated)" : "(NOT validated: --force)");
+        }
+    }
+    cli_buf_free(&tb);
+    cli_buf_free(&jb);
+    mf_table_free(&t);
+    mf_ltcfit_result_free(&r);
+    return rc;
+}
+#endif

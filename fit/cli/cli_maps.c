@@ -1,0 +1,589 @@
+/*
+ * cli_maps.c -- `mfkit maps lean|leadr|bump-roughness|toksvig INPUT --out PREFIX`: slope-moment
+ * maps and their box-filtered MIP chains from a normal or height map (docs/cli.md, mf_maps.h).
+ * Exit code 0 on success, 2 for a usage or input error (bad option, wrong channel count, invalid
+ * texel), 3 for an I/O error (unreadable input, output directory missing).  Every output file is
+ * first written to a temporary beside it; they are renamed only when all were written, so a
+ * failure leaves no output.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "cli.h"
+#include "cli_util.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+static const char *const k_cmd = "maps";
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: mfkit maps lean|leadr|bump-roughness|toksvig INPUT --out PREFIX [options]\n\n"
+            "Reads a tangent-space normal map (or, with --height, a height map) and writes the moment or\n"
+            "roughness maps of every level of a box-filtered MIP chain (computed in double) as float EXR:\n"
+            "  leadr           PREFIX_m1_mip<k>.exr  R,G,B = E[x], E[y], 0   (mfkit/LEADR slopes -n.xy/n.z)\n"
+            "                  PREFIX_m2_mip<k>.exr  R,G,B = E[x^2], E[y^2], E[xy]\n"
+            "  lean            the same files with R,G = E[n.x/n.z], E[n.y/n.z] = -E[x], -E[y] (LEAN's sign)\n"
+            "  bump-roughness  PREFIX_roughness_mip<k>.exr  alpha_1, alpha_2, dir_x, dir_y (Beckmann, Hery)\n"
+            "  toksvig         PREFIX_toksvig_mip<k>.exr    alpha, len, n_x, n_y, n_z (Toksvig)\n"
+            "Level k + 1 halves each side of level k (odd sizes round down, exact area-weighted box).\n"
+            "Frame: x to the right, y up the image (OpenGL); base roughness added as covariance.\n\n"
+            "options:\n"
+            "  --out PREFIX            output file prefix (its directory must exist)\n"
+            "  --green up|down         normal maps: green is +y up (OpenGL, default) or down (DirectX)\n"
+            "  --encoding auto|unorm|raw  normal maps: unorm n = 2c - 1, raw n = c; auto (default): unorm\n"
+            "                          for unsigned integer files (PNG, TIFF), raw for float (EXR, float TIFF)\n"
+            "  --normal-tolerance E    accepted | |n| - 1 | (default 1e-3 + sqrt(3)/(2^bits - 1) for\n"
+            "                          integer files, 1e-3 for float files)\n"
+            "  --height                the input is a height map (first channel)\n"
+            "  --height-scale S        height units per stored value (default 1)\n"
+            "  --texel-size T          distance between texels, same unit (default 1)\n"
+            "  --edge wrap|clamp       height maps: periodic central differences (default) or one-sided\n"
+            "                          differences at the borders\n"
+            "  --base-alpha A          base Beckmann roughness (>= 0, default 0), added as covariance A^2/2\n"
+            "  --quiet                 no progress on stderr (shown only on a terminal anyway)\n\n"
+            "exit status: 0 success, 2 usage or input error, 3 I/O error\n");
+}
+
+#ifndef MFKIT_HAVE_CXX_DEPS
+
+int cli_maps(int argc, char **argv)
+{
+    for (int i = 1; i < argc; ++i)
+        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+            usage(stdout);
+            return 0;
+        }
+    return cli_error(k_cmd, "built without OpenImageIO (MFKIT_WITH_CXX_DEPS=OFF): image files are not available");
+}
+
+#else
+
+#include "mfkit/mf_image.h"
+#include "mfkit/mfkit.h"
+
+#include <errno.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+typedef enum { MODE_LEAN, MODE_LEADR, MODE_BUMP, MODE_TOKSVIG } maps_mode;
+
+typedef struct {
+    maps_mode mode;
+    const char *mode_name, *input, *prefix;
+    int green_down, height, quiet;
+    int encoding; /* 0 auto, 1 unorm, 2 raw */
+    double tolerance; /* < 0: default */
+    double height_scale, texel_size, base_alpha;
+    mf_map_edge edge;
+} maps_args;
+
+/* Output files: written to tmp, renamed to final at the end. */
+typedef struct {
+    char *final_path, *tmp_path;
+} out_file;
+
+typedef struct {
+    out_file *f;
+    int n, cap;
+} out_list;
+
+static void out_list_discard(out_list *l)
+{
+    for (int i = 0; i < l->n; ++i) {
+        if (l->f[i].tmp_path)
+            remove(l->f[i].tmp_path);
+        free(l->f[i].final_path);
+        free(l->f[i].tmp_path);
+    }
+    free(l->f);
+    memset(l, 0, sizeof *l);
+}
+
+/* PREFIX_TAG_mip<level>.exr, or with pid >= 0 the temporary PREFIX_TAG_mip<level>.tmp<pid>.exr
+ * (same extension, so the writer picks the same format). */
+static char *level_path(const char *prefix, const char *tag, int level, long pid)
+{
+    size_t n = strlen(prefix) + strlen(tag) + 64;
+    char *s = malloc(n);
+    if (s && pid >= 0)
+        snprintf(s, n, "%s_%s_mip%d.tmp%ld.exr", prefix, tag, level, pid);
+    else if (s)
+        snprintf(s, n, "%s_%s_mip%d.exr", prefix, tag, level);
+    return s;
+}
+
+/* Writes one level file to its temporary; returns the exit code (0 ok). */
+static int write_level(out_list *l, const maps_args *a, const char *tag, int level, const mf_image *img,
+                       const char *const *names, const char *content)
+{
+    if (l->n == l->cap) {
+        int nc = l->cap ? 2 * l->cap : 16;
+        out_file *p = realloc(l->f, sizeof *p * (size_t)nc);
+        if (!p)
+            return cli_error(k_cmd, "out of memory"), 3;
+        l->f = p;
+        l->cap = nc;
+    }
+    out_file *o = &l->f[l->n];
+    o->final_path = level_path(a->prefix, tag, level, -1);
+    o->tmp_path = level_path(a->prefix, tag, level, (long)getpid());
+    if (!o->final_path || !o->tmp_path) {
+        free(o->final_path);
+        free(o->tmp_path);
+        return cli_error(k_cmd, "out of memory"), 3;
+    }
+    ++l->n;
+    char level_s[32], alpha_s[64];
+    snprintf(level_s, sizeof level_s, "%d", level);
+    snprintf(alpha_s, sizeof alpha_s, "%.17g", a->base_alpha);
+    const char *an[] = {"mfkit:maps_mode", "mfkit:maps_content", "mfkit:mip_level", "mfkit:base_alpha",
+                        "mfkit:frame", "mfkit:source"};
+    const char *av[] = {a->mode_name, content, level_s, alpha_s,
+                        "tangent frame x = +column, y = up the image (OpenGL); slopes (-n.x/n.z, -n.y/n.z)",
+                        a->input};
+    mf_image_write_options opt;
+    memset(&opt, 0, sizeof opt);
+    opt.channel_names = names;
+    opt.nattribs = (int)(sizeof an / sizeof an[0]);
+    opt.attrib_names = an;
+    opt.attrib_values = av;
+    char msg[1024];
+    mf_status st = mf_image_write_ex(o->tmp_path, img, &opt, msg, sizeof msg);
+    if (st != MF_OK) {
+        cli_error(k_cmd, "%s: %s", o->final_path, msg[0] ? msg : mf_status_str(st));
+        return st == MF_ERR_DOMAIN || st == MF_ERR_UNSUPPORTED ? 2 : 3;
+    }
+    return 0;
+}
+
+/* Renames every temporary to its final name; on a failure removes what was renamed. */
+static int commit(out_list *l)
+{
+    for (int i = 0; i < l->n; ++i) {
+        if (rename(l->f[i].tmp_path, l->f[i].final_path) != 0) {
+            int err = errno;
+            cli_error(k_cmd, "%s: cannot rename the temporary file: %s", l->f[i].final_path, strerror(err));
+            for (int k = 0; k < i; ++k) {
+                remove(l->f[k].final_path);
+                free(l->f[k].tmp_path);
+                l->f[k].tmp_path = NULL;
+            }
+            return 3;
+        }
+        free(l->f[i].tmp_path);
+        l->f[i].tmp_path = NULL;
+    }
+    return 0;
+}
+
+/* The directory part of the prefix must exist. */
+static int check_prefix_dir(const char *prefix)
+{
+    const char *slash = strrchr(prefix, '/');
+    if (!slash)
+        return 0;
+    size_t n = (size_t)(slash - prefix);
+    char *dir = malloc(n + 2);
+    if (!dir)
+        return cli_error(k_cmd, "out of memory"), 3;
+    if (n == 0)
+        strcpy(dir, "/");
+    else {
+        memcpy(dir, prefix, n);
+        dir[n] = '\0';
+    }
+    struct stat sb;
+    int rc = 0;
+    if (stat(dir, &sb) != 0)
+        rc = 3, cli_error(k_cmd, "--out %s: directory '%s': %s", prefix, dir, strerror(errno));
+    else if (!S_ISDIR(sb.st_mode))
+        rc = 3, cli_error(k_cmd, "--out %s: '%s' is not a directory", prefix, dir);
+    free(dir);
+    return rc;
+}
+
+/* Bits of an unsigned integer pixel type ("uint8" -> 8), 0 for other types; *is_signed_int set
+ * for "int8", "int16", ... */
+static int uint_bits(const char *type, int *is_signed_int)
+{
+    *is_signed_int = 0;
+    if (!strncmp(type, "uint", 4)) {
+        int b = atoi(type + 4);
+        return b > 0 ? b : 8;
+    }
+    if (!strncmp(type, "int", 3))
+        *is_signed_int = 1;
+    return 0;
+}
+
+/* Decodes, checks and normalises the normals of img into a 3-channel map (y-up frame). */
+static int decode_normals(const maps_args *a, const mf_image *img, const char *pixel_type, mf_map *out)
+{
+    int signed_int;
+    int bits = uint_bits(pixel_type, &signed_int);
+    int unorm = a->encoding == 1 || (a->encoding == 0 && bits > 0);
+    double tol = a->tolerance;
+    if (tol < 0)
+        tol = 1e-3 + (bits > 0 && bits < 32 ? sqrt(3.0) / (ldexp(1.0, bits) - 1.0) : 0.0);
+    if (mf_map_alloc(out, img->width, img->height, 3) != MF_OK)
+        return cli_error(k_cmd, "out of memory"), 3;
+    const char *chname[3] = {"R", "G", "B"};
+    for (int j = 0; j < img->height; ++j)
+        for (int i = 0; i < img->width; ++i) {
+            size_t t = (size_t)j * img->width + i;
+            const float *p = img->pixels + t * (size_t)img->channels;
+            double n[3];
+            for (int c = 0; c < 3; ++c) {
+                if (!isfinite(p[c])) {
+                    mf_map_free(out);
+                    return cli_error(k_cmd, "%s: texel (%d, %d) (column, row from the top): channel %s is %s",
+                                     a->input, i, j, chname[c], isnan(p[c]) ? "NaN" : "infinite");
+                }
+                n[c] = unorm ? 2.0 * (double)p[c] - 1.0 : (double)p[c];
+            }
+            if (a->green_down)
+                n[1] = -n[1];
+            double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+            if (!(fabs(len - 1.0) <= tol)) {
+                mf_map_free(out);
+                return cli_error(k_cmd,
+                                 "%s: texel (%d, %d) (column, row from the top): normal (%.6g, %.6g, %.6g) has length "
+                                 "%.6g, not 1 within %.3g (see --encoding, --normal-tolerance)",
+                                 a->input, i, j, n[0], n[1], n[2], len, tol);
+            }
+            if (!(n[2] > 0.0)) {
+                mf_map_free(out);
+                return cli_error(k_cmd,
+                                 "%s: texel (%d, %d) (column, row from the top): n.z = %.6g <= 0 (a tangent-space "
+                                 "normal must point out of the surface; see --encoding)",
+                                 a->input, i, j, n[2]);
+            }
+            for (int c = 0; c < 3; ++c)
+                out->data[3 * t + c] = n[c] / len;
+        }
+    return 0;
+}
+
+/* Unit normals (-sx, -sy, 1)/|.| of a slope map. */
+static int normals_from_slopes(const mf_map *s, mf_map *out)
+{
+    if (mf_map_alloc(out, s->width, s->height, 3) != MF_OK)
+        return cli_error(k_cmd, "out of memory"), 3;
+    size_t n = (size_t)s->width * s->height;
+    for (size_t t = 0; t < n; ++t) {
+        double sx = s->data[2 * t], sy = s->data[2 * t + 1];
+        double inv = 1.0 / sqrt(1.0 + sx * sx + sy * sy);
+        out->data[3 * t + 0] = -sx * inv;
+        out->data[3 * t + 1] = -sy * inv;
+        out->data[3 * t + 2] = inv;
+    }
+    return 0;
+}
+
+/* Writes the output files of one level of the chain `level_map` (moments or normals). */
+static int emit_level(out_list *l, const maps_args *a, const mf_map *m, int level)
+{
+    const int w = m->width, h = m->height;
+    const size_t n = (size_t)w * h;
+    mf_image img = {w, h, 3, NULL};
+    const double b = 0.5 * a->base_alpha * a->base_alpha; /* Beckmann: sigma^2 = alpha^2 / 2 */
+    int rc = 0;
+    if (a->mode == MODE_LEAN || a->mode == MODE_LEADR) {
+        img.pixels = malloc(sizeof(float) * 3 * n);
+        if (!img.pixels)
+            return cli_error(k_cmd, "out of memory"), 3;
+        const double sign = a->mode == MODE_LEAN ? -1.0 : 1.0;
+        for (size_t t = 0; t < n; ++t) {
+            const double *p = m->data + t * MF_MAP_MOMENTS;
+            img.pixels[3 * t + 0] = (float)(sign * p[MF_MAP_MEAN_X]);
+            img.pixels[3 * t + 1] = (float)(sign * p[MF_MAP_MEAN_Y]);
+            img.pixels[3 * t + 2] = 0.0f;
+        }
+        static const char *const rgb[] = {"R", "G", "B"};
+        rc = write_level(l, a, "m1", level, &img, rgb,
+                         a->mode == MODE_LEAN ? "R = E[n.x/n.z], G = E[n.y/n.z] (LEAN sign: -E[slope]), B = 0"
+                                              : "R = E[x], G = E[y] (slopes -n.x/n.z, -n.y/n.z), B = 0");
+        if (rc == 0) {
+            for (size_t t = 0; t < n; ++t) {
+                const double *p = m->data + t * MF_MAP_MOMENTS;
+                img.pixels[3 * t + 0] = (float)(p[MF_MAP_M_XX] + b);
+                img.pixels[3 * t + 1] = (float)(p[MF_MAP_M_YY] + b);
+                img.pixels[3 * t + 2] = (float)p[MF_MAP_M_XY];
+            }
+            rc = write_level(l, a, "m2", level, &img, rgb,
+                             "R = E[x^2] + base, G = E[y^2] + base, B = E[xy] (base = base_alpha^2 / 2)");
+        }
+    } else if (a->mode == MODE_BUMP) {
+        img.channels = 4;
+        img.pixels = malloc(sizeof(float) * 4 * n);
+        if (!img.pixels)
+            return cli_error(k_cmd, "out of memory"), 3;
+        for (size_t t = 0; t < n; ++t) {
+            mf_slope_moments mo = mf_map_moments_at(m, (int)(t % (size_t)w), (int)(t / (size_t)w));
+            mf_gaussian_slopes g = mf_moments_to_gaussian(&mo);
+            mf_sym2 cov = {g.var_x, g.cov_xy, g.var_y};
+            mf_aniso_roughness r = mf_hery_bump_roughness(a->base_alpha, a->base_alpha, cov);
+            double dx = r.dir1[0], dy = r.dir1[1];
+            if (dx < 0.0 || (dx == 0.0 && dy < 0.0))
+                dx = -dx, dy = -dy; /* an axis: the sign with dir_x >= 0 */
+            img.pixels[4 * t + 0] = (float)r.alpha1;
+            img.pixels[4 * t + 1] = (float)r.alpha2;
+            img.pixels[4 * t + 2] = (float)dx;
+            img.pixels[4 * t + 3] = (float)dy;
+        }
+        static const char *const names[] = {"alpha_1", "alpha_2", "dir_x", "dir_y"};
+        rc = write_level(l, a, "roughness", level, &img, names,
+                         "Beckmann alpha_1 >= alpha_2 along the unit axes (dir_x, dir_y) and (-dir_y, dir_x), "
+                         "dir_x >= 0 (Hery 2014 Eq. 11-12, mf_hery_bump_roughness)");
+    } else {
+        img.channels = 5;
+        img.pixels = malloc(sizeof(float) * 5 * n);
+        if (!img.pixels)
+            return cli_error(k_cmd, "out of memory"), 3;
+        for (size_t t = 0; t < n; ++t) {
+            const double *p = m->data + 3 * t;
+            double len = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+            if (len > 1.0 && len <= 1.0 + 1e-12)
+                len = 1.0; /* rounding of an average of unit vectors */
+            double alpha = mf_toksvig_beckmann_alpha(len, a->base_alpha);
+            img.pixels[5 * t + 0] = (float)alpha;
+            img.pixels[5 * t + 1] = (float)len;
+            for (int c = 0; c < 3; ++c)
+                img.pixels[5 * t + 2 + c] = (float)(len > 0.0 ? p[c] / len : NAN);
+        }
+        static const char *const names[] = {"alpha", "len", "n_x", "n_y", "n_z"};
+        rc = write_level(l, a, "toksvig", level, &img, names,
+                         "alpha = Toksvig-filtered Beckmann roughness sqrt(base^2 + 2 (1 - len)/len), len = |average "
+                         "unit normal|, n = average normal / len");
+    }
+    free(img.pixels);
+    return rc;
+}
+
+static int parse_args(int argc, char **argv, maps_args *a)
+{
+    memset(a, 0, sizeof *a);
+    a->tolerance = -1.0;
+    a->height_scale = 1.0;
+    a->texel_size = 1.0;
+    int set_green = 0, set_encoding = 0, set_tol = 0, set_scale = 0, set_texel = 0, set_edge = 0;
+    for (int i = 1; i < argc; ++i) {
+        const char *o = argv[i];
+        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
+        int takes = !strcmp(o, "--out") || !strcmp(o, "--green") || !strcmp(o, "--encoding") ||
+                    !strcmp(o, "--normal-tolerance") || !strcmp(o, "--height-scale") || !strcmp(o, "--texel-size") ||
+                    !strcmp(o, "--edge") || !strcmp(o, "--base-alpha");
+        if (takes && !v)
+            return cli_error(k_cmd, "option %s needs a value", o);
+        if (!strcmp(o, "--out")) {
+            a->prefix = v;
+            if (!*v)
+                return cli_error(k_cmd, "--out: empty prefix");
+        } else if (!strcmp(o, "--green")) {
+            set_green = 1;
+            if (!strcmp(v, "up"))
+                a->green_down = 0;
+            else if (!strcmp(v, "down"))
+                a->green_down = 1;
+            else
+                return cli_error(k_cmd, "--green: '%s' is not up or down", v);
+        } else if (!strcmp(o, "--encoding")) {
+            set_encoding = 1;
+            if (!strcmp(v, "auto"))
+                a->encoding = 0;
+            else if (!strcmp(v, "unorm"))
+                a->encoding = 1;
+            else if (!strcmp(v, "raw"))
+                a->encoding = 2;
+            else
+                return cli_error(k_cmd, "--encoding: '%s' is not auto, unorm or raw", v);
+        } else if (!strcmp(o, "--edge")) {
+            set_edge = 1;
+            if (!strcmp(v, "wrap"))
+                a->edge = MF_MAP_EDGE_WRAP;
+            else if (!strcmp(v, "clamp"))
+                a->edge = MF_MAP_EDGE_CLAMP;
+            else
+                return cli_error(k_cmd, "--edge: '%s' is not wrap or clamp", v);
+        } else if (!strcmp(o, "--normal-tolerance")) {
+            set_tol = 1;
+            if (cli_parse_double(v, &a->tolerance) != 0 || !(a->tolerance >= 0.0) || !isfinite(a->tolerance))
+                return cli_error(k_cmd, "--normal-tolerance: '%s' is not a finite number >= 0", v);
+        } else if (!strcmp(o, "--height-scale")) {
+            set_scale = 1;
+            if (cli_parse_double(v, &a->height_scale) != 0 || !isfinite(a->height_scale))
+                return cli_error(k_cmd, "--height-scale: '%s' is not a finite number", v);
+        } else if (!strcmp(o, "--texel-size")) {
+            set_texel = 1;
+            if (cli_parse_double(v, &a->texel_size) != 0 || !(a->texel_size > 0.0) || !isfinite(a->texel_size))
+                return cli_error(k_cmd, "--texel-size: '%s' is not a finite number > 0", v);
+        } else if (!strcmp(o, "--base-alpha")) {
+            if (cli_parse_double(v, &a->base_alpha) != 0 || !(a->base_alpha >= 0.0) || !isfinite(a->base_alpha))
+                return cli_error(k_cmd, "--base-alpha: '%s' is not a finite number >= 0", v);
+        } else if (!strcmp(o, "--height")) {
+            a->height = 1;
+        } else if (!strcmp(o, "--quiet")) {
+            a->quiet = 1;
+        } else if (o[0] == '-' && o[1] != '\0') {
+            return cli_error(k_cmd, "unknown option '%s' (see 'mfkit maps --help')", o);
+        } else if (!a->mode_name) {
+            a->mode_name = o;
+            if (!strcmp(o, "lean"))
+                a->mode = MODE_LEAN;
+            else if (!strcmp(o, "leadr"))
+                a->mode = MODE_LEADR;
+            else if (!strcmp(o, "bump-roughness"))
+                a->mode = MODE_BUMP;
+            else if (!strcmp(o, "toksvig"))
+                a->mode = MODE_TOKSVIG;
+            else
+                return cli_error(k_cmd, "unknown map type '%s' (lean, leadr, bump-roughness, toksvig)", o);
+            continue;
+        } else if (!a->input) {
+            a->input = o;
+            continue;
+        } else {
+            return cli_error(k_cmd, "unexpected argument '%s' (one INPUT)", o);
+        }
+        if (takes)
+            ++i;
+    }
+    if (!a->mode_name)
+        return cli_error(k_cmd, "needs a map type: lean, leadr, bump-roughness or toksvig (see 'mfkit maps --help')");
+    if (!a->input)
+        return cli_error(k_cmd, "needs an INPUT image (see 'mfkit maps --help')");
+    if (!a->prefix)
+        return cli_error(k_cmd, "needs --out PREFIX");
+    if (a->height && (set_green || set_encoding || set_tol))
+        return cli_error(k_cmd, "--green, --encoding and --normal-tolerance apply to normal maps, not with --height");
+    if (!a->height && (set_scale || set_texel || set_edge))
+        return cli_error(k_cmd, "--height-scale, --texel-size and --edge need --height");
+    return -1; /* parsed */
+}
+
+int cli_maps(int argc, char **argv)
+{
+    for (int i = 1; i < argc; ++i)
+        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+            usage(stdout);
+            return 0;
+        }
+    maps_args a;
+    int rc = parse_args(argc, argv, &a);
+    if (rc >= 0)
+        return rc;
+    if ((rc = check_prefix_dir(a.prefix)) != 0)
+        return rc;
+
+    mf_image img;
+    mf_image_info info;
+    char msg[1024];
+    mf_status st = mf_image_read_ex(a.input, &img, NULL, &info, msg, sizeof msg);
+    if (st != MF_OK) {
+        cli_error(k_cmd, "%s", msg[0] ? msg : mf_status_str(st));
+        return st == MF_ERR_UNSUPPORTED ? 2 : 3;
+    }
+    mf_map cur = {0, 0, 0, NULL};
+    if (img.width < 1 || img.height < 1) {
+        rc = cli_error(k_cmd, "%s: the image has zero size (%d x %d)", a.input, img.width, img.height);
+        goto done;
+    }
+    if (!a.height && img.channels < 3) {
+        rc = cli_error(k_cmd, "%s: a normal map needs at least 3 channels (R, G, B = n.x, n.y, n.z), it has %d "
+                              "(a height map? use --height)", a.input, img.channels);
+        goto done;
+    }
+    {
+        mf_map slopes = {0, 0, 0, NULL};
+        if (a.height) {
+            mf_map hm;
+            if (mf_map_alloc(&hm, img.width, img.height, 1) != MF_OK) {
+                rc = 3, cli_error(k_cmd, "out of memory");
+                goto done;
+            }
+            size_t n = (size_t)img.width * img.height;
+            for (size_t t = 0; t < n; ++t)
+                hm.data[t] = (double)img.pixels[t * (size_t)img.channels];
+            size_t bad = 0;
+            st = mf_map_slopes_from_heights(&hm, 0, a.height_scale, a.texel_size, a.edge, &slopes, &bad);
+            mf_map_free(&hm);
+            if (st == MF_ERR_DOMAIN) {
+                rc = cli_error(k_cmd, "%s: texel (%d, %d) (column, row from the top): height is %s", a.input,
+                               (int)(bad % (size_t)img.width), (int)(bad / (size_t)img.width),
+                               isnan(img.pixels[bad * (size_t)img.channels]) ? "NaN" : "infinite");
+                goto done;
+            } else if (st != MF_OK) {
+                rc = 3, cli_error(k_cmd, "out of memory");
+                goto done;
+            }
+            if (a.mode == MODE_TOKSVIG) {
+                rc = normals_from_slopes(&slopes, &cur);
+                mf_map_free(&slopes);
+                if (rc)
+                    goto done;
+            }
+        } else {
+            mf_map normals;
+            if ((rc = decode_normals(&a, &img, info.pixel_type, &normals)) != 0)
+                goto done;
+            if (a.mode == MODE_TOKSVIG) {
+                cur = normals;
+            } else {
+                size_t bad = 0;
+                st = mf_map_slopes_from_normals(&normals, &slopes, &bad);
+                mf_map_free(&normals);
+                if (st != MF_OK) {
+                    rc = 3, cli_error(k_cmd, "out of memory");
+                    goto done;
+                }
+            }
+        }
+        if (a.mode != MODE_TOKSVIG) {
+            st = mf_map_moments_from_slopes(&slopes, &cur);
+            mf_map_free(&slopes);
+            if (st != MF_OK) {
+                rc = 3, cli_error(k_cmd, "out of memory");
+                goto done;
+            }
+        }
+    }
+    mf_image_free(&img);
+
+    {
+        out_list files = {NULL, 0, 0};
+        const int levels = mf_map_mip_count(cur.width, cur.height);
+        const int show = !a.quiet && isatty(fileno(stderr));
+        cli_buf b = {0};
+        for (int k = 0; k < levels && rc == 0; ++k) {
+            if (show)
+                fprintf(stderr, "\rmfkit maps: level %d/%d (%d x %d)   %s", k + 1, levels, cur.width, cur.height,
+                        k + 1 == levels ? "\n" : "");
+            int first = files.n;
+            rc = emit_level(&files, &a, &cur, k);
+            for (int f = first; rc == 0 && f < files.n; ++f)
+                cli_buf_printf(&b, "%s: level %d, %d x %d\n", files.f[f].final_path, k, cur.width, cur.height);
+            if (rc == 0 && k + 1 < levels) {
+                mf_map next;
+                st = mf_map_box_downsample(&cur, &next);
+                mf_map_free(&cur);
+                cur = next;
+                if (st != MF_OK)
+                    rc = 3, cli_error(k_cmd, "out of memory");
+            }
+        }
+        if (rc == 0)
+            rc = commit(&files);
+        out_list_discard(&files);
+        if (rc == 0 && cli_buf_write(&b, stdout) != 0)
+            rc = 3, cli_error(k_cmd, "stdout: write failed");
+        cli_buf_free(&b);
+    }
+done:
+    mf_map_free(&cur);
+    mf_image_free(&img);
+    mf_image_info_free(&info);
+    return rc;
+}
+
+#endif

@@ -1,0 +1,117 @@
+/*
+ * mf_ltc_gate.h -- the gate an LTC table must pass before it is exported: energy, normalisation,
+ * polygon shading against Monte Carlo, smoothness.
+ *
+ * The table is an isotropic LTC table (mf_ltc_table.h: axes r (alpha = r^2, clamped) and
+ * u = sqrt(1 - cos theta_o); fields minv_00, minv_20, minv_02, minv_22, magnitude and, optionally,
+ * fresnel).  The checks, their bounds and the reasons for the bounds are in docs/validation.md
+ * ("The LTC gate").  In short:
+ *
+ *   ltc_finite          no NaN or infinity in any field of any texel                  (model-free)
+ *   ltc_energy          magnitude <= 1 + 1e-5 and 0 <= fresnel <= magnitude + 1e-5     (model-free)
+ *   ltc_normalisation   the unpacked LTC of every texel integrates to 1 over the sphere: the
+ *                       sum of its exact integrals over the 8 octant triangles of a randomly
+ *                       rotated frame (mf_ltc_integrate_polygon, the renderer's path)  (model-free)
+ *   ltc_smooth_jump     |difference| of every field between neighbouring texels <= 16 h
+ *                       (h = 1/(n - 1), the axis spacing)                              (model-free)
+ *   ltc_smooth_spike    no texel lies outside the range of its two neighbours (along either
+ *                       axis) by more than 80 h^2                                      (model-free)
+ *   ltc_albedo_quad     |magnitude - albedo| / max(albedo, 0.01) <= 1e-3 + 4 err / albedo, the
+ *                       albedo by a deterministic product Gauss-Legendre rule through the
+ *                       model's sampler (err its error estimate)                      (model)
+ *   ltc_albedo_mc       |magnitude - MC| <= z se + 1e-3 magnitude, z = 5.5, an independent
+ *                       Monte Carlo estimate with the model's sampler                  (model)
+ *   ltc_polygon_mean    over random quads and triangles (a third crossing the horizon) at sampled
+ *                       texels: the mean of max(0, |LTC - MC| - z se) / albedo <= budget
+ *   ltc_polygon_entry   the same mean per texel, worst texel <= budget                 (model)
+ * where LTC = magnitude * mf_ltc_integrate_polygon (clipped after the transform, one-sided) and
+ * MC the Monte Carlo integral of f cos over the polygon (the model's sampler, its weights).
+ *
+ * Deterministic: every random number comes from PCG32 streams keyed by (seed, texel, purpose),
+ * so a result depends on the seed only (the gate is single-threaded; `threads` is accepted for
+ * the callers that parallelise and does not change any result).  Pure C11.
+ */
+#ifndef MF_LTC_GATE_H
+#define MF_LTC_GATE_H
+
+#include <stdint.h>
+
+#include "mfkit/mf_ltc_table.h"
+#include "mfkit/mf_model.h"
+#include "mfkit/mf_validate.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Aggregates of the polygon check, for reports (errors in units of the reflected radiance from a
+ * light of unit radiance, i.e. the polygon integral of f cos; relative errors against
+ * max(MC, 0.01 albedo)).  Filled when options->stats is not NULL and a model is given. */
+typedef struct mf_ltc_gate_stats {
+    long polygons;          /* polygon tests done */
+    long entries;           /* texels with polygon tests */
+    double mean_abs, p95_abs, worst_abs;
+    double mean_rel, p95_rel, worst_rel;
+    double mean_se;         /* mean Monte Carlo standard error of the reference integrals */
+    double worst_albedo_rel; /* worst |magnitude - quadrature| / max(albedo, 0.01) */
+} mf_ltc_gate_stats;
+
+typedef struct mf_ltc_gate_options {
+    uint64_t seed; /* all random numbers derive from it (default 1) */
+    int threads;   /* accepted for the callers; the lib gate is single-threaded (results never
+                    * depend on it) */
+    int quick;     /* 1: model checks on an 8 x 8 grid of texels (< 2 s for 64 x 64); 0: albedo at every
+                    * texel, polygons on a 16 x 16 grid */
+    /* Added fields (defaults by mf_ltc_gate_options_default): */
+    int mc_samples;           /* Monte Carlo samples per tested texel (0: 32768 quick, 65536 full) */
+    int polygons_per_entry;   /* random polygons per tested texel (0: 24, half quads, half triangles) */
+    double polygon_budget_mean;  /* <= 0: the default MF_LTC_GATE_POLYGON_MEAN */
+    double polygon_budget_entry; /* <= 0: the default MF_LTC_GATE_POLYGON_ENTRY */
+    mf_ltc_gate_stats *stats; /* optional output, NULL by default */
+} mf_ltc_gate_options;
+
+/* Default error budgets of the polygon check, in units of the texel's albedo (docs/validation.md). */
+#define MF_LTC_GATE_POLYGON_MEAN 0.01
+#define MF_LTC_GATE_POLYGON_ENTRY 0.05
+
+/* The number of checks mf_ltc_gate_run writes at most. */
+#define MF_LTC_GATE_MAX_CHECKS 9
+
+void mf_ltc_gate_options_default(mf_ltc_gate_options *o);
+
+/* Runs the gate on t.  model may be NULL: then only the model-free checks run.  o may be NULL
+ * (defaults).  Writes *count checks into checks[0..cap-1] (cap >= MF_LTC_GATE_MAX_CHECKS, else
+ * MF_ERR_DOMAIN).  Returns MF_OK when all passed, MF_ERR_CHECK_FAILED otherwise, MF_ERR_DOMAIN for a
+ * table that is not an LTC table layout (two axes with the square / one-minus-square mappings and
+ * the fields minv_00, minv_20, minv_02, minv_22, magnitude), MF_ERR_ALLOC. */
+mf_status mf_ltc_gate_run(const mf_table *t, const mf_brdf_model *model, const mf_ltc_gate_options *o,
+                          mf_check *checks, int cap, int *count) MF_WARN_UNUSED;
+
+/* ---- building blocks, also used by analysis/bench_ltc ---------------------------------------- */
+
+/* The view direction of the isotropic view frame: (sqrt(1 - cos^2), 0, cos). */
+mf_vec3 mf_ltc_gate_view(double cos_theta);
+
+/* Directional albedo of the model at (alpha, wo) by an n x n product of composite 8-point
+ * Gauss-Legendre panels over the model's sampler's unit square (cosine hemisphere when it has
+ * none); out->err = |Q(n) - Q(n/2)|.  n a multiple of 16 in [16, 1024].  MF_ERR_DOMAIN otherwise or
+ * for a non-finite integrand. */
+mf_status mf_ltc_gate_albedo(const mf_brdf_model *model, double alpha, mf_vec3 wo, int n, mf_result *out) MF_WARN_UNUSED;
+
+/* A fixed-seed set of n convex, front-facing polygons in the view frame (quads for even i,
+ * triangles for odd i): centres towards the lobe (drawn with the model's sampler) or anywhere
+ * in z >= -0.35, so about a third cross the horizon; sizes from 0.003 sr to about 2 sr. */
+void mf_ltc_gate_random_polygons(const mf_brdf_model *model, double alpha, mf_vec3 wo, uint64_t seed,
+                                 uint64_t stream, int n, mf_polygon *out);
+
+/* Monte Carlo integrals of f cos over each of n convex front-facing polygons (and the albedo,
+ * over the hemisphere), with nsamples model samples from PCG32(seed, stream): val[i], se[i]
+ * (standard errors); albedo may be NULL.  MF_ERR_DOMAIN for a non-finite weight. */
+mf_status mf_ltc_gate_polygon_mc(const mf_brdf_model *model, double alpha, mf_vec3 wo, const mf_polygon *p,
+                                 int n, int nsamples, uint64_t seed, uint64_t stream, double *val, double *se,
+                                 mf_result *albedo) MF_WARN_UNUSED;
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* MF_LTC_GATE_H */

@@ -1,0 +1,666 @@
+/* mf_ltc_gate.c -- the LTC table gate (see mf_ltc_gate.h; bounds and reasons in docs/validation.md). */
+#include "mfkit/mf_ltc_gate.h"
+
+#include "mfkit/mf_quad.h"
+#include "mfkit/mf_rng.h"
+#include "mfkit/mf_sample.h"
+
+#include <float.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---- bounds (docs/validation.md, "The LTC gate") ------------------------------------------- */
+#define GATE_ENERGY_SLACK 1e-5      /* magnitude <= 1 + this; fresnel <= magnitude + this */
+#define GATE_NORM_BOUND 1e-6        /* |sum over the octants - 1| */
+#define GATE_JUMP_PER_H 16.0        /* |neighbour difference| <= 16 h */
+#define GATE_SPIKE_PER_H2 80.0      /* excess outside the neighbours' range <= 80 h^2 */
+#define GATE_ALBEDO_REL 1e-3        /* |magnitude - albedo| / max(albedo, 0.01) */
+#define GATE_ALBEDO_FLOOR 0.01
+#define GATE_ALBEDO_ERR_FACTOR 4.0  /* the quadrature's error estimate counts 4 times */
+#define GATE_Z 5.5                  /* two-sided 3.8e-8 per test: < 1e-3 family-wise up to 26000 tests */
+#define GATE_QUAD_N 64              /* albedo quadrature: 64 x 64 (error from 32 x 32) */
+#define GATE_REL_FLOOR 0.01         /* relative polygon errors against max(MC, 0.01 albedo) */
+
+/* Stream tags: each purpose and texel has its own PCG32 stream. */
+enum { STREAM_NORM = 1, STREAM_POLY = 2, STREAM_MC = 3 };
+
+static uint64_t stream_id(int purpose, size_t texel) { return ((uint64_t)texel << 4) | (uint64_t)purpose; }
+
+void mf_ltc_gate_options_default(mf_ltc_gate_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->seed = 1;
+    o->threads = 1;
+    o->quick = 0;
+    o->mc_samples = 0;
+    o->polygons_per_entry = 0;
+    o->polygon_budget_mean = MF_LTC_GATE_POLYGON_MEAN;
+    o->polygon_budget_entry = MF_LTC_GATE_POLYGON_ENTRY;
+    o->stats = NULL;
+}
+
+mf_vec3 mf_ltc_gate_view(double cos_theta)
+{
+    double s = 1.0 - cos_theta * cos_theta;
+    return mf_vec3_make(sqrt(s > 0.0 ? s : 0.0), 0.0, cos_theta);
+}
+
+/* ---- the model as an integrand -------------------------------------------------------------- */
+
+/* One sample of the model's sampler (cosine hemisphere without one): wi and the weight
+ * f cos / pdf (0 for a discarded sample). */
+static double model_weight(const mf_brdf_model *m, double alpha, mf_vec3 wo, const double u[2], mf_vec3 *wi)
+{
+    double pdf;
+    if (m->sample) {
+        *wi = m->sample(m, alpha, wo, u, &pdf);
+    } else {
+        *wi = mf_sample_cosine_hemisphere(u);
+        pdf = mf_pdf_cosine_hemisphere(*wi);
+    }
+    if (!(pdf > 0.0) || !mf_vec3_isfinite(*wi) || wi->z <= 0.0)
+        return 0.0;
+    return m->eval_cos(m, alpha, wo, *wi) / pdf;
+}
+
+mf_status mf_ltc_gate_albedo(const mf_brdf_model *model, double alpha, mf_vec3 wo, int n, mf_result *out)
+{
+    if (!model || !out || n < 16 || n > 1024 || n % 16 != 0 || !(wo.z > 0.0))
+        return MF_ERR_DOMAIN;
+    double x8[8], w8[8];
+    if (mf_quad_gauss_legendre(8, x8, w8) != MF_OK)
+        return MF_ERR_INTERNAL;
+    double q[2];
+    for (int level = 0; level < 2; ++level) {
+        int panels = (level == 0 ? n : n / 2) / 8;
+        double h = 1.0 / panels, sum = 0.0;
+        for (int pi = 0; pi < panels; ++pi) {
+            for (int a = 0; a < 8; ++a) {
+                double u0 = h * (pi + 0.5 * (x8[a] + 1.0)), wa = 0.5 * h * w8[a];
+                double row = 0.0;
+                for (int pj = 0; pj < panels; ++pj) {
+                    for (int b = 0; b < 8; ++b) {
+                        double u[2] = {u0, h * (pj + 0.5 * (x8[b] + 1.0))};
+                        mf_vec3 wi;
+                        double g = model_weight(model, alpha, wo, u, &wi);
+                        if (!isfinite(g))
+                            return MF_ERR_DOMAIN;
+                        row += 0.5 * h * w8[b] * g;
+                    }
+                }
+                sum += wa * row;
+            }
+        }
+        q[level] = sum;
+    }
+    out->val = q[0];
+    out->err = fabs(q[0] - q[1]);
+    return MF_OK;
+}
+
+/* ---- random polygons --------------------------------------------------------------------------- */
+
+static double det3(mf_vec3 a, mf_vec3 b, mf_vec3 c) { return mf_vec3_dot(a, mf_vec3_cross(b, c)); }
+
+static void make_front_facing(mf_polygon *p)
+{
+    if (det3(p->v[0], p->v[1], p->v[2]) < 0.0) {
+        for (int i = 0; i < p->n / 2; ++i) {
+            mf_vec3 tmp = p->v[i];
+            p->v[i] = p->v[p->n - 1 - i];
+            p->v[p->n - 1 - i] = tmp;
+        }
+    }
+}
+
+void mf_ltc_gate_random_polygons(const mf_brdf_model *model, double alpha, mf_vec3 wo, uint64_t seed,
+                                 uint64_t stream, int n, mf_polygon *out)
+{
+    mf_pcg32 rng;
+    mf_pcg32_seed(&rng, seed, stream);
+    for (int i = 0; i < n; ++i) {
+        /* Draw every number whatever the branch, so polygon i does not depend on the model. */
+        double r[12];
+        for (int k = 0; k < 12; ++k)
+            r[k] = mf_pcg32_next_double(&rng);
+        mf_vec3 c = mf_vec3_make(NAN, NAN, NAN);
+        int kind = (i / 2) % 3; /* 0: towards the lobe, 1: across the horizon, 2: anywhere above */
+        if (kind == 0 && model) {
+            double u[2] = {r[0], r[1]};
+            mf_vec3 wi;
+            if (model_weight(model, alpha, wo, u, &wi) > 0.0)
+                c = wi;
+        }
+        if (!mf_vec3_isfinite(c) || kind == 2) {
+            c = mf_sample_cosine_hemisphere((double[2]){r[0], r[1]});
+        }
+        if (kind == 1) {
+            double z = -0.3 + 0.6 * r[0], phi = 2.0 * MF_PI * r[1], s = sqrt(1.0 - z * z);
+            c = mf_vec3_make(s * cos(phi), s * sin(phi), z);
+        }
+        c = mf_vec3_normalize(c);
+        /* Plane normal: c tilted by up to 1 rad in a random direction. */
+        mf_frame fc = mf_frame_from_normal(c);
+        double tilt = 1.0 * r[2], tphi = 2.0 * MF_PI * r[3];
+        mf_vec3 nrm = mf_vec3_add(mf_vec3_scale(c, cos(tilt)),
+                                  mf_vec3_scale(mf_vec3_add(mf_vec3_scale(fc.s, cos(tphi)), mf_vec3_scale(fc.t, sin(tphi))),
+                                                sin(tilt)));
+        mf_frame fp = mf_frame_from_normal(mf_vec3_normalize(nrm));
+        double rot = 2.0 * MF_PI * r[4];
+        mf_vec3 e1 = mf_vec3_add(mf_vec3_scale(fp.s, cos(rot)), mf_vec3_scale(fp.t, sin(rot)));
+        mf_vec3 e2 = mf_vec3_cross(fp.n, e1);
+        /* Half-extents log-uniform in [0.03, 1.2] at distance 1, aspect up to 2:1. */
+        double s1 = 0.03 * exp(log(40.0) * r[5]);
+        double s2 = s1 * exp(0.7 * (2.0 * r[6] - 1.0));
+        mf_polygon p;
+        memset(&p, 0, sizeof p);
+        if (i % 2 == 0) {
+            p.n = 4;
+            const double sx[4] = {1, -1, -1, 1}, sy[4] = {1, 1, -1, -1};
+            for (int k = 0; k < 4; ++k)
+                p.v[k] = mf_vec3_add(c, mf_vec3_add(mf_vec3_scale(e1, s1 * sx[k]), mf_vec3_scale(e2, s2 * sy[k])));
+        } else {
+            p.n = 3;
+            double phase = 2.0 * MF_PI * r[7];
+            for (int k = 0; k < 3; ++k) {
+                double a = phase + 2.0 * MF_PI * k / 3.0 + 0.5 * (2.0 * r[8 + k] - 1.0);
+                p.v[k] = mf_vec3_add(c, mf_vec3_add(mf_vec3_scale(e1, 1.3 * s1 * cos(a)), mf_vec3_scale(e2, 1.3 * s2 * sin(a))));
+            }
+        }
+        make_front_facing(&p);
+        out[i] = p;
+    }
+}
+
+/* ---- Monte Carlo over polygons -------------------------------------------------------------- */
+
+mf_status mf_ltc_gate_polygon_mc(const mf_brdf_model *model, double alpha, mf_vec3 wo, const mf_polygon *p,
+                                 int n, int nsamples, uint64_t seed, uint64_t stream, double *val, double *se,
+                                 mf_result *albedo)
+{
+    if (!model || n < 0 || nsamples < 2 || (n > 0 && (!p || !val || !se)))
+        return MF_ERR_DOMAIN;
+    mf_vec3 *edge = malloc(sizeof *edge * (size_t)(n > 0 ? n : 1) * MF_POLYGON_MAX_VERTICES);
+    double *s1 = calloc((size_t)(n > 0 ? n : 1) * 2, sizeof *s1);
+    if (!edge || !s1) {
+        free(edge);
+        free(s1);
+        return MF_ERR_ALLOC;
+    }
+    double *s2 = s1 + (n > 0 ? n : 1);
+    /* Edge planes of the convex front-facing polygons: w is inside iff w.(v_k x v_k+1) >= 0 for all k. */
+    for (int i = 0; i < n; ++i)
+        for (int k = 0; k < p[i].n; ++k)
+            edge[i * MF_POLYGON_MAX_VERTICES + k] = mf_vec3_cross(p[i].v[k], p[i].v[(k + 1) % p[i].n]);
+    mf_pcg32 rng;
+    mf_pcg32_seed(&rng, seed, stream);
+    double a1 = 0.0, a2 = 0.0;
+    mf_status st = MF_OK;
+    for (int s = 0; s < nsamples; ++s) {
+        double u[2];
+        u[0] = mf_pcg32_next_double(&rng);
+        u[1] = mf_pcg32_next_double(&rng);
+        mf_vec3 wi;
+        double w = model_weight(model, alpha, wo, u, &wi);
+        if (!isfinite(w)) {
+            st = MF_ERR_DOMAIN;
+            break;
+        }
+        if (w == 0.0)
+            continue;
+        a1 += w;
+        a2 += w * w;
+        for (int i = 0; i < n; ++i) {
+            const mf_vec3 *e = edge + i * MF_POLYGON_MAX_VERTICES;
+            int inside = 1;
+            for (int k = 0; k < p[i].n && inside; ++k)
+                inside = mf_vec3_dot(wi, e[k]) >= 0.0;
+            if (inside) {
+                s1[i] += w;
+                s2[i] += w * w;
+            }
+        }
+    }
+    if (st == MF_OK) {
+        double nn = (double)nsamples;
+        for (int i = 0; i < n; ++i) {
+            double m = s1[i] / nn, var = s2[i] / nn - m * m;
+            val[i] = m;
+            se[i] = sqrt((var > 0.0 ? var : 0.0) / (nn - 1.0));
+        }
+        if (albedo) {
+            double m = a1 / nn, var = a2 / nn - m * m;
+            albedo->val = m;
+            albedo->err = sqrt((var > 0.0 ? var : 0.0) / (nn - 1.0));
+        }
+    }
+    free(edge);
+    free(s1);
+    return st;
+}
+
+/* ---- the gate ---------------------------------------------------------------------------------- */
+
+typedef struct gate_layout {
+    int f[MF_LTC_NFIELDS]; /* field index of each LTC field, -1 if absent */
+    int nr, nu;
+} gate_layout;
+
+static int layout_of(const mf_table *t, gate_layout *L)
+{
+    if (!t || !t->data || t->naxes != 2 || t->axes[0].mapping != MF_AXIS_SQUARE ||
+        t->axes[1].mapping != MF_AXIS_ONE_MINUS_SQUARE || t->axes[0].size < 2 || t->axes[1].size < 2)
+        return 0;
+    for (int k = 0; k < MF_LTC_NFIELDS; ++k)
+        L->f[k] = mf_table_field(t, mf_ltc_table_fields[k]);
+    for (int k = 0; k <= MF_LTC_F_MAGNITUDE; ++k)
+        if (L->f[k] < 0)
+            return 0;
+    L->nr = t->axes[0].size;
+    L->nu = t->axes[1].size;
+    return 1;
+}
+
+static const double *rec(const mf_table *t, int ir, int iu)
+{
+    return t->data + ((size_t)ir + (size_t)t->axes[0].size * (size_t)iu) * (size_t)t->nfields;
+}
+
+static int unpack_at(const mf_table *t, const gate_layout *L, int ir, int iu, mf_ltc *ltc)
+{
+    const double *r = rec(t, ir, iu);
+    double m4[4] = {r[L->f[0]], r[L->f[1]], r[L->f[2]], r[L->f[3]]};
+    for (int k = 0; k < 4; ++k)
+        if (!isfinite(m4[k]))
+            return 0;
+    return mf_ltc_table_unpack(m4, ltc) == MF_OK;
+}
+
+static void check_init(mf_check *c, const char *name, const char *what, double bound)
+{
+    memset(c, 0, sizeof *c);
+    snprintf(c->name, sizeof c->name, "%s", name);
+    snprintf(c->what, sizeof c->what, "%s", what);
+    c->bound = bound;
+    c->worst = 0.0;
+    c->passed = 1;
+}
+
+/* Records value v at a case; a NaN v counts as infinitely bad. */
+static void check_case(mf_check *c, double v, const char *where_fmt, int ir, int iu, double alpha, double cos_theta)
+{
+    c->cases++;
+    if (isnan(v))
+        v = INFINITY;
+    if (v > c->worst || !c->worst_at[0]) {
+        if (v > c->worst)
+            c->worst = v;
+        snprintf(c->worst_at, sizeof c->worst_at, "%s (ir %d, iu %d: alpha %.4g, theta %.2f deg)", where_fmt, ir, iu,
+                 alpha, acos(cos_theta) * 180.0 / MF_PI);
+    }
+}
+
+static void check_finish(mf_check *c) { c->passed = c->passed && c->worst <= c->bound; }
+
+/* A uniformly random rotation (unit quaternion from 4 normals). */
+static mf_mat3 random_rotation(mf_pcg32 *rng)
+{
+    double q[4], n2 = 0.0;
+    for (int k = 0; k < 4; ++k) {
+        q[k] = mf_pcg32_next_normal(rng);
+        n2 += q[k] * q[k];
+    }
+    double s = 1.0 / sqrt(n2), w = q[0] * s, x = q[1] * s, y = q[2] * s, z = q[3] * s;
+    mf_mat3 r = {{{1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)},
+                  {2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)},
+                  {2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)}}};
+    return r;
+}
+
+/* Integral of the LTC over the sphere as the sum of its exact integrals over the 8 octant
+ * triangles of the rotated frame r (each made front-facing). */
+static double octant_sum(const mf_ltc *ltc, mf_mat3 r)
+{
+    mf_vec3 ax[3];
+    for (int k = 0; k < 3; ++k)
+        ax[k] = mf_vec3_make(r.m[0][k], r.m[1][k], r.m[2][k]);
+    double sum = 0.0;
+    for (int o = 0; o < 8; ++o) {
+        mf_polygon p;
+        memset(&p, 0, sizeof p);
+        p.n = 3;
+        for (int k = 0; k < 3; ++k)
+            p.v[k] = mf_vec3_scale(ax[k], (o >> k) & 1 ? -1.0 : 1.0);
+        make_front_facing(&p);
+        sum += mf_ltc_integrate_polygon(ltc, &p, MF_POLYGON_ONE_SIDED);
+    }
+    return sum;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double percentile95(double *v, long n)
+{
+    if (n <= 0)
+        return NAN;
+    qsort(v, (size_t)n, sizeof *v, cmp_double);
+    long k = (long)ceil(0.95 * (double)n) - 1;
+    return v[k < 0 ? 0 : k];
+}
+
+/* The sampled texel indices along an axis of n texels: k texels evenly spread, both ends included. */
+static int sample_axis(int n, int k, int *idx)
+{
+    if (k >= n) {
+        for (int i = 0; i < n; ++i)
+            idx[i] = i;
+        return n;
+    }
+    int m = 0;
+    for (int j = 0; j < k; ++j) {
+        int i = (int)floor((double)j * (n - 1) / (k - 1) + 0.5);
+        if (m == 0 || idx[m - 1] != i)
+            idx[m++] = i;
+    }
+    return m;
+}
+
+mf_status mf_ltc_gate_run(const mf_table *t, const mf_brdf_model *model, const mf_ltc_gate_options *o_in,
+                          mf_check *checks, int cap, int *count)
+{
+    if (count)
+        *count = 0;
+    if (!checks || !count || cap < MF_LTC_GATE_MAX_CHECKS)
+        return MF_ERR_DOMAIN;
+    mf_ltc_gate_options o;
+    if (o_in)
+        o = *o_in;
+    else
+        mf_ltc_gate_options_default(&o);
+    gate_layout L;
+    if (!layout_of(t, &L))
+        return MF_ERR_DOMAIN;
+    double budget_mean = o.polygon_budget_mean > 0.0 ? o.polygon_budget_mean : MF_LTC_GATE_POLYGON_MEAN;
+    double budget_entry = o.polygon_budget_entry > 0.0 ? o.polygon_budget_entry : MF_LTC_GATE_POLYGON_ENTRY;
+    int nsamples = o.mc_samples > 0 ? o.mc_samples : (o.quick ? 32768 : 65536);
+    int npoly = o.polygons_per_entry > 0 ? o.polygons_per_entry : 24;
+    if (npoly > 256)
+        npoly = 256;
+    const int nr = L.nr, nu = L.nu;
+    const double hr = fabs(t->axes[0].hi - t->axes[0].lo) / (nr - 1);
+    const double hu = fabs(t->axes[1].hi - t->axes[1].lo) / (nu - 1);
+    int n = 0;
+    mf_status st = MF_OK;
+
+    /* 1. finite */
+    mf_check *c_fin = &checks[n++];
+    check_init(c_fin, "ltc_finite", "number of NaN or infinite values in any field (bound 0)", 0.0);
+    {
+        size_t bad = 0, first = (size_t)-1;
+        size_t nv = mf_table_texels(t) * (size_t)t->nfields;
+        for (size_t i = 0; i < nv; ++i)
+            if (!isfinite(t->data[i])) {
+                if (first == (size_t)-1)
+                    first = i;
+                ++bad;
+            }
+        c_fin->cases = (long)nv;
+        c_fin->worst = (double)bad;
+        if (bad) {
+            size_t tex = first / (size_t)t->nfields;
+            snprintf(c_fin->worst_at, sizeof c_fin->worst_at, "first: field %s of texel (ir %d, iu %d)",
+                     t->fields[first % (size_t)t->nfields], (int)(tex % (size_t)nr), (int)(tex / (size_t)nr));
+        }
+        check_finish(c_fin);
+    }
+
+    /* 2. energy (model-free) */
+    mf_check *c_en = &checks[n++];
+    check_init(c_en, "ltc_energy", "max(magnitude - 1, fresnel - magnitude, -fresnel, -magnitude) over all texels",
+               GATE_ENERGY_SLACK);
+    for (int iu = 0; iu < nu; ++iu)
+        for (int ir = 0; ir < nr; ++ir) {
+            const double *r = rec(t, ir, iu);
+            double mag = r[L.f[MF_LTC_F_MAGNITUDE]];
+            double v = mag - 1.0, v2 = -mag;
+            const char *w = "magnitude > 1";
+            if (v2 > v)
+                v = v2, w = "magnitude < 0";
+            if (L.f[MF_LTC_F_FRESNEL] >= 0) {
+                double fr = r[L.f[MF_LTC_F_FRESNEL]];
+                if (fr - mag > v)
+                    v = fr - mag, w = "fresnel > magnitude";
+                if (-fr > v)
+                    v = -fr, w = "fresnel < 0";
+            }
+            check_case(c_en, v, w, ir, iu, mf_ltc_table_alpha(t, ir), mf_ltc_table_cos_theta(t, iu));
+        }
+    check_finish(c_en);
+
+    /* 3. normalisation (model-free, every texel) */
+    mf_check *c_norm = &checks[n++];
+    check_init(c_norm, "ltc_normalisation",
+               "|integral over the sphere - 1|: exact integrals over 8 rotated octant triangles, every texel",
+               GATE_NORM_BOUND);
+    for (int iu = 0; iu < nu; ++iu)
+        for (int ir = 0; ir < nr; ++ir) {
+            mf_ltc ltc;
+            double v = INFINITY;
+            const char *w = "singular or non-finite matrix";
+            if (unpack_at(t, &L, ir, iu, &ltc)) {
+                mf_pcg32 rng;
+                mf_pcg32_seed(&rng, o.seed, stream_id(STREAM_NORM, (size_t)ir + (size_t)nr * (size_t)iu));
+                v = fabs(octant_sum(&ltc, random_rotation(&rng)) - 1.0);
+                w = "octant sum";
+            }
+            check_case(c_norm, v, w, ir, iu, mf_ltc_table_alpha(t, ir), mf_ltc_table_cos_theta(t, iu));
+        }
+    check_finish(c_norm);
+
+    /* 4-5. smoothness (model-free) */
+    mf_check *c_jump = &checks[n++];
+    mf_check *c_spike = &checks[n++];
+    check_init(c_jump, "ltc_smooth_jump", "max |neighbour difference| / (16 h) of every field (h: axis spacing)", 1.0);
+    check_init(c_spike, "ltc_smooth_spike",
+               "max excess of a texel outside its 2 neighbours' range / (80 h^2), every field, both axes", 1.0);
+    for (int f = 0; f < t->nfields; ++f) {
+        if (!strcmp(t->fields[f], "zero"))
+            continue;
+        for (int axis = 0; axis < 2; ++axis) {
+            int dr = axis == 0, du = axis == 1;
+            double h = axis == 0 ? hr : hu;
+            for (int iu = 0; iu < nu; ++iu)
+                for (int ir = 0; ir < nr; ++ir) {
+                    if (ir + dr >= nr || iu + du >= nu)
+                        continue;
+                    double a = rec(t, ir, iu)[f], b = rec(t, ir + dr, iu + du)[f];
+                    if (!isfinite(a) || !isfinite(b))
+                        continue;
+                    char w[64];
+                    snprintf(w, sizeof w, "%s along %s", t->fields[f], axis == 0 ? "r" : "u");
+                    check_case(c_jump, fabs(b - a) / (GATE_JUMP_PER_H * h), w, ir, iu, mf_ltc_table_alpha(t, ir),
+                               mf_ltc_table_cos_theta(t, iu));
+                    if (ir - dr < 0 || iu - du < 0)
+                        continue;
+                    double l = rec(t, ir - dr, iu - du)[f];
+                    if (!isfinite(l))
+                        continue;
+                    double lo = l < b ? l : b, hi = l < b ? b : l;
+                    double ex = a > hi ? a - hi : (a < lo ? lo - a : 0.0);
+                    check_case(c_spike, ex / (GATE_SPIKE_PER_H2 * h * h), w, ir, iu, mf_ltc_table_alpha(t, ir),
+                               mf_ltc_table_cos_theta(t, iu));
+                }
+        }
+    }
+    check_finish(c_jump);
+    check_finish(c_spike);
+
+    if (model) {
+        mf_check *c_aq = &checks[n++];
+        mf_check *c_amc = &checks[n++];
+        mf_check *c_pm = &checks[n++];
+        mf_check *c_pe = &checks[n++];
+        check_init(c_aq, "ltc_albedo_quad",
+                   "max (|magnitude - albedo| - 4 err) / max(albedo, 0.01), albedo by 64x64 Gauss-Legendre quadrature",
+                   GATE_ALBEDO_REL);
+        check_init(c_amc, "ltc_albedo_mc", "max |magnitude - MC albedo| / (5.5 se + 1e-3 magnitude), independent MC",
+                   1.0);
+        char what[160];
+        snprintf(what, sizeof what, "mean over polygons of max(0, |LTC - MC| - 5.5 se) / albedo (budget %g)", budget_mean);
+        check_init(c_pm, "ltc_polygon_mean", what, budget_mean);
+        snprintf(what, sizeof what, "worst texel's mean of max(0, |LTC - MC| - 5.5 se) / albedo (budget %g)",
+                 budget_entry);
+        check_init(c_pe, "ltc_polygon_entry", what, budget_entry);
+
+        int ir_idx[1024], iu_idx[1024];
+        int kq = o.quick ? 8 : 16;
+        int mr = sample_axis(nr, o.quick ? 8 : 1024, ir_idx); /* every texel in full mode (up to 1024 per axis) */
+        int mu = sample_axis(nu, o.quick ? 8 : 1024, iu_idx);
+        /* Polygon texels: the quick 8 x 8 grid, or a 32 x 32 grid in full mode. */
+        int pr_idx[1024], pu_idx[1024];
+        int pmr = sample_axis(nr, kq, pr_idx), pmu = sample_axis(nu, kq, pu_idx);
+        long maxpoly = (long)pmr * pmu * npoly;
+        double *eabs = malloc(sizeof *eabs * (size_t)(maxpoly > 0 ? maxpoly : 1));
+        double *erel = malloc(sizeof *erel * (size_t)(maxpoly > 0 ? maxpoly : 1));
+        mf_polygon *polys = malloc(sizeof *polys * (size_t)npoly);
+        double *mc = malloc(sizeof *mc * (size_t)npoly * 2);
+        if (!eabs || !erel || !polys || !mc) {
+            free(eabs);
+            free(erel);
+            free(polys);
+            free(mc);
+            return MF_ERR_ALLOC;
+        }
+        double *se = mc + npoly;
+        long np = 0, nent = 0;
+        double sum_excess = 0.0, sum_abs = 0.0, sum_rel = 0.0, sum_se = 0.0, worst_abs = 0.0, worst_rel = 0.0;
+        double worst_alb = 0.0;
+        /* The quadrature albedo of each texel, computed once (NaN: not computed). */
+        double *qalb = malloc(sizeof *qalb * (size_t)nr * (size_t)nu * 2);
+        if (!qalb) {
+            free(eabs);
+            free(erel);
+            free(polys);
+            free(mc);
+            return MF_ERR_ALLOC;
+        }
+        for (size_t i = 0; i < (size_t)nr * (size_t)nu * 2; ++i)
+            qalb[i] = NAN;
+
+        /* Albedo by quadrature at the albedo texels. */
+        for (int b = 0; b < mu; ++b)
+            for (int a = 0; a < mr; ++a) {
+                int ir = ir_idx[a], iu = iu_idx[b];
+                double alpha = mf_ltc_table_alpha(t, ir), ct = mf_ltc_table_cos_theta(t, iu);
+                double mag = rec(t, ir, iu)[L.f[MF_LTC_F_MAGNITUDE]];
+                mf_result q;
+                double v = INFINITY;
+                const char *w = "quadrature failed (model NaN)";
+                if (mf_ltc_gate_albedo(model, alpha, mf_ltc_gate_view(ct), GATE_QUAD_N, &q) == MF_OK) {
+                    size_t texel = (size_t)ir + (size_t)nr * (size_t)iu;
+                    qalb[2 * texel] = q.val;
+                    qalb[2 * texel + 1] = q.err;
+                    double den = q.val > GATE_ALBEDO_FLOOR ? q.val : GATE_ALBEDO_FLOOR;
+                    double ex = fabs(mag - q.val) - GATE_ALBEDO_ERR_FACTOR * q.err;
+                    v = (ex > 0.0 ? ex : 0.0) / den;
+                    if (fabs(mag - q.val) / den > worst_alb)
+                        worst_alb = fabs(mag - q.val) / den;
+                    w = mag > q.val ? "magnitude above the albedo" : "magnitude below the albedo";
+                }
+                check_case(c_aq, v, w, ir, iu, alpha, ct);
+            }
+
+        /* Polygons and the Monte Carlo albedo at the polygon texels. */
+        for (int b = 0; b < pmu; ++b)
+            for (int a = 0; a < pmr; ++a) {
+                int ir = pr_idx[a], iu = pu_idx[b];
+                size_t texel = (size_t)ir + (size_t)nr * (size_t)iu;
+                double alpha = mf_ltc_table_alpha(t, ir), ct = mf_ltc_table_cos_theta(t, iu);
+                mf_vec3 wo = mf_ltc_gate_view(ct);
+                double mag = rec(t, ir, iu)[L.f[MF_LTC_F_MAGNITUDE]];
+                mf_ltc ltc;
+                int ok = unpack_at(t, &L, ir, iu, &ltc) && isfinite(mag);
+                mf_ltc_gate_random_polygons(model, alpha, wo, o.seed, stream_id(STREAM_POLY, texel), npoly, polys);
+                mf_result alb, q = {qalb[2 * texel], qalb[2 * texel + 1]};
+                if (mf_ltc_gate_polygon_mc(model, alpha, wo, polys, npoly, nsamples, o.seed, stream_id(STREAM_MC, texel), mc,
+                                           se, &alb) != MF_OK)
+                    ok = 0;
+                if (isnan(q.val) && mf_ltc_gate_albedo(model, alpha, wo, GATE_QUAD_N, &q) != MF_OK)
+                    ok = 0;
+                ++nent;
+                if (!ok) {
+                    check_case(c_amc, INFINITY, "unusable entry or model", ir, iu, alpha, ct);
+                    check_case(c_pe, INFINITY, "unusable entry or model", ir, iu, alpha, ct);
+                    sum_excess += INFINITY;
+                    continue;
+                }
+                check_case(c_amc, fabs(mag - alb.val) / (GATE_Z * alb.err + 1e-3 * fabs(mag)),
+                           mag > alb.val ? "magnitude above MC" : "magnitude below MC", ir, iu, alpha, ct);
+                double albedo = q.val > 1e-300 ? q.val : 1e-300;
+                double ent = 0.0;
+                for (int i = 0; i < npoly; ++i) {
+                    double ltcv = mag * mf_ltc_integrate_polygon(&ltc, &polys[i], MF_POLYGON_ONE_SIDED);
+                    double d = fabs(ltcv - mc[i]);
+                    if (!isfinite(d))
+                        d = INFINITY;
+                    double ex = d - GATE_Z * se[i];
+                    ex = (ex > 0.0 ? ex : 0.0) / albedo;
+                    ent += ex;
+                    double rden = mc[i] > GATE_REL_FLOOR * albedo ? mc[i] : GATE_REL_FLOOR * albedo;
+                    eabs[np] = d;
+                    erel[np] = d / rden;
+                    sum_abs += d;
+                    sum_rel += erel[np];
+                    sum_se += se[i];
+                    if (d > worst_abs)
+                        worst_abs = d;
+                    if (erel[np] > worst_rel)
+                        worst_rel = erel[np];
+                    ++np;
+                }
+                sum_excess += ent;
+                check_case(c_pe, ent / npoly, "mean polygon excess", ir, iu, alpha, ct);
+            }
+        c_pm->cases = np;
+        c_pm->worst = np > 0 ? sum_excess / (double)np : INFINITY;
+        if (!isfinite(c_pm->worst))
+            c_pm->worst = INFINITY;
+        snprintf(c_pm->worst_at, sizeof c_pm->worst_at,
+                 "%ld texels x %d polygons, %d samples; |LTC-MC| mean %.3g worst %.3g, rel mean %.3g worst %.3g", nent,
+                 npoly, nsamples, np ? sum_abs / np : NAN, worst_abs, np ? sum_rel / np : NAN, worst_rel);
+        check_finish(c_aq);
+        check_finish(c_amc);
+        check_finish(c_pm);
+        check_finish(c_pe);
+        if (o.stats) {
+            mf_ltc_gate_stats *s = o.stats;
+            memset(s, 0, sizeof *s);
+            s->polygons = np;
+            s->entries = nent;
+            s->mean_abs = np ? sum_abs / np : NAN;
+            s->mean_rel = np ? sum_rel / np : NAN;
+            s->mean_se = np ? sum_se / np : NAN;
+            s->worst_abs = worst_abs;
+            s->worst_rel = worst_rel;
+            s->p95_abs = percentile95(eabs, np);
+            s->p95_rel = percentile95(erel, np);
+            s->worst_albedo_rel = worst_alb;
+        }
+        free(eabs);
+        free(erel);
+        free(polys);
+        free(mc);
+        free(qalb);
+    }
+
+    *count = n;
+    for (int i = 0; i < n; ++i)
+        if (!checks[i].passed)
+            st = MF_ERR_CHECK_FAILED;
+    return st;
+}

@@ -1,0 +1,340 @@
+/*
+ * test_ltc_gate.c -- the LTC gate (mf_ltc_gate.h): a table with the exact answer passes every
+ * check; deliberately corrupted copies fail the check made for that defect; the reader of the
+ * reference CSV (mf_ltc_reference.h, builds with the C++ dependencies) reads the 64 x 64 table.
+ *
+ * The exact table: Lambert (f cos = cos / pi) is the clamped cosine itself, so its LTC is the
+ * identity (minv = [1, 0, 0, 1]) with magnitude 1 and fresnel = integral of cos/pi (1 - wo.wh)^5,
+ * which we do not need: the gate only requires 0 <= fresnel <= magnitude, so we store 0.
+ *
+ * usage: test_ltc_gate [REFERENCE_DIR]   (default: the compile definition MFKIT_REFERENCE_DIR,
+ * ../shared/reference beside the source tree; that part is skipped with a message if absent)
+ */
+#include "mf_test.h"
+
+#include "mfkit/mfkit.h"
+#ifdef MFKIT_HAVE_FIT
+#include "mfkit/mf_ltc_reference.h"
+#endif
+
+#include <string.h>
+
+static int lambert_table(mf_table *t, int n)
+{
+    if (mf_ltc_table_create(t, n, n) != MF_OK)
+        return 0;
+    for (size_t i = 0; i < mf_table_texels(t); ++i) {
+        double *r = t->data + i * (size_t)t->nfields;
+        r[MF_LTC_F_MINV_00] = 1.0;
+        r[MF_LTC_F_MINV_22] = 1.0;
+        r[MF_LTC_F_MAGNITUDE] = 1.0;
+        /* sphere: the form-factor term is not checked beyond smoothness; a smooth stand-in. */
+        r[MF_LTC_F_SPHERE] = 0.5;
+    }
+    return 1;
+}
+
+static const mf_check *find(const mf_check *c, int n, const char *name)
+{
+    for (int i = 0; i < n; ++i)
+        if (!strcmp(c[i].name, name))
+            return &c[i];
+    return NULL;
+}
+
+static void print_checks(const char *title, const mf_check *c, int n)
+{
+    printf("-- %s\n", title);
+    for (int i = 0; i < n; ++i)
+        printf("  %-20s %-5s worst %-11.4g bound %-9.3g cases %-6ld %s\n", c[i].name, c[i].passed ? "pass" : "FAIL",
+               c[i].worst, c[i].bound, c[i].cases, c[i].worst_at);
+}
+
+/* Runs the gate on t (quick, seed) and checks which checks fail: exactly those in `fail` (comma list). */
+static void expect(const char *title, const mf_table *t, const mf_brdf_model *model, uint64_t seed, int quick,
+                   const char *const *must_fail, int nfail)
+{
+    mf_check c[MF_LTC_GATE_MAX_CHECKS];
+    int n = 0;
+    mf_ltc_gate_options o;
+    mf_ltc_gate_options_default(&o);
+    o.seed = seed;
+    o.quick = quick;
+    mf_status st = mf_ltc_gate_run(t, model, &o, c, MF_LTC_GATE_MAX_CHECKS, &n);
+    print_checks(title, c, n);
+    CHECK(n == (model ? 9 : 5));
+    CHECK(st == (nfail ? MF_ERR_CHECK_FAILED : MF_OK));
+    for (int k = 0; k < nfail; ++k) {
+        const mf_check *x = find(c, n, must_fail[k]);
+        CHECK(x != NULL);
+        if (x && x->passed)
+            MF_FAIL_AT("%s: check %s passed but must fail", title, must_fail[k]);
+    }
+}
+
+int main(int argc, char **argv)
+{
+    uint64_t seed = mf_test_seed(20240607);
+    const mf_brdf_model *lambert = mf_brdf_model_find("lambert");
+    CHECK(lambert != NULL);
+    if (!lambert)
+        MF_TEST_MAIN_END();
+    const int N = 16;
+    mf_table good;
+    CHECK(lambert_table(&good, N));
+
+    /* The exact table passes, with and without the model, quick and full. */
+    expect("lambert identity, model-free", &good, NULL, seed, 1, NULL, 0);
+    expect("lambert identity, quick", &good, lambert, seed, 1, NULL, 0);
+    expect("lambert identity, full", &good, lambert, seed, 0, NULL, 0);
+
+    /* Same seed, same report (determinism), and threads does not matter. */
+    {
+        mf_check a[MF_LTC_GATE_MAX_CHECKS], b[MF_LTC_GATE_MAX_CHECKS];
+        int na = 0, nb = 0;
+        mf_ltc_gate_options o;
+        mf_ltc_gate_options_default(&o);
+        o.seed = seed;
+        o.quick = 1;
+        mf_status s1 = mf_ltc_gate_run(&good, lambert, &o, a, MF_LTC_GATE_MAX_CHECKS, &na);
+        o.threads = 7;
+        mf_status s2 = mf_ltc_gate_run(&good, lambert, &o, b, MF_LTC_GATE_MAX_CHECKS, &nb);
+        CHECK(s1 == s2 && na == nb);
+        CHECK(memcmp(a, b, sizeof a) == 0);
+    }
+
+    /* One wrong entry, on a 32 x 32 table (16 h = 0.52), at texel (13, 18), which is on the quick
+     * 8 x 8 grid (round(3 * 31 / 7) = 13, round(4 * 31 / 7) = 18).  A moderate error (the lobe
+     * leaning by ~56 deg, or 3 times narrower along x) is caught by the smoothness checks; the
+     * polygon check's per-texel budget is loose enough to pass the reference table at 89.95 deg
+     * (docs/validation.md), so it catches only gross errors at one texel: the lobe 10 times
+     * narrower and leaning.  Every case must fail the checks listed. */
+    {
+        mf_table big, bad;
+        CHECK(lambert_table(&big, 32));
+        const int idx[2] = {13, 18};
+        const struct {
+            const char *title;
+            double m00, m02;
+            int nfail;
+            const char *fail[3];
+        } cases[] = {
+            {"one leaning matrix", 1.0, 1.5, 2, {"ltc_smooth_jump", "ltc_smooth_spike"}},
+            {"one narrowed matrix", 3.0, 0.0, 2, {"ltc_smooth_jump", "ltc_smooth_spike"}},
+            {"one grossly wrong matrix", 0.1, -3.0, 3, {"ltc_polygon_entry", "ltc_smooth_jump", "ltc_smooth_spike"}},
+        };
+        for (int k = 0; k < 3; ++k) {
+            CHECK(mf_table_copy(&bad, &big) == MF_OK);
+            double *r = mf_table_record(&bad, idx);
+            r[MF_LTC_F_MINV_00] = cases[k].m00;
+            r[MF_LTC_F_MINV_02] = cases[k].m02;
+            expect(cases[k].title, &bad, lambert, seed, 1, cases[k].fail, cases[k].nfail);
+            mf_table_free(&bad);
+        }
+        mf_table_free(&big);
+    }
+    /* An albedo > 1. */
+    {
+        mf_table bad;
+        CHECK(mf_table_copy(&bad, &good) == MF_OK);
+        int idx[2] = {2, 13};
+        mf_table_record(&bad, idx)[MF_LTC_F_MAGNITUDE] = 1.02;
+        const char *const f[] = {"ltc_energy"};
+        expect("albedo 1.02, model-free", &bad, NULL, seed, 1, f, 1);
+        mf_table_free(&bad);
+    }
+    /* An albedo uniformly 2 % low (the reference's weakness): the albedo checks fail. */
+    {
+        mf_table bad;
+        CHECK(mf_table_copy(&bad, &good) == MF_OK);
+        for (size_t i = 0; i < mf_table_texels(&bad); ++i)
+            bad.data[i * (size_t)bad.nfields + MF_LTC_F_MAGNITUDE] = 0.98;
+        const char *const f[] = {"ltc_albedo_quad", "ltc_albedo_mc"};
+        expect("albedo 2% low", &bad, lambert, seed, 1, f, 2);
+        mf_table_free(&bad);
+    }
+    /* A NaN. */
+    {
+        mf_table bad;
+        CHECK(mf_table_copy(&bad, &good) == MF_OK);
+        int idx[2] = {5, 5};
+        mf_table_record(&bad, idx)[MF_LTC_F_MINV_20] = NAN;
+        const char *const f[] = {"ltc_finite", "ltc_normalisation"};
+        expect("a NaN", &bad, NULL, seed, 1, f, 2);
+        mf_table_free(&bad);
+    }
+    /* A singular matrix. */
+    {
+        mf_table bad;
+        CHECK(mf_table_copy(&bad, &good) == MF_OK);
+        int idx[2] = {9, 3};
+        double *r = mf_table_record(&bad, idx);
+        r[MF_LTC_F_MINV_00] = 0.0;
+        const char *const f[] = {"ltc_normalisation"};
+        expect("singular matrix", &bad, NULL, seed, 1, f, 1);
+        mf_table_free(&bad);
+    }
+    /* Not an LTC layout. */
+    {
+        mf_check c[MF_LTC_GATE_MAX_CHECKS];
+        int n = -1;
+        mf_table bad;
+        CHECK(mf_table_copy(&bad, &good) == MF_OK);
+        bad.axes[1].mapping = MF_AXIS_IDENTITY;
+        CHECK(mf_ltc_gate_run(&bad, NULL, NULL, c, MF_LTC_GATE_MAX_CHECKS, &n) == MF_ERR_DOMAIN);
+        CHECK(n == 0);
+        CHECK(mf_ltc_gate_run(&good, NULL, NULL, c, 3, &n) == MF_ERR_DOMAIN);
+        mf_table_free(&bad);
+    }
+
+    /* The building blocks: quadrature albedo of GGX against its own error estimate and MC. */
+    {
+        const mf_brdf_model *ggx = mf_brdf_model_find("ggx");
+        CHECK(ggx != NULL);
+        if (ggx) {
+            mf_result q, mc;
+            mf_vec3 wo = mf_ltc_gate_view(0.3);
+            CHECK(mf_ltc_gate_albedo(ggx, 0.5, wo, 256, &q) == MF_OK);
+            CHECK(q.err < 5e-5 && q.val > 0.5 && q.val < 1.0);
+            CHECK(mf_ltc_gate_polygon_mc(ggx, 0.5, wo, NULL, 0, 100000, seed, 3, NULL, NULL, &mc) == MF_OK);
+            /* z = 4.5 (two-sided 7e-6), delta = the quadrature's error estimate. */
+            CHECK_MC(mc.val, mc.err, q.val, 4.5, q.err);
+        }
+    }
+
+    mf_table_free(&good);
+
+#ifdef MFKIT_HAVE_FIT
+    /* The reference CSV reader. */
+    {
+#ifdef MFKIT_REFERENCE_DIR
+        const char *dir = argc > 1 ? argv[1] : MFKIT_REFERENCE_DIR;
+#else
+        const char *dir = argc > 1 ? argv[1] : NULL;
+#endif
+        char path[4096];
+        snprintf(path, sizeof path, "%s/ltc_code_ggx_64.csv", dir ? dir : ".");
+        FILE *f = dir ? fopen(path, "rb") : NULL;
+        if (!f) {
+            printf("SKIP: reference table %s not found (../shared/reference beside the source tree)\n", path);
+        } else {
+            fclose(f);
+            mf_table ref;
+            char msg[512];
+            mf_status st = mf_ltc_reference_read_csv(path, &ref, msg, sizeof msg);
+            CHECK(st == MF_OK);
+            if (st != MF_OK) {
+                fprintf(stderr, "%s\n", msg);
+            } else {
+                CHECK(mf_ltc_reference_is_csv(path));
+                CHECK(ref.axes[0].size == 64 && ref.axes[1].size == 64);
+                CHECK(mf_table_texels(&ref) == 4096);
+                /* Rows of the CSV: (i_theta 0, i_alpha 1): invMn_r2c2 0.000503905, magnitude 1;
+                 * alpha of texel 0 is the 1e-5 clamp; theta of the last row is the 1.57 cap. */
+                int i01[2] = {1, 0};
+                CHECK_ABS(mf_table_record(&ref, i01)[MF_LTC_F_MINV_22], 0.000503905, 0.0);
+                CHECK_ABS(mf_table_record(&ref, i01)[MF_LTC_F_MAGNITUDE], 1.0, 0.0);
+                CHECK_REL(mf_ltc_table_alpha(&ref, 0), 1e-5, 1e-15);
+                CHECK_REL(mf_ltc_table_cos_theta(&ref, 63), cos(1.57), 1e-15);
+                CHECK_REL(mf_ltc_table_alpha(&ref, 63), 1.0, 1e-15);
+                /* Every value equals its CSV cell: re-read the file column by column. */
+                FILE *g = fopen(path, "rb");
+                char line[16384];
+                int ok = g && fgets(line, sizeof line, g);
+                int ci[9] = {-1, -1, -1, -1, -1, -1, -1, -1, -1};
+                const char *names[9] = {"i_theta", "i_alpha", "invMn_r0c0", "invMn_r2c0", "invMn_r0c2",
+                                        "invMn_r2c2", "magnitude", "fresnel", "sphere"};
+                const int fields[7] = {MF_LTC_F_MINV_00, MF_LTC_F_MINV_20, MF_LTC_F_MINV_02, MF_LTC_F_MINV_22,
+                                       MF_LTC_F_MAGNITUDE, MF_LTC_F_FRESNEL, MF_LTC_F_SPHERE};
+                if (ok) {
+                    int col = 0;
+                    for (char *tok = strtok(line, ",\r\n"); tok; tok = strtok(NULL, ",\r\n"), ++col)
+                        for (int k = 0; k < 9; ++k)
+                            if (!strcmp(tok, names[k]))
+                                ci[k] = col;
+                }
+                long rows = 0, mismatches = 0;
+                while (ok && fgets(line, sizeof line, g)) {
+                    double v[64];
+                    int col = 0;
+                    char *p = line;
+                    for (; col < 64; ++col) {
+                        v[col] = strtod(p, NULL);
+                        p = strchr(p, ',');
+                        if (!p)
+                            break;
+                        ++p;
+                    }
+                    int idx[2] = {(int)v[ci[1]], (int)v[ci[0]]};
+                    const double *r = mf_table_record(&ref, idx);
+                    for (int k = 0; k < 7; ++k)
+                        if (!r || r[fields[k]] != v[ci[2 + k]])
+                            ++mismatches;
+                    ++rows;
+                }
+                if (g)
+                    fclose(g);
+                CHECK(rows == 4096);
+                CHECK(mismatches == 0);
+                /* The model-free gate on the reference runs (its verdict is reported by
+                 * `mfkit validate`, docs/validation.md). */
+                mf_check c[MF_LTC_GATE_MAX_CHECKS];
+                int n = 0;
+                mf_status gs = mf_ltc_gate_run(&ref, NULL, NULL, c, MF_LTC_GATE_MAX_CHECKS, &n);
+                CHECK(gs == MF_OK || gs == MF_ERR_CHECK_FAILED);
+                print_checks("reference table, model-free", c, n);
+                /* With the GGX model (quick): the reference's matrices pass the polygon budget, its
+                 * albedo (32 x 32 MC, up to 6.5 % low at grazing) fails the albedo checks.  A
+                 * wrong convention (minv_02 and minv_20 swapped: the transposed matrix) fails the
+                 * polygon budget. */
+                const mf_brdf_model *ggx = mf_brdf_model_find("ggx");
+                if (ggx) {
+                    const char *const fa[] = {"ltc_albedo_quad", "ltc_albedo_mc", "ltc_smooth_spike"};
+                    mf_check cg[MF_LTC_GATE_MAX_CHECKS];
+                    int ng = 0;
+                    mf_ltc_gate_options o;
+                    mf_ltc_gate_options_default(&o);
+                    o.quick = 1;
+                    o.seed = seed;
+                    CHECK(mf_ltc_gate_run(&ref, ggx, &o, cg, MF_LTC_GATE_MAX_CHECKS, &ng) == MF_ERR_CHECK_FAILED);
+                    print_checks("reference table, ggx, quick", cg, ng);
+                    for (int k = 0; k < 3; ++k)
+                        CHECK(find(cg, ng, fa[k]) && !find(cg, ng, fa[k])->passed);
+                    CHECK(find(cg, ng, "ltc_polygon_mean") && find(cg, ng, "ltc_polygon_mean")->passed);
+                    CHECK(find(cg, ng, "ltc_polygon_entry") && find(cg, ng, "ltc_polygon_entry")->passed);
+                    for (size_t i = 0; i < mf_table_texels(&ref); ++i) {
+                        double *r = ref.data + i * (size_t)ref.nfields, tmp = r[MF_LTC_F_MINV_02];
+                        r[MF_LTC_F_MINV_02] = r[MF_LTC_F_MINV_20];
+                        r[MF_LTC_F_MINV_20] = tmp;
+                    }
+                    CHECK(mf_ltc_gate_run(&ref, ggx, &o, cg, MF_LTC_GATE_MAX_CHECKS, &ng) == MF_ERR_CHECK_FAILED);
+                    print_checks("reference table transposed, ggx, quick", cg, ng);
+                    CHECK(find(cg, ng, "ltc_polygon_mean") && !find(cg, ng, "ltc_polygon_mean")->passed);
+                }
+                mf_table_free(&ref);
+            }
+        }
+        /* Malformed input is refused with a message. */
+        {
+            const char *bad = "test_ltc_gate_bad.csv"; /* in the test's working directory */
+            FILE *h = fopen(bad, "wb");
+            if (h) {
+                fputs("i_theta,i_alpha,roughness,x_theta,invMn_r0c0,invMn_r2c0,invMn_r0c2,invMn_r2c2,magnitude,fresnel,sphere\n"
+                      "0,0,0,0,1,0,0,1,1,0,0\n0,1,1,0,1,0,0,1,1,0,x\n",
+                      h);
+                fclose(h);
+                mf_table t;
+                char msg[512];
+                CHECK(mf_ltc_reference_read_csv(bad, &t, msg, sizeof msg) == MF_ERR_FORMAT);
+                CHECK(strstr(msg, "bad number") != NULL);
+                remove(bad);
+            }
+        }
+    }
+#else
+    (void)argc;
+    (void)argv;
+    printf("SKIP: reference CSV reader (built without the C++ dependencies)\n");
+#endif
+    MF_TEST_MAIN_END();
+}
