@@ -122,8 +122,7 @@ static int validate_table(const char *path, const char *brdf, int quick, uint64_
     const char *cmd = "validate";
 #ifndef MFKIT_HAVE_CXX_DEPS
     (void)path, (void)brdf, (void)quick, (void)seed, (void)json, (void)json_file, (void)quiet;
-    fprintf(stderr, "mfkit validate: reading table files needs a build with MFKIT_WITH_CXX_DEPS=ON\n");
-    return 2;
+    return cli_error(cmd, "reading table files needs a build with MFKIT_WITH_CXX_DEPS=ON");
 #else
     mf_table t;
     char msg[1024];
