@@ -40,7 +40,7 @@ out=$(run "albedo --ndf ggx" "alpha,cos_theta_o" "0.5,0.5")
 ok 'echo "$out" | head -1 | grep -q "alpha,cos_theta_o,albedo,albedo_err"' "albedo header"
 # issue 4 and 5 functions: closed forms
 out=$(run "ggx-proxy" "alpha,dh" "0.5,0")
-ok '[ "$(echo "$out" | tail -1)" = "0.5,0,0.5,0.5" ]' "ggx-proxy dh=0 is alpha: $out"
+ok '[ "$(echo "$out" | tail -1)" = "0.5,0,0.5,0.5,0.5" ]' "ggx-proxy dh=0 is alpha: $out"
 out=$(run "beckmann-filter" "alpha_x,alpha_y,cov_xx,cov_xy,cov_yy" "0.2,0.1,0.01,0.002,0.02")
 ok 'echo "$out" | tail -1 | grep -q ",0.0300*[0-9]*,0.002,0.0250*[0-9]*$"' "beckmann-filter B + P: $out"
 out=$(run "bump-roughness" "var_u,var_v,cov_uv,alpha_u,alpha_v" "0.01,0.01,0,0.1,0.1")

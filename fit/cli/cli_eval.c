@@ -179,6 +179,7 @@ static void fn_ggx_proxy(const eval_opts *o, const double *in, double *out)
     (void)o;
     out[0] = mf_filter_ggx_proxy_alpha(in[0], in[1]);
     out[1] = mf_filter_ggx_proxy_alpha_approx(in[0], in[1]);
+    out[2] = mf_proxy_alpha_fit(in[0], in[1]);
 }
 
 static void fn_beckmann_filter(const eval_opts *o, const double *in, double *out)
@@ -258,7 +259,7 @@ static const eval_function k_functions[] = {
     {"ggx-rect", "mean of the GGX slope density P22 over the rectangle [x0,x1] x [y0,y1] (Kaplanyan App. A)",
      {"alpha_x", "alpha_y", "x0", "x1", "y0", "y1"}, {"mean_P22"}, {NULL}, fn_ggx_rect, 0, 0},
     {"ggx-proxy", "GGX proxy roughness of the square slope footprint of full width dh (Kaplanyan Eq. 19)",
-     {"alpha", "dh"}, {"alpha_eff", "alpha_eff_sqrt"}, {NULL}, fn_ggx_proxy, 0, 0},
+     {"alpha", "dh"}, {"alpha_eff", "alpha_eff_sqrt", "alpha_eff_fit"}, {NULL}, fn_ggx_proxy, 0, 0},
     {"beckmann-filter", "Beckmann filtered by a slope covariance: B' = diag(alpha^2/2) + P (Kaplanyan Eq. 14-15)",
      {"alpha_x", "alpha_y", "cov_xx", "cov_xy", "cov_yy"}, {"out_cov_xx", "out_cov_xy", "out_cov_yy"}, {NULL},
      fn_beckmann_filter, 0, 0},

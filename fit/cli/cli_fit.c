@@ -22,6 +22,7 @@
 #ifdef MFKIT_HAVE_CXX_DEPS
 #include "mfkit/mf_ltc_gate.h"
 #include "mfkit/mf_ltcfit.h"
+#include "mfkit/mf_proxyfit.h"
 #include "mfkit/mf_table_io.h"
 #endif
 
@@ -200,6 +201,99 @@ static int export_all(const char *cmd, const char *dir, const char *stem, const 
     return 0;
 }
 
+static void proxy_usage(FILE *f)
+{
+    fprintf(f,
+            "usage: mfkit fit ggx-proxy [--out DIR] [--size N] [--quiet]\n\n"
+            "Tabulates the exact GGX proxy roughness alpha'(alpha, dh) of Kaplanyan 2016 Eq. 19 (ERRATA K3)\n"
+            "on an N x N grid log-spaced in alpha in [1e-3, 1] and dh in [1e-3, 10], fits (Ceres, analytic\n"
+            "Jacobian, least squares of the relative error of alpha') the shader form\n"
+            "  alpha'^2 = alpha^2 + dh^2 R(x), x = dh^2/(alpha^2 + dh^2), R = (1-x)/3 + x/pi + x(1-x) c/(1+q x)\n"
+            "(limits dh << alpha and dh >> alpha built in), prints the coefficients and the max and mean\n"
+            "relative errors of the fit and of sqrt(alpha^2 + dh^2), and writes into DIR (each file atomically):\n"
+            "ggx_proxy_table.json, ggx_proxy_table.h (the table), ggx_proxy_fit.h, ggx_proxy_fit.glsl,\n"
+            "ggx_proxy_fit.json (the coefficients and the error report).\n\n"
+            "options:\n"
+            "  --out DIR   output directory (default out/; created if missing)\n"
+            "  --size N    grid points per axis, 2..1024 (default 64; the shipped coefficients of\n"
+            "              mf_proxy.h come from the default)\n"
+            "  --quiet     no summary on stderr\n\n"
+            "exit status: 0 written, 2 usage error, 3 I/O error, 4 fit failed\n");
+}
+
+static int fit_ggx_proxy(int argc, char **argv)
+{
+    const char *cmd = "fit ggx-proxy", *out = "out";
+    int quiet = 0;
+    mf_proxyfit_options po;
+    mf_proxyfit_options_default(&po);
+    for (int i = 2; i < argc; ++i) {
+        const char *a = argv[i];
+        long v;
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            proxy_usage(stdout);
+            return 0;
+        } else if (!strcmp(a, "--quiet")) {
+            quiet = 1;
+        } else if (i + 1 >= argc && (!strcmp(a, "--out") || !strcmp(a, "--size"))) {
+            return cli_error(cmd, "option %s needs a value", a);
+        } else if (!strcmp(a, "--out")) {
+            out = argv[++i];
+            if (!*out)
+                return cli_error(cmd, "--out: empty path");
+        } else if (!strcmp(a, "--size")) {
+            if (cli_parse_int(argv[++i], 2, 1024, &v))
+                return cli_error(cmd, "--size: bad value '%s' (2..1024)", argv[i]);
+            po.size = (int)v;
+        } else {
+            return cli_error(cmd, "unknown option '%s' (see 'mfkit fit ggx-proxy --help')", a);
+        }
+    }
+    mf_proxyfit_result r;
+    mf_table t;
+    mf_status st = mf_proxyfit_run(&po, &r, &t);
+    if (st != MF_OK) {
+        if (st == MF_ERR_NO_CONVERGENCE)
+            mf_table_free(&t);
+        cli_error(cmd, "%s%s%s", mf_status_str(st), st == MF_ERR_NO_CONVERGENCE ? ": " : "",
+                  st == MF_ERR_NO_CONVERGENCE ? r.solver.message : "");
+        return 4;
+    }
+    cli_buf b = {0};
+    cli_buf_printf(&b, "form: alpha'^2 = alpha^2 + dh^2 R(x), x = dh^2/(alpha^2+dh^2), R = (1-x)/3 + x/pi + x(1-x) c/(1+q x)\n");
+    cli_buf_printf(&b, "c = %.17g\nq = %.17g\n", r.coef[0], r.coef[1]);
+    cli_buf_printf(&b, "domain: alpha [%g, %g], dh [%g, %g], %dx%d log grid; errors over a %ld-point check grid\n",
+                   po.alpha_lo, po.alpha_hi, po.dh_lo, po.dh_hi, po.size, po.size, r.check_points);
+    cli_buf_printf(&b, "%-24s %-11s %-11s %-14s %s\n", "approximation", "max_rel", "mean_rel", "max_rel_all_x",
+                   "worst (alpha, dh)");
+    const mf_proxyfit_error *e[2] = {&r.fit, &r.sqrt_approx};
+    const char *names[2] = {"fit", "sqrt(alpha^2+dh^2)"};
+    for (int k = 0; k < 2; ++k)
+        cli_buf_printf(&b, "%-24s %-11.3e %-11.3e %-14.3e (%.4g, %.4g)\n", names[k], e[k]->max_rel, e[k]->mean_rel,
+                       e[k]->max_rel_all, e[k]->worst_alpha, e[k]->worst_dh);
+    cli_buf_printf(&b, "improvement (max_rel): %.4g x\n", r.sqrt_approx.max_rel / r.fit.max_rel);
+    int rc = 0;
+    if (make_dir(out) != 0) {
+        cli_error(cmd, "%s: cannot create the output directory: %s", out, strerror(errno));
+        rc = 3;
+    }
+    char msg[1024];
+    if (rc == 0) {
+        mf_status ws = mf_proxyfit_write(out, &po, &r, &t, "mfkit fit ggx-proxy " MFKIT_VERSION, msg, sizeof msg);
+        if (ws != MF_OK) {
+            cli_error(cmd, "%s (%s)", msg[0] ? msg : out, mf_status_str(ws));
+            rc = 3;
+        }
+    }
+    if (rc == 0 && cli_buf_write(&b, stdout) != 0)
+        rc = 3;
+    if (rc == 0 && !quiet)
+        fprintf(stderr, "exported %s/ggx_proxy_table.{json,h} and %s/ggx_proxy_fit.{h,glsl,json}\n", out, out);
+    cli_buf_free(&b);
+    mf_table_free(&t);
+    return rc;
+}
+
 int cli_fit(int argc, char **argv)
 {
     const char *cmd = "fit ltc";
@@ -207,8 +301,10 @@ int cli_fit(int argc, char **argv)
         usage(argc < 2 ? stderr : stdout);
         return argc < 2 ? 2 : 0;
     }
+    if (!strcmp(argv[1], "ggx-proxy"))
+        return fit_ggx_proxy(argc, argv);
     if (strcmp(argv[1], "ltc"))
-        return cli_error("fit", "unknown table kind '%s' (only 'ltc')", argv[1]);
+        return cli_error("fit", "unknown table kind '%s' ('ltc' or 'ggx-proxy')", argv[1]);
     const char *brdf = "ggx", *out = "out";
     int force = 0, quiet = 0, resume = 0;
     mf_ltcfit_options fo;

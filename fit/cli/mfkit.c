@@ -9,8 +9,9 @@ static void usage(FILE *f)
     fprintf(f,
             "usage: mfkit COMMAND [options]      (mfkit COMMAND --help for each)\n\n"
             "commands:\n"
-            "  eval FUNCTION   evaluate a core function on CSV rows from stdin (ndf, slope-pdf, lambda,\n"
-            "                  lambda-gaussian, g2, brdf, albedo)\n"
+            "  eval FUNCTION   evaluate a core function on CSV rows from stdin (NDFs, Smith, BRDFs, albedo,\n"
+            "                  polygons and LTCs, GGX rectangle and proxy, filtering, SH, LEADR; the list:\n"
+            "                  mfkit eval --help)\n"
             "  validate        run the property checks of the core math and print a report\n"
             "  table convert IN OUT | table info FILE\n"
             "                  convert lookup-table files (.exr .dds .json .npy -> also .h .glsl .hlsl\n"

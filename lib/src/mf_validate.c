@@ -8,6 +8,8 @@
 #include "mfkit/mf_validate.h"
 #include "mfkit/mf_brdf.h"
 #include "mfkit/mf_ltc.h"
+#include "mfkit/mf_filter.h"
+#include "mfkit/mf_proxy.h"
 #include "mfkit/mf_quad.h"
 
 #include <float.h>
@@ -922,12 +924,191 @@ static void check_ltc_polygon(mf_check *c)
     check_finish(c);
 }
 
+/* ---- filtering identities [Kaplanyan 2016] (issue 4) ------------------------------------- */
+
+/* Breakpoints for an axis of [lo, hi] with a peak of scale alpha at 0: 0 and +-alpha 10^k,
+ * k = -2..2, where they fall strictly inside. */
+static int axis_breaks(double lo, double hi, double alpha, double *pts)
+{
+    static const double k_scales[] = {0.0, 0.01, -0.01, 0.1, -0.1, 1.0, -1.0, 10.0, -10.0, 100.0, -100.0};
+    int n = 0;
+    for (int i = 0; i < (int)(sizeof k_scales / sizeof k_scales[0]); ++i) {
+        double p = k_scales[i] * alpha;
+        if (p > lo && p < hi)
+            pts[n++] = p;
+    }
+    return n;
+}
+
+typedef struct {
+    mf_ndf ndf;
+    double s, y0, y1;
+    int failed;
+} rect_ctx;
+
+static double rect_inner(double t, void *vctx)
+{
+    rect_ctx *c = vctx;
+    return mf_ndf_p22(c->ndf, c->s, t);
+}
+
+static double rect_outer(double s, void *vctx)
+{
+    rect_ctx *c = vctx;
+    c->s = s;
+    double pts[16];
+    int n = axis_breaks(c->y0, c->y1, c->ndf.alpha_y, pts);
+    return integrate_pieces(rect_inner, c, c->y0, c->y1, pts, n, 1e-12, 0.0, &c->failed);
+}
+
+/* The closed-form mean of GGX's P22 over rectangles [Kaplanyan 2016, Eq. 16, App. A; ERRATA K1]
+ * against nested adaptive Gauss-Kronrod of P22 itself (independent of the antiderivative). */
+static void check_ggx_rect(mf_check *c)
+{
+    check_init(c, "ggx_rect_vs_quadrature",
+               "GGX slope-density mean over rectangles (Eq. 16, App. A, ERRATA K1) vs nested adaptive quadrature",
+               1e-10);
+    static const double k_rect_alphas[][2] = {{1e-3, 1e-3}, {0.1, 0.01}, {1.0, 0.5}};
+    /* centre and full width in units of alpha_x, alpha_y: tiny at the peak, unit, wide, near the
+     * peak off-centre, far tail, corner on the peak, sliver, huge */
+    static const double k_rects[][4] = {{0, 0, 1e-6, 1e-6}, {0, 0, 1, 1},     {0, 0, 100, 30},  {0.5, -0.3, 0.3, 0.7},
+                                        {50, -20, 1, 2},    {0.5, 0.5, 1, 1}, {3, 0, 1e-4, 5}, {-7, 4, 1e4, 3e3}};
+    for (int ia = 0; ia < 3; ++ia) {
+        for (int ir = 0; ir < (int)(sizeof k_rects / sizeof k_rects[0]); ++ir) {
+            double ax = k_rect_alphas[ia][0], ay = k_rect_alphas[ia][1];
+            double cx = k_rects[ir][0] * ax, cy = k_rects[ir][1] * ay;
+            double wx = k_rects[ir][2] * ax, wy = k_rects[ir][3] * ay;
+            rect_ctx q = {mf_ndf_make(MF_NDF_GGX, ax, ay), 0.0, cy - 0.5 * wy, cy + 0.5 * wy, 0};
+            double x0 = cx - 0.5 * wx, x1 = cx + 0.5 * wx;
+            double pts[16];
+            int n = axis_breaks(x0, x1, ax, pts);
+            double integral = integrate_pieces(rect_outer, &q, x0, x1, pts, n, 1e-12, 0.0, &q.failed);
+            double ref = integral / ((x1 - x0) * (q.y1 - q.y0));
+            double v = mf_filter_ggx_rect_mean(ax, ay, cx, cy, wx, wy);
+            char at[200];
+            snprintf(at, sizeof at, "alpha (%g, %g), centre (%g, %g), widths (%g, %g)", ax, ay, cx, cy, wx, wy);
+            check_record(c, q.failed ? NAN : fabs(v - ref) / ref, at);
+        }
+    }
+    check_finish(c);
+}
+
+typedef struct {
+    mf_ndf beck;
+    mf_gaussian_slopes filt; /* centred, covariance P */
+    double s[2];
+    double scale;
+} conv_ctx;
+
+static double conv_integrand(double yx, double yy, void *user)
+{
+    const conv_ctx *c = user;
+    return c->scale * mf_ndf_p22(c->beck, c->s[0] - yx, c->s[1] - yy) * mf_gaussian_p22(&c->filt, yx, yy);
+}
+
+/* Beckmann filtered by a Gaussian of covariance P [Kaplanyan 2016, Eq. 14-15]: the covariance sum
+ * B' = diag(alpha^2/2) + P against the numerical convolution integral P22_B(s - y) N_P(y) d^2y. */
+static void check_beckmann_convolution(mf_check *c)
+{
+    check_init(c, "beckmann_filter_convolution",
+               "Beckmann (x) Gaussian filter: covariance sum B' = B + P (Eq. 14-15) vs numerical 2D convolution", 1e-8);
+    static const double k_conv_alphas[][2] = {{0.05, 0.05}, {0.5, 0.1}};
+    static const double k_conv_p[][3] = {{0.01, 0.0, 0.01}, {0.02, 0.01, 0.015}, {1e-6, 0.0, 4e-6}, {2.0, -0.5, 1.0}};
+    static const double k_conv_s[][2] = {{0.0, 0.0}, {0.05, -0.03}, {0.3, 0.2}};
+    for (int ia = 0; ia < 2; ++ia) {
+        for (int ip = 0; ip < 4; ++ip) {
+            for (int is = 0; is < 3; ++is) {
+                double ax = k_conv_alphas[ia][0], ay = k_conv_alphas[ia][1];
+                mf_sym2 p = {k_conv_p[ip][0], k_conv_p[ip][1], k_conv_p[ip][2]};
+                conv_ctx q;
+                q.beck = mf_ndf_make(MF_NDF_BECKMANN, ax, ay);
+                mf_gaussian_slopes f = {0.0, 0.0, p.xx, p.yy, p.xy};
+                q.filt = f;
+                q.s[0] = k_conv_s[is][0];
+                q.s[1] = k_conv_s[is][1];
+                /* The integrand is a Gaussian in y of covariance C = (B^-1 + P^-1)^-1 = B - B (B+P)^-1 B
+                 * and mean m = s - B (B+P)^-1 s (Woodbury; B = diag(alpha^2/2)): integrate in its frame. */
+                double bx = 0.5 * ax * ax, by = 0.5 * ay * ay;
+                double sxx = bx + p.xx, syy = by + p.yy, sxy = p.xy, det = sxx * syy - sxy * sxy;
+                double ixx = syy / det, iyy = sxx / det, ixy = -sxy / det; /* (B+P)^-1 */
+                double cxx = bx - bx * ixx * bx, cyy = by - by * iyy * by, cxy = -bx * ixy * by;
+                double mx = q.s[0] - bx * (ixx * q.s[0] + ixy * q.s[1]);
+                double my = q.s[1] - by * (ixy * q.s[0] + iyy * q.s[1]);
+                /* scale the integrand to ~1/sqrt(det C) at its peak, the unit-mass scale the
+                 * integrator's absolute floor is set for */
+                q.scale = 1.0;
+                double peak = conv_integrand(mx, my, &q);
+                double sqdet = sqrt(cxx * cyy - cxy * cxy);
+                q.scale = 1.0 / (peak * sqdet);
+                mf_vec3 none = {0.0, 0.0, 0.0};
+                double conv = integrate_slopes(conv_integrand, &q, mx, my, cxx, cyy, cxy, none) * peak * sqdet;
+                mf_gaussian_slopes g = mf_filter_beckmann(ax, ay, p);
+                double ref = mf_gaussian_p22(&g, q.s[0], q.s[1]);
+                char at[200];
+                snprintf(at, sizeof at, "alpha (%g, %g), P (%g, %g, %g), s (%g, %g)", ax, ay, p.xx, p.xy, p.yy, q.s[0],
+                         q.s[1]);
+                check_record(c, fabs(conv - ref) / ref, at);
+            }
+        }
+    }
+    check_finish(c);
+}
+
+/* The exact proxy alpha' satisfies the peak equation 1/(pi alpha'^2) = mean of P22 over the
+ * centred square of width dh [Kaplanyan 2016, Eq. 19; ERRATA K3], and the joint anisotropic solve
+ * 1/(pi a'_x a'_y) = mean over the rectangle; mfkit's fitted form stays within its bound. */
+static void check_ggx_proxy_peak(mf_check *c)
+{
+    check_init(c, "ggx_proxy_peak",
+               "exact GGX proxy alpha' (ERRATA K3; joint anisotropic solve) satisfies 1/(pi a'^2) = rect mean (Eq. 19)",
+               64 * DBL_EPSILON);
+    static const double k_px_alpha[] = {1e-4, 1e-3, 1e-2, 0.1, 0.5, 1.0};
+    static const double k_px_ratio[] = {0.0, 1e-6, 1e-3, 0.1, 1.0, 3.0, 10.0, 1e3, 1e5};
+    char at[200];
+    for (int ia = 0; ia < 6; ++ia) {
+        for (int ir = 0; ir < 9; ++ir) {
+            double a = k_px_alpha[ia], dh = a * k_px_ratio[ir];
+            double ap = mf_filter_ggx_proxy_alpha(a, dh);
+            double mean = mf_filter_ggx_rect_mean(a, a, 0.0, 0.0, dh, dh);
+            snprintf(at, sizeof at, "isotropic alpha %g, dh %g", a, dh);
+            check_record(c, fabs(MF_PI * ap * ap * mean - 1.0), at);
+            /* joint solve, anisotropic: alpha_y = alpha/10 (>= 1e-4), widths dh and dh/3 */
+            double ay = fmax(1e-4, 0.1 * a), out[2];
+            double wy = dh / 3.0;
+            mf_status st = mf_filter_ggx_proxy_alpha_joint(a, ay, dh, wy, out);
+            double cm = mf_filter_ggx_rect_mean(a, ay, 0.0, 0.0, dh, wy);
+            snprintf(at, sizeof at, "joint alpha (%g, %g), widths (%g, %g)", a, ay, dh, wy);
+            check_record(c, st == MF_OK ? fabs(MF_PI * out[0] * out[1] * cm - 1.0) : NAN, at);
+        }
+    }
+    check_finish(c);
+}
+
+/* mfkit's fitted proxy (mf_proxy.h) against the exact alpha'. */
+static void check_ggx_proxy_fit(mf_check *c)
+{
+    char at[200];
+    check_init(c, "ggx_proxy_fit_error",
+               "max relative error of the fitted proxy mf_proxy_alpha_fit vs the exact alpha', all dh/alpha",
+               MF_PROXY_FIT_MAX_REL_ERROR);
+    /* alpha'/alpha depends on x = dh^2/(alpha^2 + dh^2) only: sweep x over [0, 1) */
+    for (int i = 0; i < 2000; ++i) {
+        double x = (i + 0.5) / 2000.0;
+        double a = 1.0, dh = sqrt(x / (1.0 - x));
+        double e = fabs(mf_proxy_alpha_fit(a, dh) / mf_filter_ggx_proxy_alpha(a, dh) - 1.0);
+        snprintf(at, sizeof at, "alpha 1, dh %.6g (x = %.6g)", dh, x);
+        check_record(c, e, at);
+    }
+    check_finish(c);
+}
+
 /* ---- driver -------------------------------------------------------------------------------- */
 typedef void (*check_fn)(mf_check *c);
 static const check_fn k_checks[] = {check_ndf_normalisation, check_projected_area, check_leadr_identity,
                                     check_lambda,            check_walter,         check_reciprocity,
                                     check_albedo,            check_finite,         check_polygon_cosine,
-                                    check_ltc_normalisation, check_ltc_polygon};
+                                    check_ltc_normalisation, check_ltc_polygon,    check_ggx_rect,
+                                    check_beckmann_convolution, check_ggx_proxy_peak, check_ggx_proxy_fit};
 #define N_CHECKS ((int)(sizeof k_checks / sizeof k_checks[0]))
 
 int mf_validate_core_count(void) { return N_CHECKS; }

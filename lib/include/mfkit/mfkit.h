@@ -18,6 +18,7 @@
 #include "mfkit/mf_leadr.h"
 #include "mfkit/mf_moments.h"
 #include "mfkit/mf_filter.h"
+#include "mfkit/mf_proxy.h"
 #include "mfkit/mf_maps.h"
 
 #include "mfkit/mf_ltc_table.h"
