@@ -5,7 +5,9 @@
  * M = [[a, 0, b], [0, c, 0], [d, 0, 1]] in the view frame [Heitz et al. 2016; Nahmias Eq. 2.26]
  * that best reproduces POLYGON-LIT shading, the only use renderers make of the table:
  *
- *   residual_k = (magnitude * E_LTC(P_k; M) - I_k) / (I_k + 0.01 magnitude),   k = 1..K
+ *   residual_k = (magnitude * E_LTC(P_k; M) - I_k) / (I_k + 0.2 magnitude),   k = 1..K
+ *
+ * (the floor 0.2: docs/tables.md, "Weight floor")
  *
  * over a fixed family of K test lights P_k placed around the BRDF lobe (quads, triangles and
  * cap-like 8-gons of angular radius 0.25 to 4 lobe widths on the lobe and beside it, lights

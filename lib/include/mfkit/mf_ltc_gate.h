@@ -15,7 +15,8 @@
  *   ltc_smooth_jump     |difference| of every field between neighbouring texels <= 16 h
  *                       (h = 1/(n - 1), the axis spacing)                              (model-free)
  *   ltc_smooth_spike    no texel lies outside the range of its two neighbours (along either
- *                       axis) by more than 80 h^2                                      (model-free)
+ *                       axis) by more than 80 h^2 (with a model, a magnitude spike is measured
+ *                       on magnitude - albedo: the true albedo spikes at grazing)      (model-free)
  *   ltc_albedo_quad     |magnitude - albedo| / max(albedo, 0.01) <= 1e-3 + 4 err / albedo, the
  *                       albedo by a deterministic product Gauss-Legendre rule through the
  *                       model's sampler (err its error estimate)                      (model)
@@ -94,7 +95,8 @@ mf_vec3 mf_ltc_gate_view(double cos_theta);
 
 /* Directional albedo of the model at (alpha, wo) by an n x n product of composite 8-point
  * Gauss-Legendre panels over the model's sampler's unit square (cosine hemisphere when it has
- * none); out->err = |Q(n) - Q(n/2)|.  n a multiple of 16 in [16, 1024].  MF_ERR_DOMAIN otherwise or
+ * none), the first coordinate graded towards 1 (u0 = 1 - (1 - t)^3: grazing micro-normals);
+ * out->err = |Q(n) - Q(n/2)|.  n a multiple of 16 in [16, 1024].  MF_ERR_DOMAIN otherwise or
  * for a non-finite integrand. */
 mf_status mf_ltc_gate_albedo(const mf_brdf_model *model, double alpha, mf_vec3 wo, int n, mf_result *out) MF_WARN_UNUSED;
 
