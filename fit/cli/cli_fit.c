@@ -101,54 +101,19 @@ static void progress(void *user, int done, int total)
             done, total, elapsed(&p->start), done == total ? "\n" : "");
 }
 
-static void json_string(cli_buf *b, const char *s)
-{
-    cli_buf_printf(b, "\"");
-    for (; *s; ++s) {
-        if (*s == '"' || *s == '\\')
-            cli_buf_printf(b, "\\%c", *s);
-        else if ((unsigned char)*s < 0x20)
-            cli_buf_printf(b, "\\u%04x", (unsigned char)*s);
-        else
-            cli_buf_printf(b, "%c", *s);
-    }
-    cli_buf_printf(b, "\"");
-}
-
-static void json_number(cli_buf *b, double v)
-{
-    if (isfinite(v))
-        cli_buf_printf(b, "%.17g", v);
-    else
-        cli_buf_printf(b, "null");
-}
-
 static void gate_json(cli_buf *b, const char *brdf, const mf_check *c, int n, int all, const mf_ltcfit_result *r,
                       double fit_wall)
 {
     cli_buf_printf(b, "{\n  \"tool\": \"mfkit fit ltc\",\n  \"version\": \"%s\",\n  \"brdf\": ", MFKIT_VERSION);
-    json_string(b, brdf);
+    cli_buf_json_string(b, brdf);
     cli_buf_printf(b, ",\n  \"passed\": %s,\n  \"fit\": {\"wall_s\": ", all ? "true" : "false");
-    json_number(b, fit_wall);
+    cli_buf_json_number(b, fit_wall);
     cli_buf_printf(b, ", \"worst_residual\": ");
-    json_number(b, r->worst_residual);
-    cli_buf_printf(b, ", \"max_iterations\": %d, \"total_iterations\": %ld, \"not_converged\": %d},\n  \"checks\": [\n",
+    cli_buf_json_number(b, r->worst_residual);
+    cli_buf_printf(b, ", \"max_iterations\": %d, \"total_iterations\": %ld, \"not_converged\": %d},\n  \"checks\": ",
                    r->max_iterations, r->total_iterations, r->not_converged);
-    for (int i = 0; i < n; ++i) {
-        cli_buf_printf(b, "    {\"name\": ");
-        json_string(b, c[i].name);
-        cli_buf_printf(b, ", \"what\": ");
-        json_string(b, c[i].what);
-        cli_buf_printf(b, ", \"worst\": ");
-        json_number(b, c[i].worst);
-        cli_buf_printf(b, ", \"bound\": ");
-        json_number(b, c[i].bound);
-        cli_buf_printf(b, ", \"passed\": %s, \"cases\": %ld, \"worst_at\": ", c[i].passed ? "true" : "false",
-                       c[i].cases);
-        json_string(b, c[i].worst_at);
-        cli_buf_printf(b, "}%s\n", i + 1 < n ? "," : "");
-    }
-    cli_buf_printf(b, "  ]\n}\n");
+    cli_buf_checks_json(b, c, n);
+    cli_buf_printf(b, "\n}\n");
 }
 
 static int make_dir(const char *dir)
@@ -448,11 +413,7 @@ int cli_fit(int argc, char **argv)
     }
     int all = gs == MF_OK;
     cli_buf tb = {0}, jb = {0};
-    cli_buf_printf(&tb, "%-22s %-12s %-12s %-6s %8s  %s\n", "check", "worst", "bound", "result", "cases", "worst case");
-    for (int i = 0; i < nchecks; ++i)
-        cli_buf_printf(&tb, "%-22s %-12.4g %-12.4g %-6s %8ld  %s\n", checks[i].name, checks[i].worst, checks[i].bound,
-                       checks[i].passed ? "pass" : "FAIL", checks[i].cases, checks[i].worst_at);
-    cli_buf_printf(&tb, "%s\n", all ? "all checks passed" : "SOME CHECKS FAILED");
+    cli_buf_checks_table(&tb, checks, nchecks, all);
     gate_json(&jb, model->name, checks, nchecks, all, &r, fit_wall);
     int rc = 0;
     if (cli_buf_write(&tb, stdout) != 0)

@@ -207,20 +207,6 @@ out:
     return 0;
 }
 
-static void json_string(cli_buf *b, const char *s)
-{
-    cli_buf_printf(b, "\"");
-    for (; *s; ++s) {
-        if (*s == '"' || *s == '\\')
-            cli_buf_printf(b, "\\%c", *s);
-        else if ((unsigned char)*s < 0x20)
-            cli_buf_printf(b, "\\u%04x", (unsigned char)*s);
-        else
-            cli_buf_printf(b, "%c", *s);
-    }
-    cli_buf_printf(b, "\"");
-}
-
 static int sh_project(int argc, char **argv)
 {
     const char *env = NULL, *lights_path = NULL;
@@ -327,7 +313,7 @@ static int sh_project(int argc, char **argv)
             mf_sh_add_directional(coeffs + MF_SH_COEFFS * (size_t)rgb[c], lights[l].dir, lights[l].power[c]);
 
     cli_buf_printf(&b, "{\n  \"tool\": \"mfkit sh project\",\n  \"version\": \"%s\",\n  \"env\": ", MFKIT_VERSION);
-    json_string(&b, env);
+    cli_buf_json_string(&b, env);
     cli_buf_printf(&b, ",\n  \"width\": %d,\n  \"height\": %d,\n  \"up\": \"%s\",\n", img.width, img.height,
                    up_y ? "y" : "z");
     cli_buf_printf(&b, "  \"frame\": \"%s\",\n",
@@ -337,7 +323,7 @@ static int sh_project(int argc, char **argv)
                        "L_lm = integral L(w) Y_lm(w) dw\",\n");
     cli_buf_printf(&b, "  \"lights\": ");
     if (lights_path) {
-        json_string(&b, lights_path);
+        cli_buf_json_string(&b, lights_path);
         cli_buf_printf(&b, ",\n  \"light_count\": %d,\n", nlights);
     } else {
         cli_buf_printf(&b, "null,\n  \"light_count\": 0,\n");
@@ -345,7 +331,7 @@ static int sh_project(int argc, char **argv)
     cli_buf_printf(&b, "  \"channels\": {\n");
     for (int k = 0; k < nch; ++k) {
         cli_buf_printf(&b, "    ");
-        json_string(&b, info.channel_names ? info.channel_names[chan[k]] : "Y");
+        cli_buf_json_string(&b, info.channel_names ? info.channel_names[chan[k]] : "Y");
         cli_buf_printf(&b, ": {");
         for (int i = 0; i < MF_SH_COEFFS; ++i) {
             cli_buf_printf(&b, "%s\"%s\": ", i ? ", " : "", k_names[i]);

@@ -147,6 +147,57 @@ void cli_buf_double(cli_buf *b, double v)
         cli_buf_printf(b, "%.17g", v);
 }
 
+void cli_buf_json_string(cli_buf *b, const char *s)
+{
+    cli_buf_printf(b, "\"");
+    for (; *s; ++s) {
+        if (*s == '"' || *s == '\\')
+            cli_buf_printf(b, "\\%c", *s);
+        else if ((unsigned char)*s < 0x20)
+            cli_buf_printf(b, "\\u%04x", (unsigned char)*s);
+        else
+            cli_buf_printf(b, "%c", *s);
+    }
+    cli_buf_printf(b, "\"");
+}
+
+void cli_buf_json_number(cli_buf *b, double v)
+{
+    if (isfinite(v))
+        cli_buf_printf(b, "%.17g", v);
+    else
+        cli_buf_printf(b, "null");
+}
+
+void cli_buf_checks_json(cli_buf *b, const mf_check *c, int n)
+{
+    cli_buf_printf(b, "[\n");
+    for (int i = 0; i < n; ++i) {
+        cli_buf_printf(b, "    {\"name\": ");
+        cli_buf_json_string(b, c[i].name);
+        cli_buf_printf(b, ", \"what\": ");
+        cli_buf_json_string(b, c[i].what);
+        cli_buf_printf(b, ", \"worst\": ");
+        cli_buf_json_number(b, c[i].worst);
+        cli_buf_printf(b, ", \"bound\": ");
+        cli_buf_json_number(b, c[i].bound);
+        cli_buf_printf(b, ", \"passed\": %s, \"cases\": %ld, \"worst_at\": ", c[i].passed ? "true" : "false",
+                       c[i].cases);
+        cli_buf_json_string(b, c[i].worst_at);
+        cli_buf_printf(b, "}%s\n", i + 1 < n ? "," : "");
+    }
+    cli_buf_printf(b, "  ]");
+}
+
+void cli_buf_checks_table(cli_buf *b, const mf_check *c, int n, int all_passed)
+{
+    cli_buf_printf(b, "%-22s %-12s %-12s %-6s %8s  %s\n", "check", "worst", "bound", "result", "cases", "worst case");
+    for (int i = 0; i < n; ++i)
+        cli_buf_printf(b, "%-22s %-12.4g %-12.4g %-6s %8ld  %s\n", c[i].name, c[i].worst, c[i].bound,
+                       c[i].passed ? "pass" : "FAIL", c[i].cases, c[i].worst_at);
+    cli_buf_printf(b, "%s\n", all_passed ? "all checks passed" : "SOME CHECKS FAILED");
+}
+
 /* ---- CSV ----------------------------------------------------------------------------------- */
 static char *trim(char *s)
 {

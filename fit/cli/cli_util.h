@@ -5,6 +5,8 @@
 #include <stddef.h>
 #include <stdio.h>
 
+#include "mfkit/mf_validate.h"
+
 /* Prints "mfkit <cmd>: <message>" on one line of stderr. Always returns 2 (usage/input error). */
 int cli_error(const char *cmd, const char *fmt, ...)
 #if defined(__GNUC__)
@@ -53,5 +55,13 @@ int cli_csv_column(const cli_csv *csv, const char *name);
 
 /* Formats a double with %.17g ("nan", "inf", "-inf" for non-finite values). */
 void cli_buf_double(cli_buf *b, double v);
+
+/* JSON: a quoted, escaped string; a number with %.17g, or null for NaN/inf (JSON has neither). */
+void cli_buf_json_string(cli_buf *b, const char *s);
+void cli_buf_json_number(cli_buf *b, double v);
+/* A report of checks: the JSON array [{"name", "what", "worst", "bound", "passed", "cases",
+ * "worst_at"}, ...] (indented for an object member), and the plain-text table with its verdict. */
+void cli_buf_checks_json(cli_buf *b, const mf_check *c, int n);
+void cli_buf_checks_table(cli_buf *b, const mf_check *c, int n, int all_passed);
 
 #endif /* MF_CLI_UTIL_H */

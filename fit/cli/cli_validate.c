@@ -64,55 +64,12 @@ static void progress(void *user, int done, int total, const mf_check *last)
                 elapsed(&p->start), done == total ? "\n" : "");
 }
 
-static void json_string(cli_buf *b, const char *s)
-{
-    cli_buf_printf(b, "\"");
-    for (; *s; ++s) {
-        if (*s == '"' || *s == '\\')
-            cli_buf_printf(b, "\\%c", *s);
-        else if ((unsigned char)*s < 0x20)
-            cli_buf_printf(b, "\\u%04x", (unsigned char)*s);
-        else
-            cli_buf_printf(b, "%c", *s);
-    }
-    cli_buf_printf(b, "\"");
-}
-
-static void json_number(cli_buf *b, double v)
-{
-    if (isfinite(v))
-        cli_buf_printf(b, "%.17g", v);
-    else
-        cli_buf_printf(b, "null"); /* JSON has no NaN */
-}
-
 static void report_json(cli_buf *b, const mf_check *c, int n, int all_passed)
 {
-    cli_buf_printf(b, "{\n  \"tool\": \"mfkit validate\",\n  \"version\": \"%s\",\n  \"passed\": %s,\n  \"checks\": [\n",
+    cli_buf_printf(b, "{\n  \"tool\": \"mfkit validate\",\n  \"version\": \"%s\",\n  \"passed\": %s,\n  \"checks\": ",
                    MFKIT_VERSION, all_passed ? "true" : "false");
-    for (int i = 0; i < n; ++i) {
-        cli_buf_printf(b, "    {\"name\": ");
-        json_string(b, c[i].name);
-        cli_buf_printf(b, ", \"what\": ");
-        json_string(b, c[i].what);
-        cli_buf_printf(b, ", \"worst\": ");
-        json_number(b, c[i].worst);
-        cli_buf_printf(b, ", \"bound\": ");
-        json_number(b, c[i].bound);
-        cli_buf_printf(b, ", \"passed\": %s, \"cases\": %ld, \"worst_at\": ", c[i].passed ? "true" : "false", c[i].cases);
-        json_string(b, c[i].worst_at);
-        cli_buf_printf(b, "}%s\n", i + 1 < n ? "," : "");
-    }
-    cli_buf_printf(b, "  ]\n}\n");
-}
-
-static void report_table(cli_buf *b, const mf_check *c, int n, int all_passed)
-{
-    cli_buf_printf(b, "%-22s %-12s %-12s %-6s %8s  %s\n", "check", "worst", "bound", "result", "cases", "worst case");
-    for (int i = 0; i < n; ++i)
-        cli_buf_printf(b, "%-22s %-12.4g %-12.4g %-6s %8ld  %s\n", c[i].name, c[i].worst, c[i].bound,
-                       c[i].passed ? "pass" : "FAIL", c[i].cases, c[i].worst_at);
-    cli_buf_printf(b, "%s\n", all_passed ? "all checks passed" : "SOME CHECKS FAILED");
+    cli_buf_checks_json(b, c, n);
+    cli_buf_printf(b, "\n}\n");
 }
 
 /* The LTC gate on a table file. */
@@ -175,11 +132,11 @@ static int validate_table(const char *path, const char *brdf, int quick, uint64_
     int all = (st == MF_OK);
     cli_buf jb = {0}, tb = {0};
     cli_buf_printf(&jb, "{\n  \"tool\": \"mfkit validate\",\n  \"version\": \"%s\",\n  \"table\": ", MFKIT_VERSION);
-    json_string(&jb, path);
+    cli_buf_json_string(&jb, path);
     cli_buf_printf(&jb, ",\n  \"layout\": \"%s\",\n  \"size\": [%d, %d],\n  \"brdf\": ",
                    is_ref ? "reference-csv" : "mfkit", n_r, n_u);
     if (model)
-        json_string(&jb, model->name);
+        cli_buf_json_string(&jb, model->name);
     else
         cli_buf_printf(&jb, "null");
     cli_buf_printf(&jb, ",\n  \"seed\": %llu,\n  \"quick\": %s,\n  \"seconds\": %.3f,\n", (unsigned long long)seed,
@@ -187,19 +144,19 @@ static int validate_table(const char *path, const char *brdf, int quick, uint64_
     if (model) {
         cli_buf_printf(&jb, "  \"polygon_errors\": {\"polygons\": %ld, \"texels\": %ld, \"mean_abs\": ", stats.polygons,
                        stats.entries);
-        json_number(&jb, stats.mean_abs);
+        cli_buf_json_number(&jb, stats.mean_abs);
         cli_buf_printf(&jb, ", \"p95_abs\": ");
-        json_number(&jb, stats.p95_abs);
+        cli_buf_json_number(&jb, stats.p95_abs);
         cli_buf_printf(&jb, ", \"worst_abs\": ");
-        json_number(&jb, stats.worst_abs);
+        cli_buf_json_number(&jb, stats.worst_abs);
         cli_buf_printf(&jb, ", \"mean_rel\": ");
-        json_number(&jb, stats.mean_rel);
+        cli_buf_json_number(&jb, stats.mean_rel);
         cli_buf_printf(&jb, ", \"p95_rel\": ");
-        json_number(&jb, stats.p95_rel);
+        cli_buf_json_number(&jb, stats.p95_rel);
         cli_buf_printf(&jb, ", \"worst_rel\": ");
-        json_number(&jb, stats.worst_rel);
+        cli_buf_json_number(&jb, stats.worst_rel);
         cli_buf_printf(&jb, ", \"mean_mc_se\": ");
-        json_number(&jb, stats.mean_se);
+        cli_buf_json_number(&jb, stats.mean_se);
         cli_buf_printf(&jb, "},\n");
     }
     /* The checks, as for the core report (drop its opening lines). */
@@ -212,7 +169,7 @@ static int validate_table(const char *path, const char *brdf, int quick, uint64_
     cli_buf_printf(&tb, "LTC gate: %s (%d x %d, %s), BRDF %s, seed %llu, %s, %.2f s\n", path, n_r, n_u,
                    is_ref ? "reference CSV layout" : "mfkit table", model ? model->name : "none (model-free checks)",
                    (unsigned long long)seed, quick ? "quick" : "full", secs);
-    report_table(&tb, checks, n, all);
+    cli_buf_checks_table(&tb, checks, n, all);
     if (model)
         cli_buf_printf(&tb,
                        "polygon shading vs Monte Carlo (%ld polygons at %ld texels): |error| mean %.4g, p95 %.4g, worst "
@@ -290,7 +247,7 @@ int cli_validate(int argc, char **argv)
     int all = (st == MF_OK);
     cli_buf jb = {0}, tb = {0};
     report_json(&jb, checks, n, all);
-    report_table(&tb, checks, n, all);
+    cli_buf_checks_table(&tb, checks, n, all);
     free(checks);
     int rc = all ? 0 : 1;
     char msg[512];
