@@ -1,0 +1,38 @@
+#!/bin/bash
+# make_figures.sh BUILD_DIR OUT_DIR [DATA_DIR] -- run the accuracy studies (fast settings) and plot
+# them (issue 6; docs/figures.md).  Run from the source directory, e.g.
+#   analysis/make_figures.sh build out/figures
+# CSV files go to DATA_DIR (default: a scratch directory, removed afterwards; pass notebooks_data
+# to keep them locally -- they are generated, not committed), figures (PNG + PDF) to OUT_DIR.
+# bench_ltc's per-polygon CSV is added when bench_ltc was built (C++ dependencies on) and the
+# reference table ../shared/reference/ltc_code_ggx_64.csv exists.  Needs /usr/bin/python3 with
+# python3-numpy and python3-matplotlib.
+set -eu
+if [ $# -lt 2 ] || [ $# -gt 3 ]; then
+    echo "usage: analysis/make_figures.sh BUILD_DIR OUT_DIR [DATA_DIR]" >&2
+    exit 2
+fi
+build=$1 out=$2
+src=$(cd "$(dirname "$0")/.." && pwd)
+bin=$build/analysis
+if [ $# -eq 3 ]; then
+    data=$3
+    mkdir -p "$data"
+else
+    data=$(mktemp -d "${TMPDIR:-/tmp}/mfkit_figures.XXXXXX")
+    trap 'rm -rf "$data"' EXIT
+fi
+for s in study_smith study_furnace study_proxy study_leadr_grid; do
+    [ -x "$bin/$s" ] || { echo "make_figures.sh: $bin/$s not built (cmake --build $build)" >&2; exit 1; }
+done
+echo "== study_smith";       "$bin/study_smith" --out "$data/smith_lambda.csv"
+echo "== study_furnace";     "$bin/study_furnace" --out "$data/furnace.csv"
+echo "== study_proxy";       "$bin/study_proxy" --out "$data/ggx_proxy.csv"
+echo "== study_leadr_grid";  "$bin/study_leadr_grid" --samples 65536 --out "$data/leadr_grid_convergence.csv" | tail -n 3
+ref=$src/../shared/reference/ltc_code_ggx_64.csv
+if [ -x "$bin/bench_ltc" ] && [ -f "$ref" ]; then
+    echo "== bench_ltc"
+    "$bin/bench_ltc" --views 64 --polygons 16 --csv "$data/bench_ltc.csv" "$ref" >/dev/null
+fi
+echo "== plot.py"
+/usr/bin/python3 "$src/analysis/plot.py" "$data" "$out"
