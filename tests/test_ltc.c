@@ -21,6 +21,7 @@
  * hemisphere, so every cell integrand is smooth and a fixed product rule is exact to ~1e-13.
  */
 #include "mf_test.h"
+#include "mf_stats.h"
 #include "mfkit/mf_ltc.h"
 #include "mfkit/mf_quad.h"
 #include "mfkit/mf_rng.h"
@@ -431,48 +432,7 @@ static void test_errata(mf_pcg32 *rng)
 }
 
 /* ---- chi-square test of the sampler ----------------------------------------------------------
- * Regularized upper incomplete gamma Q(a, x), copied from tests/test_sample.c (Numerical Recipes
- * in C, 2nd ed., Sec. 6.2: series for x < a + 1, continued fraction otherwise). */
-#define IG_ITMAX 10000
-#define IG_EPS 1e-15
-#define IG_FPMIN 1e-300
-
-static double gamma_q(double a, double x)
-{
-    if (!(a > 0.0) || !(x >= 0.0))
-        return NAN;
-    if (x == 0.0)
-        return 1.0;
-    if (x < a + 1.0) {
-        double ap = a, sum = 1.0 / a, del = sum;
-        for (int n = 0; n < IG_ITMAX; ++n) {
-            ap += 1.0;
-            del *= x / ap;
-            sum += del;
-            if (fabs(del) < fabs(sum) * IG_EPS)
-                break;
-        }
-        return 1.0 - sum * exp(-x + a * log(x) - lgamma(a));
-    }
-    double b = x + 1.0 - a, c = 1.0 / IG_FPMIN, d = 1.0 / b, h = d;
-    for (int i = 1; i <= IG_ITMAX; ++i) {
-        double an = -i * (i - a);
-        b += 2.0;
-        d = an * d + b;
-        if (fabs(d) < IG_FPMIN)
-            d = IG_FPMIN;
-        c = b + an / c;
-        if (fabs(c) < IG_FPMIN)
-            c = IG_FPMIN;
-        d = 1.0 / d;
-        double del = d * c;
-        h *= del;
-        if (fabs(del - 1.0) < IG_EPS)
-            break;
-    }
-    return exp(-x + a * log(x) - lgamma(a)) * h;
-}
-
+ * (Q(a, x) and the p-value from tests/mf_stats.h.) */
 #define N_MU 20
 #define N_PHI 40
 #define N_CELLS (N_MU * N_PHI)
