@@ -17,6 +17,7 @@ static void usage(FILE *f)
             "                  convert lookup-table files (.exr .dds .json .npy -> also .h .glsl .hlsl\n"
             "                  .csv) and describe them (needs the OpenImageIO build)\n"
             "  fit ltc         fit an LTC table to a BRDF, gate it and export it (needs the Ceres build)\n"
+            "  fit ggx-proxy   fit the shader formula of the GGX proxy roughness and export it (Ceres build)\n"
             "  maps lean|leadr|bump-roughness|toksvig INPUT --out PREFIX\n"
             "                  moment / roughness maps with their MIP chain from a normal or height map\n"
             "                  (needs the OpenImageIO build)\n"
