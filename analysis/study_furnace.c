@@ -24,6 +24,8 @@
 #define _POSIX_C_SOURCE 200809L
 #include <mfkit/mfkit.h>
 
+#include "study_header.h"
+
 #include <errno.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -31,25 +33,9 @@
 #include <string.h>
 #include <time.h>
 
-#ifndef MFKIT_VERSION
-#define MFKIT_VERSION "unknown"
-#endif
-
 #define DEG (MF_PI / 180.0)
 /* probability of the model's own sampler in the mixture (the rest: cosine hemisphere) */
 #define MODEL_WEIGHT 0.875
-
-/* Provenance header line: # command=..., mfkit=..., seed=..., date=... */
-static void write_header(FILE *f, int argc, char **argv, unsigned long long seed)
-{
-    char date[32];
-    time_t now = time(NULL);
-    strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", gmtime(&now));
-    fprintf(f, "# command=");
-    for (int i = 0; i < argc; ++i)
-        fprintf(f, "%s%s", i ? " " : "", i ? argv[i] : "study_furnace");
-    fprintf(f, ", mfkit=%s, seed=%llu, date=%s\n", MFKIT_VERSION, seed, date);
-}
 
 /* One sample of the mixture estimator f cos / pdf. */
 static double mixture_sample(const mf_brdf_model *m, double alpha, mf_vec3 wo, const double u[2], double pick)
@@ -107,7 +93,9 @@ int main(int argc, char **argv)
         fprintf(stderr, "study_furnace: %s: %s\n", out_path, strerror(errno));
         return 3;
     }
-    write_header(f, argc, argv, seed);
+    char seed_text[32];
+    snprintf(seed_text, sizeof seed_text, "%llu", seed);
+    study_write_header(f, "study_furnace", argc, argv, seed_text);
     fprintf(f, "source,brdf,fresnel,theta_deg,alpha,albedo,err\n");
 
     /* 1. microfacet BRDFs by deterministic quadrature */

@@ -21,27 +21,13 @@
 #define _POSIX_C_SOURCE 200809L
 #include <mfkit/mfkit.h>
 
+#include "study_header.h"
+
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-
-#ifndef MFKIT_VERSION
-#define MFKIT_VERSION "unknown"
-#endif
-
-/* Provenance header line: # command=..., mfkit=..., seed=..., date=... */
-static void write_header(FILE *f, int argc, char **argv, const char *seed)
-{
-    char date[32];
-    time_t now = time(NULL);
-    strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", gmtime(&now));
-    fprintf(f, "# command=");
-    for (int i = 0; i < argc; ++i)
-        fprintf(f, "%s%s", i ? " " : "", i ? argv[i] : "study_proxy");
-    fprintf(f, ", mfkit=%s, seed=%s, date=%s\n", MFKIT_VERSION, seed, date);
-}
 
 typedef struct {
     mf_ndf ndf;
@@ -108,7 +94,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "study_proxy: %s: %s\n", out_path, strerror(errno));
         return 3;
     }
-    write_header(f, argc, argv, "none");
+    study_write_header(f, "study_proxy", argc, argv, "none");
     fprintf(f, "alpha,dh,x,rect_mean,rect_naive,rect_ref,rect_ref_err,rel_err_rect,rel_err_rect_naive,alpha_exact,"
                "alpha_approx,alpha_fit,rel_err_approx,rel_err_fit\n");
     double worst[4] = {0, 0, 0, 0};

@@ -28,30 +28,16 @@
 #define _POSIX_C_SOURCE 200809L
 #include <mfkit/mfkit.h>
 
+#include "study_header.h"
+
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
-#ifndef MFKIT_VERSION
-#define MFKIT_VERSION "unknown"
-#endif
-
 #define DEG (MF_PI / 180.0)
 #define GAUSS_VAR 0.125 /* Beckmann alpha 0.5: var = alpha^2 / 2 */
-
-/* Provenance header line: # command=..., mfkit=..., seed=..., date=... */
-static void write_header(FILE *f, int argc, char **argv, const char *seed)
-{
-    char date[32];
-    time_t now = time(NULL);
-    strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", gmtime(&now));
-    fprintf(f, "# command=");
-    for (int i = 0; i < argc; ++i)
-        fprintf(f, "%s%s", i ? " " : "", i ? argv[i] : "study_smith");
-    fprintf(f, ", mfkit=%s, seed=%s, date=%s\n", MFKIT_VERSION, seed, date);
-}
 
 typedef struct {
     double a;
@@ -118,7 +104,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "study_smith: %s: %s\n", out_path, strerror(errno));
         return 3;
     }
-    write_header(f, argc, argv, "none");
+    study_write_header(f, "study_smith", argc, argv, "none");
     fprintf(f, "part,nu,mean_slope,theta_deg,lambda_exact,lambda_ref,g1_exact,g1_ref,rel_err_g1,rel_err_lambda\n");
 
     /* 1. Walter's approximation over nu */
