@@ -7,7 +7,8 @@
  *
  *   residual_k = (magnitude * E_LTC(P_k; M) - I_k) / (I_k + 0.2 magnitude),   k = 1..K
  *
- * (the floor 0.2: docs/tables.md, "Weight floor")
+ * (the floor 0.2: docs/tables.md, "Weight floor"; two low lights have residual weights that blend
+ * with the lobe's side, so that the objective is continuous in the texel)
  *
  * over a fixed family of K test lights P_k placed around the BRDF lobe (quads, triangles and
  * cap-like 8-gons of angular radius 0.25 to 4 lobe widths on the lobe and beside it, lights
@@ -18,7 +19,10 @@
  * (the same scramble for every texel, so neighbouring texels see the same point set mapped
  * through slightly different samplers and their errors are correlated: a smoother table), mapped
  * through the model's sampler (or the cosine hemisphere) with weights f cos / pdf, reused across
- * all lights; the weights are rescaled so that their mean equals the quadrature magnitude.  A
+ * all lights; the weights are rescaled so that their mean equals the quadrature magnitude, and a
+ * control variate (the previous texel's LTC, whose light integrals are exact, with a per-light
+ * regression coefficient in [0, 1]) removes most of the noise of the light edges.  Views with
+ * cos theta < 0.1 use 4 x `samples` directions.  A
  * direction is inside a convex spherical polygon when dot(w, v_i x v_i+1) > 0 for every edge.
  * The Jacobian is exact: forward-mode dual numbers (4 derivatives) through the transform, the
  * clip and the edge formula.  The least-squares problem is solved by mfkit's Ceres bridge
@@ -30,7 +34,11 @@
  * Warm start and determinism.  Each roughness column ir is fitted sequentially along u (view
  * angle) from a closed-form start at u = 0 (the best isotropic scaling a' = c' = s, b' = d' = 0 of a
  * log grid of s, about the lobe's mean direction), each entry starting from the previous entry's
- * solution (when its cost is not above that of the closed-form start, which every entry computes).  Columns are
+ * lobe-frame solution (when its cost is not above that of the closed-form start, which every
+ * entry computes).  Two proximal residuals 0.1 (b' - b'_prev), 0.1 (d' - d'_prev) keep weakly
+ * determined shears continuous along the column, and where the lobe's mean is within 0.1 of the
+ * normal a forward-skewed fit (d' > 0) is replaced by its mirror image if that costs within 1 %
+ * (docs/tables.md, "Mirror convention").  Columns are
  * independent and handed out to `threads` pthreads; so the result does not depend on the thread
  * count or the order, bit for bit (tests/test_ltcfit.c).
  *
