@@ -16,7 +16,11 @@
 #include <unistd.h>
 
 #define LIGHTS_MAX 48
-#define CKPT_MAGIC "MFLTCCK1"
+/* The checkpoint's magic names the fitter revision: bump it whenever the fitted values change
+ * (objective, lights, constants), so that --resume refuses a checkpoint of another revision
+ * instead of mixing columns of two fitters.  2: control variate, proximal shears, mirror
+ * convention, 4x directions at grazing views. */
+#define CKPT_MAGIC "MFLTCCK2"
 #define ENTRY_DOUBLES 19
 #define A_MIN 1e-7
 /* The floor of the residual weights, in units of the texel's albedo: residual_k =
