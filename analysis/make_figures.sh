@@ -5,7 +5,9 @@
 # CSV files go to DATA_DIR (default: a scratch directory, removed afterwards; pass notebooks_data
 # to keep them locally -- they are generated, not committed), figures (PNG + PDF) to OUT_DIR.
 # bench_ltc's per-polygon CSV is added when bench_ltc was built (C++ dependencies on) and the
-# reference table ../shared/reference/ltc_code_ggx_64.csv exists.  Needs /usr/bin/python3 with
+# reference table ../shared/reference/ltc_code_ggx_64.csv exists, and so is study_ltc_texels'
+# per-texel CSV (paired with the table named by the environment variable MFKIT_LTC_TABLE, if set,
+# e.g. MFKIT_LTC_TABLE=out/ltc/ltc_ggx.exr analysis/make_figures.sh build out/figures).  Needs /usr/bin/python3 with
 # python3-numpy and python3-matplotlib.
 set -eu
 if [ $# -lt 2 ] || [ $# -gt 3 ]; then
@@ -33,6 +35,23 @@ ref=$src/../shared/reference/ltc_code_ggx_64.csv
 if [ -x "$bin/bench_ltc" ] && [ -f "$ref" ]; then
     echo "== bench_ltc"
     "$bin/bench_ltc" --views 64 --polygons 16 --csv "$data/bench_ltc.csv" "$ref" >/dev/null
+fi
+# study_ltc_texels: the reference table's error per texel (every 4th texel: 17 x 17, ~10 s); with
+# MFKIT_LTC_TABLE=FILE (a 64 x 64 table of `mfkit fit ltc`, e.g. out/ltc/ltc_ggx.exr) paired with
+# that table too (figure ltc_texel_pair).
+if [ -x "$bin/study_ltc_texels" ] && [ -f "$ref" ]; then
+    echo "== study_ltc_texels"
+    "$bin/study_ltc_texels" --stride 4 --out "$data/ltc_texels.csv" "$ref" ${MFKIT_LTC_TABLE:+"$MFKIT_LTC_TABLE"} >/dev/null
+fi
+# study_sh_irradiance: 30 x 60 normals (~10 s); study_half: the reference table's half-float error
+# (~1 s), when it was built (C++ dependencies on) and the table exists.
+[ -x "$bin/study_sh_irradiance" ] ||
+    { echo "make_figures.sh: $bin/study_sh_irradiance not built (cmake --build $build)" >&2; exit 1; }
+echo "== study_sh_irradiance"
+"$bin/study_sh_irradiance" --thetas 30 --phis 60 --out "$data/sh_irradiance.csv"
+if [ -x "$bin/study_half" ] && [ -f "$ref" ]; then
+    echo "== study_half"
+    "$bin/study_half" --out "$data/half_error.csv" "$ref"
 fi
 echo "== plot.py"
 /usr/bin/python3 "$src/analysis/plot.py" "$data" "$out"

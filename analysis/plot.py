@@ -10,6 +10,9 @@ still plot; unknown CSV files are listed and skipped.  Known data (docs/figures.
   study_proxy        proxy_alpha_error.*, proxy_alpha_curves.*, ggx_rect_error.*
   study_leadr_grid   leadr_grid_convergence.*
   bench_ltc --csv    ltc_polygon_error.*
+  study_sh_irradiance  sh_irradiance_error.*, sh_irradiance_curves.*
+  study_half         half_shading_error.* (LTC tables), half_rounding_error.*
+  study_ltc_texels   ltc_texel_errors.*, and ltc_texel_pair.* with a SECOND_TABLE
 
 Each figure carries a caption line naming its data file and the file's provenance header
 (command, mfkit version, seed, date).  Exit status: 0 when every recognised file plotted,
@@ -359,13 +362,293 @@ def plot_bench_ltc(d, out_dir, made):
            note="|LTC - MC| / max(MC, 0.01 albedo), averaged over the random polygons of each view")
 
 
+# ---- study_ltc_texels ---------------------------------------------------------------------------
+LTC_TEXEL_FLOOR = 1e-4  # log colour scales start here: the r = 0 row (alpha 1e-4 or 1e-5, a near-delta
+                        # lobe) is ~1e-8 and would squeeze every other texel into one colour
+
+
+def _clip_limit(z):
+    """A symmetric colour limit for signed data: the 98th percentile of |z|, so that a few
+    outlying texels (drawn in the darkest colour) do not wash out the rest."""
+    a = np.abs(z[np.isfinite(z)])
+    return float(np.percentile(a, 98)) if a.size else 0.0
+
+
+def _diverging(ax, fig, xs, ys, z, xlabel, ylabel, title, cbar_label, limit=None):
+    """Heat map centred on 0 (blue < 0 < red); symmetric limits, or +-limit."""
+    m = limit if limit is not None else float(np.nanmax(np.abs(z))) if np.isfinite(z).any() else 0.0
+    if not m > 0:
+        m = 1.0  # every value exactly 0 (or missing): any symmetric range shows them white
+        title += "\n(every value exactly 0)" if np.isfinite(z).any() else ""
+    return heatmap(ax, fig, xs, ys, z, xlabel, ylabel, title, cbar_label, vmin=-m, vmax=m, cmap="RdBu_r")
+
+
+def plot_ltc_texels(d, out_dir, made):
+    th_label, r_label = r"view zenith angle $\theta_o$ (deg)", r"roughness r ($\alpha = r^2$)"
+    xs, ys = np.unique(d["theta_deg"]), np.unique(d["r"])
+    ix, iy = np.searchsorted(xs, d["theta_deg"]), np.searchsorted(ys, d["r"])
+
+    def grid(values):
+        z = np.full((len(ys), len(xs)), np.nan)
+        z[iy, ix] = values
+        return z
+
+    def where(z, fn):
+        i = int(fn(np.where(np.isfinite(z), z, np.nan)))
+        return "%.4g deg, r = %.3f" % (xs[i % len(xs)], ys[i // len(xs)])
+
+    def axes_0_90(a):
+        a.set_xlim(0, 90)  # the last texel (89.95 deg) sits on the edge, its cell is cut in half
+        a.set_ylim(0, 1)
+        a.set_xticks(range(0, 91, 15))
+
+    n = len(d["ir"])
+    fig, ax = new_figure(2, 2, width=6.2, height=4.8)
+    z = grid(d["poly_mean_rel"])
+    heatmap(ax[0][0], fig, xs, ys, z, th_label, r_label,
+            "polygon shading: mean |LTC - MC| / max(MC, 0.01 albedo)\nmean %.3g, worst %.3g at %s"
+            % (np.nanmean(z), np.nanmax(z), where(z, np.nanargmax)),
+            "mean relative error over the polygons (log)", log_colour=True, vmin=LTC_TEXEL_FLOOR)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = grid(np.where(d["mc_mean_se"] > 0, d["poly_mean_abs"] / d["mc_mean_se"], np.nan))
+    heatmap(ax[0][1], fig, xs, ys, z, th_label, r_label,
+            "mean |LTC - MC| in units of the mean MC standard error, median %.2g\n(about 1 or less: the error is "
+            "Monte Carlo noise; colour clipped at 100)" % np.nanmedian(z),
+            "mean |LTC - MC| / mean s.e. (log)", log_colour=True, vmax=100.0,
+            masked_label="MC standard error 0 (a delta-like lobe)")
+    z = grid(d["lobe_l1"])
+    heatmap(ax[1][0], fig, xs, ys, z, th_label, r_label,
+            "lobe: L1 distance over the sphere, relative to the albedo\nmean %.3g, worst %.3g at %s"
+            % (np.nanmean(z), np.nanmax(z), where(z, np.nanargmax)),
+            r"$\int |m\,D_{LTC} - f\,\cos\theta_i|\,d\omega_i$ / albedo (log)", log_colour=True,
+            vmin=LTC_TEXEL_FLOOR)
+    z = grid(d["albedo_rel_diff"])
+    lim = _clip_limit(z)
+    _diverging(ax[1][1], fig, xs, ys, z, th_label, r_label,
+               "albedo: (magnitude - quadrature) / quadrature\nworst %+.3g at %s; colour clipped at +-%.2g"
+               % (z.flat[int(np.nanargmax(np.abs(z)))], where(np.abs(z), np.nanargmax), lim),
+               "relative albedo error (signed)", limit=lim)
+    for a in ax.flat:
+        axes_0_90(a)
+    note = ("%d texels, %d polygons each; MC = Monte Carlo; log colour scales start at %g; any light's error "
+            "<= (L1 albedo + |magnitude - albedo|) / 2" % (n, int(np.nanmax(d["polygons"])), LTC_TEXEL_FLOOR))
+    finish(fig, d, out_dir, "ltc_texel_errors", made, note=note)
+
+    if not d.has("d_poly_mean_rel", "d_poly_mean_abs", "d_poly_mean_abs_se", "d_minv_00", "d_magnitude"):
+        return
+    fig, ax = new_figure(2, 2, width=6.2, height=4.8)
+    z = grid(d["d_poly_mean_rel"])
+    lim = _clip_limit(z)
+    _diverging(ax[0][0], fig, xs, ys, z, th_label, r_label,
+               "second - first: mean relative polygon error (paired)\nmean %+.3g; colour clipped at +-%.2g"
+               % (np.nanmean(z), lim), "difference of mean relative errors", limit=lim)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(d["d_poly_mean_abs"] == 0, 0.0, d["d_poly_mean_abs"] / d["d_poly_mean_abs_se"])
+    z = grid(t)
+    _diverging(ax[0][1], fig, xs, ys, z, th_label, r_label,
+               "paired t of the mean |LTC - MC| difference\n(spread over the polygons; colour clipped at +-5)",
+               "difference / its standard error", limit=5.0)
+    dmax = np.nanmax(np.abs(np.vstack([d[c] for c in ("d_minv_00", "d_minv_20", "d_minv_02", "d_minv_22")])), axis=0)
+    z = grid(dmax)
+    heatmap(ax[1][0], fig, xs, ys, z, th_label, r_label,
+            "largest |second - first| of minv_00, _20, _02, _22\nmax %.3g (exact zeros drawn at 1e-17)" % np.nanmax(z),
+            "|difference| of the stored M^-1 fields (log)", log_colour=True)
+    z = grid(d["d_magnitude"])
+    lim = _clip_limit(z)
+    _diverging(ax[1][1], fig, xs, ys, z, th_label, r_label,
+               "second - first: magnitude\nmax |d| %.3g; colour clipped at +-%.2g" % (np.nanmax(np.abs(z)), lim),
+               "difference of the stored magnitude", limit=lim)
+    for a in ax.flat:
+        axes_0_90(a)
+    finish(fig, d, out_dir, "ltc_texel_pair", made,
+           note="first = TABLE, second = SECOND_TABLE of the command line; same polygons and Monte Carlo values for "
+                "both (paired); red: the second is larger (worse, for the errors)")
+
+
+# ---- study_sh_irradiance ----------------------------------------------------------------------
+SH_ENV_TITLES = {
+    "overcast": "CIE overcast sky (0 below the horizon)",
+    "sun_sky": "smooth sky with a soft sun lobe",
+    "sun_disc": "overcast sky + solar disc (P = 20)",
+    "directional": "one directional light (P = 1)",
+}
+SH_WINDOW_STYLES = {"none": "-", "hanning": "--", "lanczos": ":"}
+
+
+def _sh_env_grid(s, col):
+    xs, ys, z = grid_of(s, "phi_deg", "theta_deg", col)
+    return xs, ys, z
+
+
+def plot_sh_irradiance(d, out_dir, made):
+    envs = list(dict.fromkeys(d["env"]))
+    windows = list(dict.fromkeys(d["window"]))
+    base = d.where(d["window"] == "none") if "none" in windows else d.where(d["window"] == windows[0])
+    wname = "none" if "none" in windows else windows[0]
+    ncols = 2 if len(envs) > 1 else 1
+    nrows = (len(envs) + ncols - 1) // ncols
+    fig, ax = new_figure(ncols, nrows, width=6.0, height=4.3)
+    lo, hi = 1e-4, 10.0
+    for k, env in enumerate(envs):
+        a = ax[k // ncols][k % ncols]
+        s = base.where(base["env"] == env)
+        xs, ys, z = _sh_env_grid(s, "rel_err")
+        _, _, zn = _sh_env_grid(s, "norm_err")
+        th = s["theta_deg"]
+        w = np.sin(np.radians(th))
+        title = "%s: %s\n" r"max $|E_{SH} - E| / \int L\,d\omega$ = %.3g, mean %.3g (bound 3/32 = 0.094)" % (
+            env, SH_ENV_TITLES.get(env, ""), np.nanmax(s["norm_err"]), np.sum(w * s["norm_err"]) / np.sum(w))
+        heatmap(a, fig, xs, ys, z, r"azimuth of the normal $\phi_n$ (deg)", r"zenith angle of the normal $\theta_n$ (deg)",
+                title, r"relative error $|E_{SH} - E| / E$ (log; clipped to [1e-4, 10])", log_colour=True,
+                vmin=lo, vmax=hi, cmap="magma")
+        if np.isnan(z).any():
+            a.text(0.99, 0.02, "grey: E = 0 (no light reaches the normal)", transform=a.transAxes, ha="right",
+                   va="bottom", fontsize=7, color="k", bbox=dict(fc="w", ec="none", alpha=0.7))
+        lt, lp = s["light_theta_deg"][0], s["light_phi_deg"][0]
+        if np.isfinite(lt) and np.isfinite(lp):
+            a.plot([lp], [lt], marker="*", ms=11, mfc="cyan", mec="k", ls="none")
+            a.annotate("light", (lp, lt), textcoords="offset points", xytext=(7, -3), fontsize=8, color="cyan")
+        a.set_xlim(0, 360)
+        a.set_ylim(180, 0)  # zenith at the top, as in a latitude-longitude map
+        a.set_xticks(range(0, 361, 60))
+        a.set_yticks(range(0, 181, 30))
+    for k in range(len(envs), nrows * ncols):
+        ax[k // ncols][k % ncols].axis("off")
+    fig.suptitle("Order-2 SH irradiance (9 coefficients, window: %s) vs quadrature, over the sphere of normals" % wname,
+                 fontsize=11)
+    finish(fig, d, out_dir, "sh_irradiance_error", made,
+           note="E = integral L max(0, n.w) dw by quadrature; star: direction of the sun (or sun lobe); dark thin "
+                "curves: E_SH crosses E (the error changes sign)")
+
+    # summary: the worst error over the azimuths per zenith angle, every window; and the fraction of the
+    # sphere of normals above a relative error
+    fig, ax = new_figure(2, 1, width=6.2, height=4.6)
+    a0, a1 = ax[0]
+    for k, env in enumerate(envs):
+        for win in windows:
+            s = d.where((d["env"] == env) & (d["window"] == win))
+            ths = np.unique(s["theta_deg"])
+            worst = np.array([np.nanmax(s["norm_err"][s["theta_deg"] == t]) for t in ths])
+            a0.semilogy(ths, np.maximum(worst, ERR_FLOOR), SH_WINDOW_STYLES.get(win, "-."), color="C%d" % k,
+                        label="%s, %s" % (env, win) if win == wname or len(windows) == 1 else None)
+        s = base.where(base["env"] == env)
+        rel = s["rel_err"]
+        w = np.sin(np.radians(s["theta_deg"]))
+        ok = np.isfinite(rel)
+        o = np.argsort(rel[ok])
+        r_sorted, w_sorted = rel[ok][o], w[ok][o]
+        frac = 1.0 - (np.cumsum(w_sorted) - w_sorted) / np.sum(w_sorted)  # share with an error >= this one
+        median = r_sorted[min(np.searchsorted(np.cumsum(w_sorted), 0.5 * np.sum(w_sorted)), len(r_sorted) - 1)]
+        a1.loglog(np.maximum(r_sorted, ERR_FLOOR), frac, color="C%d" % k, label="%s (median %.2g)" % (env, median))
+    a0.axhline(3.0 / 32.0, color="k", lw=1.0, label="3/32: bound for any L >= 0, no window")
+    for win in windows:
+        a0.plot([], [], SH_WINDOW_STYLES.get(win, "-."), color="0.4", label="window: %s" % win)
+    a0.set_xlabel(r"zenith angle of the normal $\theta_n$ (deg)")
+    a0.set_ylabel(r"max over $\phi_n$ of $|E_{SH} - E|$ / $\int L\,d\omega$")
+    a0.set_title("worst error per zenith angle of the normal\n(colour: environment; line style: SH window of width 3)",
+                 fontsize=10)
+    a0.set_xlim(0, 180)
+    a0.set_ylim(1e-8, 1.0)  # room for the legend below the curves
+    a0.set_xticks(range(0, 181, 30))
+    a0.grid(True, which="major", alpha=0.3)
+    a0.legend(fontsize=7, loc="lower right", ncol=2)
+    a1.set_xlabel(r"relative error $|E_{SH} - E| / E$")
+    a1.set_ylabel("fraction of the normals with E > 0 (by solid angle)\nwhose relative error is at least x")
+    a1.set_title("distribution of the relative error over the lit normals\n(window: %s)" % wname, fontsize=10)
+    a1.axvline(0.01, color="0.5", lw=0.8, ls=":")
+    a1.grid(True, which="major", alpha=0.3)
+    a1.legend(fontsize=8)
+    finish(fig, d, out_dir, "sh_irradiance_curves", made,
+           note="left: error relative to the total incident flux integral L dw; right: pointwise relative error, "
+                "unbounded where E -> 0 (the terminator of a light, downward normals under a sky)")
+
+
+# ---- study_half -------------------------------------------------------------------------------
+HALF_REL = 2.0 ** -11  # round to nearest in half's normal range: relative error <= 2^-11
+HALF_MIN_NORMAL = 2.0 ** -14
+
+
+def plot_half(d, out_dir, made):
+    tables = list(dict.fromkeys(d["table"]))
+    sh = d.where(d["kind"] == "shading")
+    ltc = [t for t in tables if np.any(sh["table"] == t)]
+    if ltc:
+        fig, ax = new_figure(len(ltc), 1, width=7.2, height=5.0)
+        for k, t in enumerate(ltc):
+            s = sh.where(sh["table"] == t)
+            xs, ys, z = grid_of(s, "theta_o_deg", "p0", "shade_rel_worst")
+            i = int(np.nanargmax(s["shade_rel_worst"]))
+            heatmap(ax[0][k], fig, xs, ys, z, r"view zenith angle $\theta_o$ (deg)", r"roughness r ($\alpha = r^2$)",
+                    "%s: half-float export, change of LTC polygon shading\n"
+                    "worst %.3g at %.2f deg, r = %.3f; mean over the texels %.3g" % (
+                        os.path.basename(t), s["shade_rel_worst"][i], s["theta_o_deg"][i], s["p0"][i],
+                        np.nanmean(s["shade_rel_worst"])),
+                    r"worst $|m_h\,E(M_h, P) - m\,E(M, P)|\ /\ m$ over the polygons P", log_colour=True, vmin=1e-7,
+                    masked_label="not shaded (singular matrix or magnitude <= 0)")
+            ax[0][k].set_xlim(0, 90)
+            ax[0][k].set_xticks(range(0, 91, 15))
+        finish(fig, d, out_dir, "half_shading_error", made,
+               note="m = magnitude (the albedo), M = LTC rebuilt from minv_*, _h: from their halves "
+                    "(mf_half_from_double); P: random polygons of mf_ltc_gate_random_polygons; log colour from 1e-7")
+
+    v = d.where(d["kind"] == "value")
+    fig, ax = new_figure(2, len(tables), width=6.4, height=4.6)
+    for k, t in enumerate(tables):
+        s = v.where(v["table"] == t)
+        fields = list(dict.fromkeys(s["field"]))
+        a0, a1 = ax[k]
+        for j, fld in enumerate(fields):
+            r = s["rel_err"][s["field"] == fld]
+            r = r[np.isfinite(r)]
+            if not r.size:
+                a0.text(j, 2e-8, "all 0", ha="center", fontsize=7, rotation=90)
+                continue
+            a0.plot([j - 0.18], [max(np.max(r), ERR_FLOOR)], "v", color="C3", label="max" if j == 0 else None)
+            a0.plot([j], [max(np.percentile(r, 99), ERR_FLOOR)], "s", color="C1", ms=5,
+                    label="99th percentile" if j == 0 else None)
+            a0.plot([j + 0.18], [max(np.median(r), ERR_FLOOR)], "o", color="C0", ms=5,
+                    label="median" if j == 0 else None)
+        a0.set_yscale("log")
+        a0.set_ylim(1e-8, 2.0)
+        a0.axhline(HALF_REL, color="0.3", lw=0.8, ls="--")
+        a0.text(0.99, HALF_REL * 2.0, "$2^{-11}$: bound in half's normal range", fontsize=7, color="0.3",
+                ha="right", transform=a0.get_yaxis_transform())
+        a0.set_xticks(range(len(fields)))
+        a0.set_xticklabels(fields, rotation=30, ha="right", rotation_mode="anchor", fontsize=8)
+        a0.set_xlabel("field")
+        a0.set_ylabel("relative rounding error |half(x) - x| / |x|")
+        a0.set_title("%s: per field (x != 0)" % os.path.basename(t), fontsize=10)
+        a0.grid(True, axis="y", alpha=0.3)
+        a0.legend(fontsize=7, loc="lower left")
+        for j, fld in enumerate(fields):
+            m = (s["field"] == fld) & np.isfinite(s["rel_err"])
+            a1.loglog(np.abs(s["value"][m]), np.maximum(s["rel_err"][m], 1e-8), ".", ms=2, color="C%d" % (j % 10),
+                      label=fld, rasterized=True)  # thousands of points: a bitmap inside the PDF
+        pos = np.abs(s["value"][np.isfinite(s["rel_err"])])
+        xx = np.logspace(np.log10(max(np.min(pos), 1e-300)) if pos.size else -11, 1, 400)
+        a1.loglog(xx, np.minimum(np.where(xx >= HALF_MIN_NORMAL, HALF_REL, 2.0 ** -25 / xx), 1.0), color="k", lw=0.8,
+                  label="bound: $2^{-11}$, $2^{-25}/|x|$ (subnormal), 1 (flushed)")
+        a1.axvline(HALF_MIN_NORMAL, color="0.5", lw=0.8, ls=":")
+        a1.set_ylim(1e-8, 2.0)
+        a1.set_xlabel("|x| (stored value)")
+        a1.set_ylabel("relative rounding error (exact 0 drawn at 1e-8)")
+        a1.set_title("error against magnitude (dotted: $2^{-14}$, smallest normal half)", fontsize=10)
+        a1.grid(True, which="major", alpha=0.3)
+        a1.legend(fontsize=6, markerscale=4, loc="lower left", ncol=2)
+    finish(fig, d, out_dir, "half_rounding_error", made,
+           note="half(x) = mf_half_to_double(mf_half_from_double(x)), round to nearest even, as the --half writers")
+
+
 # ---- dispatch -------------------------------------------------------------------------------
 KINDS = (
     (("part", "nu", "rel_err_g1", "rel_err_lambda"), plot_smith),
     (("source", "brdf", "fresnel", "theta_deg", "alpha", "albedo"), plot_furnace),
     (("alpha", "dh", "rel_err_approx", "rel_err_fit", "rel_err_rect"), plot_proxy),
     (("layout", "N", "lambda", "rel_err"), plot_leadr),
+    (("env", "window", "theta_deg", "phi_deg", "e_exact", "e_sh", "norm_err"), plot_sh_irradiance),
+    (("table", "kind", "field", "half", "rel_err", "shade_rel_worst"), plot_half),
     (("table", "view", "r", "cos_theta", "rel_error"), plot_bench_ltc),
+    (("ir", "iu", "theta_deg", "poly_mean_rel", "lobe_l1", "albedo_rel_diff"), plot_ltc_texels),
 )
 
 
