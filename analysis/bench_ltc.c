@@ -25,6 +25,7 @@
  * printed.  --csv PATH writes one row per (table, view, polygon) (use notebooks_data/...).
  */
 #define _POSIX_C_SOURCE 200809L
+#include "study_header.h"
 #include "mfkit/mfkit.h"
 #include "mfkit/mf_ltc_reference.h"
 #include "mfkit/mf_ltcfit.h"
@@ -225,6 +226,9 @@ int main(int argc, char **argv)
             fprintf(stderr, "bench_ltc: cannot write %s\n", csv_path);
             return 3;
         }
+        char seed_s[32];
+        snprintf(seed_s, sizeof seed_s, "%llu", (unsigned long long)seed);
+        study_write_header(csv, "bench_ltc", argc, argv, seed_s);
         fprintf(csv, "table,view,r,u,alpha,cos_theta,polygon,vertices,ltc,mc,mc_se,abs_error,rel_error,magnitude,"
                      "albedo_quadrature\n");
     }
