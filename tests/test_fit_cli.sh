@@ -34,5 +34,18 @@ ok '[ $rc -eq 1 ]' "disney 8x8 refused by the gate (rc=$rc)"
 ok '[ -s "$tmp/d.err" ]' "refusal says why on stderr"
 ok '[ -z "$(ls "$tmp/d" 2>/dev/null | grep -E "\.(exr|dds|json|npy|h|glsl|hlsl)$" | grep -v gate)" ]' "nothing exported after a refusal: $(ls "$tmp/d" 2>/dev/null | tr '\n' ' ')"
 
+# Axis ranges: a bad range is a usage error (exit 2, the option named, nothing created); a good
+# one is recorded in the exported table's axes and in the sidecar
+for bad in "1:0.5" "0.5:0.5" "abc" "0.2:1.5" ":1" "0.2"; do
+    "$mfkit" fit ltc --r-range "$bad" --out "$tmp/rr" >"$tmp/rr.log" 2>&1; rc=$?
+    ok '[ $rc -eq 2 ] && grep -q -- "--r-range" "$tmp/rr.log" && [ ! -e "$tmp/rr" ]' "--r-range $bad: exit 2 naming the option, nothing created (rc=$rc)"
+done
+"$mfkit" fit ltc --u-range 2:3 --out "$tmp/ur" >"$tmp/ur.log" 2>&1; rc=$?
+ok '[ $rc -eq 2 ] && grep -q -- "--u-range" "$tmp/ur.log"' "--u-range 2:3: exit 2 (rc=$rc)"
+"$mfkit" fit ltc --brdf lambert --size 4 --r-range 0.5:1 --u-range 0.25:0.75 --threads 2 --out "$tmp/rg" --quiet >"$tmp/rg.log" 2>&1; rc=$?
+ok '[ $rc -eq 0 ]' "lambert 4x4 on ranges exits 0 (rc=$rc): $(tail -3 "$tmp/rg.log")"
+ok 'grep -q "\"r_range\": \[0.5, 1\]" "$tmp/rg/ltc_lambert_fit.json" && grep -q "\"u_range\": \[0.25, 0.75\]" "$tmp/rg/ltc_lambert_fit.json"' "sidecar records the ranges"
+ok '"$mfkit" table info "$tmp/rg/ltc_lambert.exr" | grep -E "r.*0\.5.*1" >/dev/null' "table info shows the r range: $("$mfkit" table info "$tmp/rg/ltc_lambert.exr" 2>&1 | grep -E "^ *(axis|r|u)" | head -3 | tr '\n' ' ')"
+
 echo "test_fit_cli: $((checks-fails)) passed, $fails failed"
 [ $fails -eq 0 ]

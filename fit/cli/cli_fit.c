@@ -30,7 +30,8 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: mfkit fit ltc [--brdf NAME] [--size N | --size NRxNU] [--threads N] [--seed S]\n"
-            "                     [--samples N] [--out DIR] [--resume] [--force] [--quiet]\n\n"
+            "                     [--samples N] [--r-range LO:HI] [--u-range LO:HI] [--out DIR] [--resume]\n"
+            "                     [--force] [--quiet]\n\n"
             "Fits the isotropic LTC table of a BRDF (Ceres, exact Jacobians, an objective of polygon-lit\n"
             "shading), runs the gate (energy, normalisation, polygon shading against Monte Carlo,\n"
             "smoothness), prints its report, and exports the table into DIR only if every check passed.\n\n"
@@ -42,6 +43,9 @@ static void usage(FILE *f)
             "  --seed S        scramble of the sample points and seed of the gate (default 1)\n"
             "  --samples N     directions per texel, a power of two (default 4096; 4 N at views\n"
             "                  beyond 84.3 deg)\n"
+            "  --r-range LO:HI the roughness axis r (alpha = max(r^2, 1e-4)), default 0:1\n"
+            "  --u-range LO:HI the view axis u = sqrt(1 - cos theta_o), default 0:1 (only the default\n"
+            "                  ranges give the drop-in layout of existing renderers)\n"
             "  --out DIR       output directory (default out/; created if missing)\n"
             "  --resume        continue from DIR/ltc_<brdf>.checkpoint (same settings) if it exists\n"
             "  --force         export even if a gate check fails (metadata \"validated\" = \"false\")\n"
@@ -65,6 +69,21 @@ int cli_fit(int argc, char **argv)
     return cli_error("fit", "not available: mfkit was built without Ceres and OpenImageIO");
 }
 #else
+
+/* "LO:HI" with 0 <= LO < HI <= 1; 0 on success. */
+static int parse_range(const char *s, double *lo, double *hi)
+{
+    const char *c = strchr(s, ':');
+    char buf[64];
+    size_t n = c ? (size_t)(c - s) : 0;
+    if (!c || n == 0 || n >= sizeof buf)
+        return 1;
+    memcpy(buf, s, n);
+    buf[n] = '\0';
+    if (cli_parse_double(buf, lo) || cli_parse_double(c + 1, hi))
+        return 1;
+    return !(*lo >= 0.0 && *hi <= 1.0 && *lo < *hi);
+}
 
 /* set by the handler; an int is written atomically on every platform mfkit builds on (sig_atomic_t is int) */
 static volatile int g_cancel_int = 0;
@@ -291,7 +310,8 @@ int cli_fit(int argc, char **argv)
             resume = 1;
         } else if (i + 1 >= argc && (!strcmp(a, "--brdf") || !strcmp(a, "--size") || !strcmp(a, "--threads") ||
                                      !strcmp(a, "--seed") || !strcmp(a, "--out") || !strcmp(a, "--samples") ||
-                                     !strcmp(a, "--stop-after"))) {
+                                     !strcmp(a, "--stop-after") || !strcmp(a, "--r-range") ||
+                                     !strcmp(a, "--u-range"))) {
             return cli_error(cmd, "option %s needs a value", a);
         } else if (!strcmp(a, "--brdf")) {
             brdf = argv[++i];
@@ -327,6 +347,14 @@ int cli_fit(int argc, char **argv)
             if (cli_parse_int(argv[++i], 64, 1 << 20, &v) || (v & (v - 1)))
                 return cli_error(cmd, "--samples: bad value '%s' (a power of two, 64..1048576)", argv[i]);
             fo.samples = (int)v;
+        } else if (!strcmp(a, "--r-range") || !strcmp(a, "--u-range")) {
+            double lo, hi;
+            if (parse_range(argv[++i], &lo, &hi))
+                return cli_error(cmd, "%s: bad value '%s' (LO:HI with 0 <= LO < HI <= 1)", a, argv[i]);
+            if (a[2] == 'r')
+                fo.r_lo = lo, fo.r_hi = hi;
+            else
+                fo.u_lo = lo, fo.u_hi = hi;
         } else if (!strcmp(a, "--stop-after")) {
             if (cli_parse_int(argv[++i], 1, 4096, &v))
                 return cli_error(cmd, "--stop-after: bad value '%s'", argv[i]);

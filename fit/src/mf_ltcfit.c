@@ -50,6 +50,8 @@ void mf_ltcfit_options_default(mf_ltcfit_options *o)
     o->seed = 1;
     o->samples = 4096;
     o->max_iterations = 100;
+    o->r_lo = o->u_lo = 0.0;
+    o->r_hi = o->u_hi = 1.0;
 }
 
 /* ---- forward-mode dual numbers with 4 derivatives (d/da, d/db, d/dc, d/dd) ---------------- */
@@ -874,7 +876,8 @@ static int check_options(const mf_ltcfit_options *o)
 {
     return o && o->n_r >= 2 && o->n_u >= 2 && o->n_r <= 4096 && o->n_u <= 4096 && o->threads >= 1 &&
            o->threads <= 256 && o->samples >= 64 && o->samples <= (1 << 20) && !(o->samples & (o->samples - 1)) &&
-           o->max_iterations >= 1 && o->stop_after_columns >= 0;
+           o->max_iterations >= 1 && o->stop_after_columns >= 0 && o->r_lo >= 0.0 && o->r_hi <= 1.0 &&
+           o->r_lo < o->r_hi && o->u_lo >= 0.0 && o->u_hi <= 1.0 && o->u_lo < o->u_hi;
 }
 
 mf_status mf_ltcfit_entry_fit(const mf_brdf_model *model, double alpha, double cos_theta, const double *start,
@@ -979,6 +982,7 @@ typedef struct {
     char model[32];
     int32_t n_r, n_u, samples, max_iterations;
     uint64_t seed;
+    double range[4]; /* r_lo, r_hi, u_lo, u_hi */
 } ckpt_header;
 
 static void ckpt_header_make(const job *j, ckpt_header *h)
@@ -991,6 +995,10 @@ static void ckpt_header_make(const job *j, ckpt_header *h)
     h->samples = j->o->samples;
     h->max_iterations = j->o->max_iterations;
     h->seed = j->o->seed;
+    h->range[0] = j->o->r_lo;
+    h->range[1] = j->o->r_hi;
+    h->range[2] = j->o->u_lo;
+    h->range[3] = j->o->u_hi;
 }
 
 /* Writes the checkpoint (called with the lock held). */
@@ -1177,7 +1185,7 @@ mf_status mf_ltcfit_table(const mf_brdf_model *model, const mf_ltcfit_options *o
             snprintf(msg, msg_size, "invalid fit options");
         return MF_ERR_DOMAIN;
     }
-    mf_status st = mf_ltc_table_create(table, o->n_r, o->n_u);
+    mf_status st = mf_ltc_table_create_range(table, o->n_r, o->r_lo, o->r_hi, o->n_u, o->u_lo, o->u_hi);
     if (st != MF_OK)
         return st;
     size_t n = (size_t)o->n_r * (size_t)o->n_u;
@@ -1316,6 +1324,8 @@ mf_status mf_ltcfit_write_sidecar(const char *path, const mf_brdf_model *model, 
     if (ok) {
         fprintf(f, "{\n  \"format\": \"mfkit-ltcfit\",\n  \"brdf\": \"%s\",\n  \"n_r\": %d,\n  \"n_u\": %d,\n", model->name,
                 r->n_r, r->n_u);
+        fprintf(f, "  \"r_range\": [%.17g, %.17g],\n  \"u_range\": [%.17g, %.17g],\n", o->r_lo, o->r_hi, o->u_lo,
+                o->u_hi);
         fprintf(f, "  \"seed\": %llu,\n  \"samples\": %d,\n  \"lights\": %d,\n  \"entries\": [\n",
                 (unsigned long long)o->seed, o->samples, mf_ltcfit_light_count());
         size_t n = (size_t)r->n_r * (size_t)r->n_u;

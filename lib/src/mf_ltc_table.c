@@ -9,7 +9,15 @@ const char *const mf_ltc_table_fields[MF_LTC_NFIELDS] = {"minv_00", "minv_20", "
 
 mf_status mf_ltc_table_create(mf_table *t, int n_r, int n_u)
 {
-    if (n_r < 2 || n_u < 2) {
+    return mf_ltc_table_create_range(t, n_r, 0.0, 1.0, n_u, 0.0, 1.0);
+}
+
+static int range_ok(double lo, double hi) { return lo >= 0.0 && hi <= 1.0 && lo < hi; }
+
+mf_status mf_ltc_table_create_range(mf_table *t, int n_r, double r_lo, double r_hi, int n_u, double u_lo,
+                                    double u_hi)
+{
+    if (n_r < 2 || n_u < 2 || !range_ok(r_lo, r_hi) || !range_ok(u_lo, u_hi)) {
         memset(t, 0, sizeof *t);
         return MF_ERR_DOMAIN;
     }
@@ -18,15 +26,15 @@ mf_status mf_ltc_table_create(mf_table *t, int n_r, int n_u)
     snprintf(axes[0].name, sizeof axes[0].name, "r");
     snprintf(axes[0].physical, sizeof axes[0].physical, "alpha");
     axes[0].size = n_r;
-    axes[0].lo = 0.0;
-    axes[0].hi = 1.0;
+    axes[0].lo = r_lo;
+    axes[0].hi = r_hi;
     axes[0].mapping = MF_AXIS_SQUARE;
     axes[0].physical_min = MF_LTC_ALPHA_MIN;
     snprintf(axes[1].name, sizeof axes[1].name, "u");
     snprintf(axes[1].physical, sizeof axes[1].physical, "cos_theta_o");
     axes[1].size = n_u;
-    axes[1].lo = 0.0;
-    axes[1].hi = 1.0;
+    axes[1].lo = u_lo;
+    axes[1].hi = u_hi;
     axes[1].mapping = MF_AXIS_ONE_MINUS_SQUARE;
     axes[1].physical_min = cos(MF_LTC_THETA_MAX);
     mf_status st = mf_table_create(t, 2, axes, MF_LTC_NFIELDS, mf_ltc_table_fields);

@@ -84,6 +84,8 @@ typedef struct mf_ltcfit_options {
     const volatile int *cancel;/* may be NULL; non-zero: stop after the columns in progress */
     void (*progress)(void *user, int done, int total); /* may be NULL; called under a lock */
     void *progress_user;
+    double r_lo, r_hi;         /* the roughness axis r (alpha = max(r^2, 1e-4)): default [0, 1] */
+    double u_lo, u_hi;         /* the view axis u = sqrt(1 - cos theta_o): default [0, 1]; 0 <= lo < hi <= 1 */
 } mf_ltcfit_options;
 
 void mf_ltcfit_options_default(mf_ltcfit_options *o);

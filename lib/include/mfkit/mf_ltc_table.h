@@ -57,9 +57,14 @@ extern const char *const mf_ltc_table_fields[MF_LTC_NFIELDS];
 /* Largest theta_o of the view axis (radians), as in the reference fitter: cos clamped >= cos(1.57). */
 #define MF_LTC_THETA_MAX 1.57
 
-/* Creates an empty n_r x n_u LTC table with the axes above (n_r, n_u >= 2).  MF_ERR_DOMAIN,
- * MF_ERR_ALLOC. */
+/* Creates an empty n_r x n_u LTC table with the axes above (n_r, n_u >= 2), r and u over [0, 1].
+ * MF_ERR_DOMAIN, MF_ERR_ALLOC. */
 mf_status mf_ltc_table_create(mf_table *t, int n_r, int n_u) MF_WARN_UNUSED;
+/* The same with r over [r_lo, r_hi] and u over [u_lo, u_hi] (0 <= lo < hi <= 1 each): texel i of
+ * an axis of n texels holds lo + (hi - lo) i / (n - 1).  Only the default ranges give the common
+ * drop-in layout (docs/tables.md).  MF_ERR_DOMAIN for bad sizes or ranges, MF_ERR_ALLOC. */
+mf_status mf_ltc_table_create_range(mf_table *t, int n_r, double r_lo, double r_hi, int n_u, double u_lo,
+                                    double u_hi) MF_WARN_UNUSED;
 
 /* alpha and cos theta_o of texel (ir, iu). */
 double mf_ltc_table_alpha(const mf_table *t, int ir);
