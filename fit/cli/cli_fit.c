@@ -136,11 +136,33 @@ static void gate_json(cli_buf *b, const char *brdf, const mf_check *c, int n, in
     cli_buf_printf(b, "\n}\n");
 }
 
+/* mkdir -p: creates dir and its missing parents; 0 if dir is (now) a directory, else -1 with errno
+ * set (ENOTDIR when it exists as something else). */
 static int make_dir(const char *dir)
 {
-    if (mkdir(dir, 0777) == 0 || errno == EEXIST)
-        return 0;
-    return -1;
+    char path[4096];
+    size_t n = strlen(dir);
+    if (n == 0 || n >= sizeof path) {
+        errno = ENAMETOOLONG;
+        return -1;
+    }
+    memcpy(path, dir, n + 1);
+    for (size_t i = 1; i <= n; ++i)
+        if (path[i] == '/' || path[i] == '\0') {
+            char c = path[i];
+            path[i] = '\0';
+            if (mkdir(path, 0777) != 0 && errno != EEXIST)
+                return -1;
+            path[i] = c;
+        }
+    struct stat st;
+    if (stat(dir, &st) != 0)
+        return -1;
+    if (!S_ISDIR(st.st_mode)) {
+        errno = ENOTDIR;
+        return -1;
+    }
+    return 0;
 }
 
 static int export_all(const char *cmd, const char *dir, const char *stem, const mf_table *t, const mf_brdf_model *model,
