@@ -331,6 +331,29 @@ static void test_ggx_model(void)
     CHECK(n > 1000);
     if (getenv("MF_LTCFIT_PRINT_GOLDEN"))
         printf("ggx model: worst relative difference %.3g over %d samples\n", worst, n);
+    /* the batched sample_weights gives the bits of sample + eval_cos / pdf (the fitter relies on it
+     * for bitwise reproducibility across the two paths), including the invalid views */
+    CHECK(m->sample_weights != NULL);
+    const double views[3] = {1.0, 0.3, -0.2};
+    for (int a = 0; a < 5; ++a)
+        for (int t = 0; t < 3; ++t) {
+            double st = sqrt(fmax(0.0, 1.0 - views[t] * views[t]));
+            mf_vec3 wo = mf_vec3_make(st, 0.0, views[t]);
+            double u[2 * 256], pdf[256], w[256];
+            mf_vec3 wi[256];
+            for (int k = 0; k < 256; ++k) {
+                u[2 * k] = (k + 0.5) / 256.0;
+                u[2 * k + 1] = fmod(0.618033988749895 * k + 0.1, 1.0);
+            }
+            m->sample_weights(m, alphas[a], wo, 256, u, wi, pdf, w);
+            for (int k = 0; k < 256; ++k) {
+                double p1;
+                mf_vec3 v = m->sample(m, alphas[a], wo, u + 2 * k, &p1);
+                double w1 = p1 > 0.0 && v.z > 0.0 && mf_vec3_isfinite(v) ? m->eval_cos(m, alphas[a], wo, v) / p1 : 0.0;
+                CHECK(pdf[k] == p1 && w[k] == w1);
+                CHECK((isnan(v.x) && isnan(wi[k].x)) || (v.x == wi[k].x && v.y == wi[k].y && v.z == wi[k].z));
+            }
+        }
 }
 
 int main(void)

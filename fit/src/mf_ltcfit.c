@@ -382,15 +382,25 @@ typedef struct {
     double *w;
     double *pdf;       /* the sampler's density of dir */
     double *cw;        /* control-variate weights D_LTC / pdf */
+    double *u;         /* sample points, 2 per direction */
+    double *qw;        /* quadrature weights and Fresnel factors (texel_magnitude) */
     double *x, *y, *z; /* the live directions, component arrays (the cap pre-test) */
     int *cand;         /* indices passing a light's cap test */
     int n;             /* directions of this texel: base, or GRAZING_FACTOR base at grazing views */
     int base;          /* the options' samples (GRAZING_FACTOR base allocated) */
 } workspace;
 
+/* The quadrature of texel_magnitude: QUAD_PANELS^2 cells of 8 x 8 points. */
+#define QUAD_PANELS 8
+#define QUAD_POINTS (QUAD_PANELS * QUAD_PANELS * 64)
+
 static int ws_init(workspace *ws, int base)
 {
     int n = GRAZING_FACTOR * base;
+    if (n < QUAD_POINTS)
+        n = QUAD_POINTS; /* texel_magnitude uses dir, w, pdf, u as scratch */
+    ws->u = malloc(sizeof *ws->u * (size_t)n * 2);
+    ws->qw = malloc(sizeof *ws->qw * (size_t)n * 2);
     ws->dir = malloc(sizeof *ws->dir * (size_t)n);
     ws->w = malloc(sizeof *ws->w * (size_t)n);
     ws->pdf = malloc(sizeof *ws->pdf * (size_t)n);
@@ -400,10 +410,12 @@ static int ws_init(workspace *ws, int base)
     ws->z = ws->x ? ws->x + 2 * (size_t)n : NULL;
     ws->cand = malloc(sizeof *ws->cand * (size_t)n);
     ws->n = ws->base = base;
-    return ws->dir && ws->w && ws->pdf && ws->cw && ws->x && ws->cand;
+    return ws->dir && ws->w && ws->pdf && ws->cw && ws->x && ws->cand && ws->u && ws->qw;
 }
 static void ws_free(workspace *ws)
 {
+    free(ws->u);
+    free(ws->qw);
     free(ws->dir);
     free(ws->w);
     free(ws->pdf);
@@ -474,6 +486,23 @@ static mf_vec3 model_sample(const mf_brdf_model *m, double alpha, mf_vec3 wo, co
     return wi;
 }
 
+/* wi, pdf and weight f cos / pdf of n points u (model_sample and eval_cos, or the model's batched
+ * sample_weights, which gives the same bits): weight 0 unless pdf > 0 and wi is finite with
+ * wi.z > 0. */
+static void model_sample_weights(const mf_brdf_model *m, double alpha, mf_vec3 wo, int n, const double *u,
+                                 mf_vec3 *wi, double *pdf, double *w)
+{
+    if (m->sample && m->sample_weights) {
+        m->sample_weights(m, alpha, wo, n, u, wi, pdf, w);
+        return;
+    }
+    for (int i = 0; i < n; ++i) {
+        wi[i] = model_sample(m, alpha, wo, u + 2 * i, &pdf[i]);
+        w[i] = pdf[i] > 0.0 && wi[i].z > 0.0 && mf_vec3_isfinite(wi[i]) ? m->eval_cos(m, alpha, wo, wi[i]) / pdf[i]
+                                                                       : 0.0;
+    }
+}
+
 static const double gl8_x[8] = {-0.9602898564975363, -0.7966664774136267, -0.5255324099163290, -0.1834346424956498,
                                 0.1834346424956498,  0.5255324099163290,  0.7966664774136267,  0.9602898564975363};
 static const double gl8_w[8] = {0.1012285362903763, 0.2223810344533745, 0.3137066458778873, 0.3626837833783620,
@@ -486,37 +515,40 @@ static const double gl8_w[8] = {0.1012285362903763, 0.2223810344533745, 0.313706
  * 1e6-sample Monte Carlo for GGX (alpha 0.0025..1, cos theta 0.05..0.99): 8 panels agree with 16
  * within 5e-5, while mf_brdf_microfacet_albedo (uniform panels) is off by up to 3e-3 at
  * alpha 0.04..0.11 even with n = 1024, so it is not used for the magnitude. */
-static void generic_quadrature(const mf_brdf_model *m, double alpha, mf_vec3 wo, int panels, double *alb,
-                               double *fres)
+static void generic_quadrature(const mf_brdf_model *m, double alpha, mf_vec3 wo, int panels, workspace *ws,
+                               double *alb, double *fres)
 {
-    double sa = 0.0, sf = 0.0;
+    int k = 0;
     for (int pi = 0; pi < panels; ++pi)
         for (int i = 0; i < 8; ++i)
             for (int pj = 0; pj < panels; ++pj)
                 for (int j = 0; j < 8; ++j) {
                     double tt = (pi + 0.5 * (gl8_x[i] + 1.0)) / panels, om = 1.0 - tt;
-                    double u[2] = {1.0 - om * om * om, (pj + 0.5 * (gl8_x[j] + 1.0)) / panels};
-                    double wt = 0.25 * gl8_w[i] * gl8_w[j] / ((double)panels * panels) * 3.0 * om * om;
-                    double pdf;
-                    mf_vec3 wi = model_sample(m, alpha, wo, u, &pdf);
-                    if (!(pdf > 0.0) || !(wi.z > 0.0))
-                        continue;
-                    double v = m->eval_cos(m, alpha, wo, wi) / pdf;
-                    mf_vec3 h = mf_vec3_normalize(mf_vec3_add(wo, wi));
-                    double x = 1.0 - fmin(1.0, fmax(0.0, mf_vec3_dot(wo, h)));
-                    double x5 = x * x * x * x * x;
-                    sa += wt * v;
-                    sf += wt * v * x5;
+                    ws->u[2 * k] = 1.0 - om * om * om;
+                    ws->u[2 * k + 1] = (pj + 0.5 * (gl8_x[j] + 1.0)) / panels;
+                    ws->qw[k++] = 0.25 * gl8_w[i] * gl8_w[j] / ((double)panels * panels) * 3.0 * om * om;
                 }
+    model_sample_weights(m, alpha, wo, k, ws->u, ws->dir, ws->pdf, ws->w);
+    double sa = 0.0, sf = 0.0;
+    for (int q = 0; q < k; ++q) {
+        if (!(ws->pdf[q] > 0.0) || !(ws->dir[q].z > 0.0))
+            continue;
+        double v = ws->w[q];
+        mf_vec3 h = mf_vec3_normalize(mf_vec3_add(wo, ws->dir[q]));
+        double x = 1.0 - fmin(1.0, fmax(0.0, mf_vec3_dot(wo, h)));
+        double x5 = x * x * x * x * x;
+        sa += ws->qw[q] * v;
+        sf += ws->qw[q] * v * x5;
+    }
     *alb = sa;
     *fres = sf;
 }
 
-static mf_status texel_magnitude(const mf_brdf_model *m, double alpha, mf_vec3 wo, texel *t)
+static mf_status texel_magnitude(const mf_brdf_model *m, double alpha, mf_vec3 wo, workspace *ws, texel *t)
 {
     double a8, f8, a4, f4;
-    generic_quadrature(m, alpha, wo, 8, &a8, &f8);
-    generic_quadrature(m, alpha, wo, 4, &a4, &f4);
+    generic_quadrature(m, alpha, wo, QUAD_PANELS, ws, &a8, &f8);
+    generic_quadrature(m, alpha, wo, QUAD_PANELS / 2, ws, &a4, &f4);
     t->magnitude = a8;
     t->magnitude_err = fabs(a8 - a4);
     t->fresnel = f8;
@@ -550,26 +582,23 @@ static mf_status texel_prepare(const mf_brdf_model *m, double alpha, double cos_
 {
     mf_vec3 wo = view_dir(cos_theta);
     ws->n = cos_theta < GRAZING_COS ? GRAZING_FACTOR * ws->base : ws->base;
-    mf_status st = texel_magnitude(m, alpha, wo, t);
+    mf_status st = texel_magnitude(m, alpha, wo, ws, t);
     if (st != MF_OK)
         return st;
     double sum = 0.0;
     mf_vec3 mean = {0.0, 0.0, 0.0};
+    for (int j = 0; j < ws->n; ++j)
+        mf_sobol2((uint32_t)j, scr[0], scr[1], ws->u + 2 * j);
+    model_sample_weights(m, alpha, wo, ws->n, ws->u, ws->dir, ws->pdf, ws->w);
     for (int j = 0; j < ws->n; ++j) {
-        double u[2], pdf;
-        mf_sobol2((uint32_t)j, scr[0], scr[1], u);
-        mf_vec3 wi = model_sample(m, alpha, wo, u, &pdf);
-        double w = 0.0;
-        if (pdf > 0.0 && wi.z > 0.0 && mf_vec3_isfinite(wi)) {
-            w = m->eval_cos(m, alpha, wo, wi) / pdf;
+        mf_vec3 wi = ws->dir[j];
+        double w = ws->w[j];
+        if (ws->pdf[j] > 0.0 && wi.z > 0.0 && mf_vec3_isfinite(wi)) {
             if (!isfinite(w))
                 return MF_ERR_DOMAIN;
         } else {
-            pdf = 0.0;
+            ws->pdf[j] = 0.0;
         }
-        ws->dir[j] = wi;
-        ws->w[j] = w;
-        ws->pdf[j] = pdf;
         sum += w;
         mean = mf_vec3_add(mean, mf_vec3_scale(wi, w));
     }

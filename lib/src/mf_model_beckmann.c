@@ -39,4 +39,4 @@ static mf_vec3 beckmann_sample(const mf_brdf_model *m, double alpha, mf_vec3 wo,
 
 const mf_brdf_model mf_model_beckmann = {
     "beckmann", "Beckmann microfacet, height-correlated Smith G2, F = 1 [Walter 2007, Eq. 20, 25; Heitz 2014]",
-    beckmann_eval_cos, beckmann_sample, beckmann_pdf};
+    beckmann_eval_cos, beckmann_sample, beckmann_pdf, NULL};

@@ -57,4 +57,4 @@ static double charlie_eval_cos(const mf_brdf_model *m, double alpha, mf_vec3 wo,
 
 const mf_brdf_model mf_model_charlie = {
     "charlie", "Charlie sheen, Lambda fit, height-correlated G2 [Estevez & Kulla 2017]", charlie_eval_cos, NULL,
-    NULL};
+    NULL, NULL};

@@ -36,4 +36,4 @@ static double disney_eval_cos(const mf_brdf_model *m, double alpha, mf_vec3 wo, 
 }
 
 const mf_brdf_model mf_model_disney = {"disney", "Disney diffuse, roughness sqrt(alpha) [Burley 2012, Sec. 5.3]",
-                                       disney_eval_cos, NULL, NULL};
+                                       disney_eval_cos, NULL, NULL, NULL};

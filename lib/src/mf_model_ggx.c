@@ -70,6 +70,51 @@ static double ggx_pdf(const mf_brdf_model *m, double alpha, mf_vec3 wo, mf_vec3 
     return ggx_density(alpha * alpha, wo, mf_vec3_add(wo, wi));
 }
 
+/* ggx_sample + ggx_eval_cos for n points, with the same operations in the same order (so the same
+ * bits), the view-dependent parts hoisted: the visible-normal frame of mf_sample_ggx_vndf
+ * [Heitz 2018, Listing 1] and Lambda(wo).  tests/test_ltcfit.c (test_ggx_model) compares them. */
+static void ggx_sample_weights(const mf_brdf_model *m, double alpha, mf_vec3 wo, int n, const double *u, mf_vec3 *wi,
+                               double *pdf, double *w)
+{
+    (void)m;
+    if (!(alpha > 0.0) || !(wo.z > 0.0) || !mf_vec3_isfinite(wo)) {
+        for (int i = 0; i < n; ++i) {
+            wi[i] = mf_vec3_make(NAN, NAN, NAN);
+            pdf[i] = w[i] = 0.0;
+        }
+        return;
+    }
+    const double a2 = alpha * alpha, lo = ggx_lambda(a2, wo);
+    mf_vec3 vh = mf_vec3_normalize(mf_vec3_make(alpha * wo.x, alpha * wo.y, wo.z));
+    double lensq = vh.x * vh.x + vh.y * vh.y;
+    mf_vec3 t1 = lensq > 0.0 ? mf_vec3_scale(mf_vec3_make(-vh.y, vh.x, 0.0), 1.0 / sqrt(lensq))
+                             : mf_vec3_make(1.0, 0.0, 0.0);
+    mf_vec3 t2 = mf_vec3_cross(vh, t1);
+    double s = 0.5 * (1.0 + vh.z);
+    for (int i = 0; i < n; ++i) {
+        double r = sqrt(u[2 * i]);
+        double phi = 2.0 * MF_PI * u[2 * i + 1];
+        double p1 = r * cos(phi), p2 = r * sin(phi);
+        p2 = (1.0 - s) * sqrt(fmax(0.0, 1.0 - p1 * p1)) + s * p2;
+        double pz = sqrt(fmax(0.0, 1.0 - p1 * p1 - p2 * p2));
+        mf_vec3 nh = mf_vec3_add(mf_vec3_add(mf_vec3_scale(t1, p1), mf_vec3_scale(t2, p2)), mf_vec3_scale(vh, pz));
+        mf_vec3 wm = mf_vec3_normalize(mf_vec3_make(alpha * nh.x, alpha * nh.y, fmax(0.0, nh.z)));
+        mf_vec3 v = mf_vec3_reflect(wo, wm);
+        double p = 0.0;
+        if (v.z > 0.0 && mf_vec3_dot(wo, wm) > 0.0 && wm.z > 0.0)
+            p = ggx_d_unnorm(a2, wm) / ((1.0 + lo) * 4.0 * wo.z);
+        double wt = 0.0;
+        if (p > 0.0 && v.z > 0.0 && mf_vec3_isfinite(v)) {
+            mf_vec3 h = mf_vec3_add(wo, v);
+            double g2 = 1.0 / (1.0 + lo + ggx_lambda(a2, v));
+            wt = ggx_d_unnorm(a2, h) * g2 / (4.0 * wo.z) / p;
+        }
+        wi[i] = v;
+        pdf[i] = p;
+        w[i] = wt;
+    }
+}
+
 const mf_brdf_model mf_model_ggx = {
     "ggx", "GGX microfacet, height-correlated Smith G2, F = 1 [Walter 2007, Eq. 20, 33; Heitz 2014]",
-    ggx_eval_cos, ggx_sample, ggx_pdf};
+    ggx_eval_cos, ggx_sample, ggx_pdf, ggx_sample_weights};

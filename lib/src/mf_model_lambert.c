@@ -16,4 +16,4 @@ static double lambert_eval_cos(const mf_brdf_model *m, double alpha, mf_vec3 wo,
 }
 
 const mf_brdf_model mf_model_lambert = {"lambert", "Lambert 1/pi (the identity LTC)", lambert_eval_cos, NULL,
-                                        NULL};
+                                        NULL, NULL};

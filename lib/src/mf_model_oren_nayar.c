@@ -68,4 +68,4 @@ static double on_eval_cos(const mf_brdf_model *m, double alpha, mf_vec3 wo, mf_v
 
 const mf_brdf_model mf_model_oren_nayar = {
     "oren-nayar", "LEADR rough diffuse, centred isotropic Beckmann slopes [Dupuy 2013, Eq. 20-21]", on_eval_cos,
-    NULL, NULL};
+    NULL, NULL, NULL};

@@ -21,6 +21,8 @@
 #ifndef MF_MODEL_H
 #define MF_MODEL_H
 
+#include <stddef.h>
+
 #include "mfkit/mf_core.h"
 
 #ifdef __cplusplus
@@ -40,6 +42,12 @@ struct mf_brdf_model {
     mf_vec3 (*sample)(const mf_brdf_model *m, double alpha, mf_vec3 wo, const double u[2], double *pdf);
     /* Optional (NULL when sample is NULL): the density of `sample` at wi. */
     double (*pdf)(const mf_brdf_model *m, double alpha, mf_vec3 wo, mf_vec3 wi);
+    /* Optional (may be NULL; only with sample): n samples at once.  For u = (u[2i], u[2i+1]):
+     * wi[i] and pdf[i] as `sample` gives them, and w[i] = eval_cos(wi[i]) / pdf[i] where
+     * pdf[i] > 0 and wi[i] is finite with wi[i].z > 0, else w[i] = 0 -- bit for bit the separate
+     * calls, with the work that depends on wo alone done once (the fitter's hot loop). */
+    void (*sample_weights)(const mf_brdf_model *m, double alpha, mf_vec3 wo, int n, const double *u, mf_vec3 *wi,
+                           double *pdf, double *w);
 };
 
 /* The registry: NULL-terminated array of the shipped models, and lookup by name (NULL if unknown). */
