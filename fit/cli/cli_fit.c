@@ -42,7 +42,7 @@ static void usage(FILE *f)
             "                  not depend on it, bit for bit\n"
             "  --seed S        scramble of the sample points and seed of the gate (default 1)\n"
             "  --samples N     directions per texel, a power of two (default 4096; 4 N at views\n"
-            "                  beyond 84.3 deg)\n"
+            "                  beyond 78.5 deg)\n"
             "  --r-range LO:HI the roughness axis r (alpha = max(r^2, 1e-4)), default 0:1\n"
             "  --u-range LO:HI the view axis u = sqrt(1 - cos theta_o), default 0:1 (only the default\n"
             "                  ranges give the drop-in layout of existing renderers)\n"

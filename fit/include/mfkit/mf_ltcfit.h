@@ -22,7 +22,7 @@
  * all lights; the weights are rescaled so that their mean equals the quadrature magnitude, and a
  * control variate (the previous texel's LTC, whose light integrals are exact, with a per-light
  * regression coefficient in [0, 1]) removes most of the noise of the light edges.  Views with
- * cos theta < 0.1 use 4 x `samples` directions.  A
+ * cos theta < 0.2 use 4 x `samples` directions.  A
  * direction is inside a convex spherical polygon when dot(w, v_i x v_i+1) > 0 for every edge.
  * The Jacobian is exact: forward-mode dual numbers (4 derivatives) through the transform, the
  * clip and the edge formula.  The least-squares problem is solved by mfkit's Ceres bridge
