@@ -53,5 +53,17 @@ if [ -x "$bin/study_half" ] && [ -f "$ref" ]; then
     echo "== study_half"
     "$bin/study_half" --out "$data/half_error.csv" "$ref"
 fi
+# LTC error per texel of each shipped BRDF: a 12 x 12 fit of each (--force: most fail their gate,
+# issue 7; the figures show where), 16 polygons and 16384 Monte Carlo samples per texel (~40 s in
+# all).  MFKIT_FIGURES_BRDFS chooses the BRDFs (default: all but oren-nayar, whose model integrates
+# numerically per evaluation: ~2.5 min for its 12 x 12 fit and map; "" for none).
+if [ -x "$bin/study_ltc_texels" ] && [ -x "$build/bin/mfkit" ]; then
+    for b in ${MFKIT_FIGURES_BRDFS-ggx beckmann lambert disney charlie}; do
+        echo "== fit ltc --brdf $b --size 12, study_ltc_texels"
+        "$build/bin/mfkit" fit ltc --brdf "$b" --size 12 --force --quiet --out "$data/ltc_$b" >/dev/null
+        "$bin/study_ltc_texels" --polygons 16 --samples 16384 --out "$data/ltc_texels_$b.csv" \
+            "$data/ltc_$b/ltc_${b//-/_}.json" >/dev/null
+    done
+fi
 echo "== plot.py"
 /usr/bin/python3 "$src/analysis/plot.py" "$data" "$out"

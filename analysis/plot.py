@@ -384,6 +384,9 @@ def _diverging(ax, fig, xs, ys, z, xlabel, ylabel, title, cbar_label, limit=None
 
 
 def plot_ltc_texels(d, out_dir, made):
+    # ltc_texels.csv -> ltc_texel_errors; ltc_texels_<x>.csv (one per BRDF) -> ltc_texel_errors_<x>
+    stem = os.path.splitext(os.path.basename(d.path))[0]
+    suffix = stem[len("ltc_texels"):] if stem.startswith("ltc_texels") else ""
     th_label, r_label = r"view zenith angle $\theta_o$ (deg)", r"roughness r ($\alpha = r^2$)"
     xs, ys = np.unique(d["theta_deg"]), np.unique(d["r"])
     ix, iy = np.searchsorted(xs, d["theta_deg"]), np.searchsorted(ys, d["r"])
@@ -432,7 +435,9 @@ def plot_ltc_texels(d, out_dir, made):
         axes_0_90(a)
     note = ("%d texels, %d polygons each; MC = Monte Carlo; log colour scales start at %g; any light's error "
             "<= (L1 albedo + |magnitude - albedo|) / 2" % (n, int(np.nanmax(d["polygons"])), LTC_TEXEL_FLOOR))
-    finish(fig, d, out_dir, "ltc_texel_errors", made, note=note)
+    if suffix:
+        fig.suptitle("LTC table of %s, error per texel" % suffix.lstrip("_"), fontsize=10)
+    finish(fig, d, out_dir, "ltc_texel_errors" + suffix, made, note=note)
 
     if not d.has("d_poly_mean_rel", "d_poly_mean_abs", "d_poly_mean_abs_se", "d_minv_00", "d_magnitude"):
         return
@@ -460,7 +465,7 @@ def plot_ltc_texels(d, out_dir, made):
                "difference of the stored magnitude", limit=lim)
     for a in ax.flat:
         axes_0_90(a)
-    finish(fig, d, out_dir, "ltc_texel_pair", made,
+    finish(fig, d, out_dir, "ltc_texel_pair" + suffix, made,
            note="first = TABLE, second = SECOND_TABLE of the command line; same polygons and Monte Carlo values for "
                 "both (paired); red: the second is larger (worse, for the errors)")
 

@@ -55,7 +55,9 @@ else
     "$texels" --stride 64 --out "$tmp/no_such_dir/x.csv" "$ref" >/dev/null 2>"$tmp/err.txt"; rc=$?
     [ $rc -eq 4 ] && grep -q 'no_such_dir' "$tmp/err.txt" || fail "study_ltc_texels, unwritable --out: exit $rc"
     ! ls "$tmp"/bad.csv* >/dev/null 2>&1 || fail "study_ltc_texels left output behind after an error"
-    ltc_figs="ltc_texel_errors ltc_texel_pair"
+    # a per-BRDF file (make_figures.sh writes ltc_texels_<brdf>.csv) gets suffixed figure names
+    cp "$lt" "$tmp/data/ltc_texels_ggx.csv"
+    ltc_figs="ltc_texel_errors ltc_texel_pair ltc_texel_errors_ggx ltc_texel_pair_ggx"
 fi
 # study_sh_irradiance (always built; MFKIT_STUDY_SH_IRRADIANCE is set by tests/CMakeLists.txt, else
 # it is looked up beside study_smith) on a 6 x 12 grid of normals, and study_half (only with the C++
