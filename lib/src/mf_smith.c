@@ -12,9 +12,14 @@ double mf_smith_lambda_beckmann_nu(double nu)
     /* erfc(nu) = exp(-nu^2)/sqrt(pi) * 1/(nu + r), r = (1/2)/(nu + 1/(nu + (3/2)/(nu + ...)))
      * (Laplace's continued fraction).  Then Lambda = exp(-nu^2)/(2 sqrt(pi)) (1/nu - 1/(nu + r))
      * = exp(-nu^2)/(2 sqrt(pi)) * r / (nu (nu + r)): the difference is formed exactly.
-     * 80 terms converge to < 1e-16 relative for nu >= 2 (checked against mpmath, tests/). */
+     * 80 terms converge to < 1e-16 relative for nu >= 2 (checked against mpmath, tests/).  Fewer
+     * suffice as nu grows (58 at nu = 2, 25 at 3.9, 13 at 7.6, 9 at 15, against 400 terms), so
+     * K = min(80, 12 + 160 / nu) terms: over nu = 2..28 in steps of 1e-4 (250791 values; beyond,
+     * exp(-nu^2) underflows) the result is bit for bit the 80-term one.  Beckmann LTC fits spent
+     * 58 % of their time here. */
+    int terms = nu < 160.0 / 68.0 ? 80 : 12 + (int)(160.0 / nu);
     double t = nu;
-    for (int k = 80; k >= 2; --k)
+    for (int k = terms; k >= 2; --k)
         t = nu + 0.5 * k / t;
     double r = 0.5 / t;
     return exp(-nu * nu) * (0.5 * MF_INV_SQRT_PI) * r / (nu * (nu + r));
