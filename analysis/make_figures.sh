@@ -38,10 +38,13 @@ if [ -x "$bin/bench_ltc" ] && [ -f "$ref" ]; then
 fi
 # study_ltc_texels: the reference table's error per texel (every 4th texel: 17 x 17, ~10 s); with
 # MFKIT_LTC_TABLE=FILE (a 64 x 64 table of `mfkit fit ltc`, e.g. out/ltc/ltc_ggx.exr) paired with
-# that table too (figure ltc_texel_pair).
+# that table too (figure ltc_texel_pair).  Without the reference, MFKIT_LTC_TABLE's own map.
 if [ -x "$bin/study_ltc_texels" ] && [ -f "$ref" ]; then
     echo "== study_ltc_texels"
     "$bin/study_ltc_texels" --stride 4 --out "$data/ltc_texels.csv" "$ref" ${MFKIT_LTC_TABLE:+"$MFKIT_LTC_TABLE"} >/dev/null
+elif [ -x "$bin/study_ltc_texels" ] && [ -n "${MFKIT_LTC_TABLE:-}" ]; then
+    echo "== study_ltc_texels ($MFKIT_LTC_TABLE)"
+    "$bin/study_ltc_texels" --stride 4 --out "$data/ltc_texels.csv" "$MFKIT_LTC_TABLE" >/dev/null
 fi
 # study_sh_irradiance: 30 x 60 normals (~10 s); study_half: the reference table's half-float error
 # (~1 s), when it was built (C++ dependencies on) and the table exists.
@@ -49,9 +52,12 @@ fi
     { echo "make_figures.sh: $bin/study_sh_irradiance not built (cmake --build $build)" >&2; exit 1; }
 echo "== study_sh_irradiance"
 "$bin/study_sh_irradiance" --thetas 30 --phis 60 --out "$data/sh_irradiance.csv"
-if [ -x "$bin/study_half" ] && [ -f "$ref" ]; then
+half_tables=()
+[ -f "$ref" ] && half_tables+=("$ref")
+[ -n "${MFKIT_LTC_TABLE:-}" ] && half_tables+=("$MFKIT_LTC_TABLE")
+if [ -x "$bin/study_half" ] && [ ${#half_tables[@]} -gt 0 ]; then
     echo "== study_half"
-    "$bin/study_half" --out "$data/half_error.csv" "$ref"
+    "$bin/study_half" --out "$data/half_error.csv" "${half_tables[@]}"
 fi
 # LTC error per texel of each shipped BRDF: a 12 x 12 fit of each (--force: most fail their gate,
 # issue 7; the figures show where), 16 polygons and 16384 Monte Carlo samples per texel (~40 s in
