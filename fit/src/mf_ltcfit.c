@@ -882,7 +882,7 @@ static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_thet
     }
     texel_control_variate(t, ws, q);
     t->prox = 0.0;
-    if (warm) {
+    if (warm && q[0] > 0.0 && q[2] > 0.0) { /* (a start from mf_ltcfit_entry_fit may be anything) */
         t->prox = PROX_WEIGHT;
         memcpy(t->prox_at, q, sizeof q);
     }

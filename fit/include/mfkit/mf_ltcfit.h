@@ -35,8 +35,9 @@
  * angle) from a closed-form start at u = 0 (the best isotropic scaling a' = c' = s, b' = d' = 0 of a
  * log grid of s, about the lobe's mean direction), each entry starting from the previous entry's
  * lobe-frame solution (when its cost is not above that of the closed-form start, which every
- * entry computes).  Two proximal residuals 0.1 (b' - b'_prev), 0.1 (d' - d'_prev) keep weakly
- * determined shears continuous along the column, and where the lobe's mean is within 0.1 of the
+ * entry computes).  Four proximal residuals, 0.1 (b' - b'_prev), 0.1 (d' - d'_prev),
+ * 0.1 (a' - a'_prev) / a'_prev, 0.1 (c' - c'_prev) / c'_prev, keep weakly determined directions
+ * continuous along the column (docs/tables.md, "Proximal term"), and where the lobe's mean is within 0.1 of the
  * normal a forward-skewed fit (d' > 0) is replaced by its mirror image if that costs within 1 %
  * (docs/tables.md, "Mirror convention").  Columns are
  * independent and handed out to `threads` pthreads; so the result does not depend on the thread
