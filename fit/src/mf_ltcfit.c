@@ -439,52 +439,51 @@ static void ws_free(workspace *ws)
     free(ws->cand);
 }
 
-/* Sum of the weights of the live directions inside light l, in index order (so the same sum, bit
- * for bit, as testing `inside` direction by direction): a branch-free pass collects the indices
- * inside the light's bounding cap (most of the work, and a branch the CPU cannot predict), then
- * the edge planes are tested on those only. */
-static double light_sum(const light *l, const workspace *ws, int live)
+/* The indices of the live directions inside light l, in index order, into ws->cand; returns their
+ * count.  A branch-free pass collects the indices inside the light's bounding cap (most of the
+ * work, and a branch the CPU cannot predict), then the edge planes are tested on those only. */
+static int light_inside(const light *l, const workspace *ws, int live)
 {
     const double cx = l->centre.x, cy = l->centre.y, cz = l->centre.z, cr = l->cos_radius;
     const double *x = ws->x, *y = ws->y, *z = ws->z;
-    int *cand = ws->cand, m = 0;
+    int *cand = ws->cand, m = 0, n = 0;
     for (int j = 0; j < live; ++j) {
         cand[m] = j;
         m += x[j] * cx + y[j] * cy + z[j] * cz >= cr;
     }
-    double s = 0.0;
     for (int i = 0; i < m; ++i) {
         int j = cand[i], in = 1;
         for (int e = 0; e < l->poly.n && in; ++e)
             in = mf_vec3_dot(ws->dir[j], l->edge_n[e]) > 0.0;
-        if (in)
-            s += ws->w[j];
+        cand[n] = j;
+        n += in;
     }
+    return n;
+}
+
+/* Sum of the weights of the live directions inside light l, in index order (so the same sum, bit
+ * for bit, as testing `inside` direction by direction). */
+static double light_sum(const light *l, const workspace *ws, int live)
+{
+    int n = light_inside(l, ws, live);
+    double s = 0.0;
+    for (int i = 0; i < n; ++i)
+        s += ws->w[ws->cand[i]];
     return s;
 }
 
 /* The sums over the live directions inside light l of y = w, x = cw, x^2 and x y (out[0..3]), in
- * index order, with the inside test of light_sum. */
+ * index order. */
 static void light_sums_cv(const light *l, const workspace *ws, int live, double out[4])
 {
-    const double cx = l->centre.x, cy = l->centre.y, cz = l->centre.z, cr = l->cos_radius;
-    const double *x = ws->x, *y = ws->y, *z = ws->z;
-    int *cand = ws->cand, m = 0;
-    for (int j = 0; j < live; ++j) {
-        cand[m] = j;
-        m += x[j] * cx + y[j] * cy + z[j] * cz >= cr;
-    }
+    int n = light_inside(l, ws, live);
     double sy = 0.0, sx = 0.0, sxx = 0.0, sxy = 0.0;
-    for (int i = 0; i < m; ++i) {
-        int j = cand[i], in = 1;
-        for (int e = 0; e < l->poly.n && in; ++e)
-            in = mf_vec3_dot(ws->dir[j], l->edge_n[e]) > 0.0;
-        if (in) {
-            sy += ws->w[j];
-            sx += ws->cw[j];
-            sxx += ws->cw[j] * ws->cw[j];
-            sxy += ws->cw[j] * ws->w[j];
-        }
+    for (int i = 0; i < n; ++i) {
+        int j = ws->cand[i];
+        sy += ws->w[j];
+        sx += ws->cw[j];
+        sxx += ws->cw[j] * ws->cw[j];
+        sxy += ws->cw[j] * ws->w[j];
     }
     out[0] = sy;
     out[1] = sx;
@@ -675,21 +674,6 @@ static mf_status texel_prepare(const mf_brdf_model *m, double alpha, double cos_
     return MF_OK;
 }
 
-/* Control variate [Owen, "Monte Carlo theory, methods and examples", 2013, Sec. 8.9]: with an
- * LTC D_0 close to the texel's lobe (lobe-frame parameters p0: the warm start, the previous
- * texel's fit), whose integral over each light is known exactly, the target of light k becomes
- *   I_k = Y^_k - beta_k (X^_k - magnitude C_k),
- *   Y^_k = (1/N) sum_j y_j [w_j in P_k],  y_j = f cos / pdf (scaled to the quadrature magnitude),
- *   X^_k = (1/N) sum_j x_j [w_j in P_k],  x_j = magnitude D_0(w_j) / pdf(w_j),
- *   C_k  = integral of D_0 over P_k clipped to z >= 0 (where the sampler's density is positive),
- * with beta_k the regression coefficient of y on x over the N directions (Owen Eq. 8.14), clamped
- * to [0, 1]: the estimate stays consistent for any p0, and beta_k -> 0 when D_0 / pdf is heavy
- * tailed (a sliver LTC at grazing views of smooth BRDFs put a direction of weight 4600 x the
- * others' into a light: beta = 1 turned targets of 0.9 into 0.2).  The same directions cross the
- * same light edges in Y^_k and X^_k, so the edge noise of Y^_k (a direction entering or leaving a
- * light between neighbouring texels) cancels to the extent that magnitude D_0 matches f cos.
- * Measured at GGX alpha 1, 4096 samples: the weakly determined skew (view-frame d, 65-88 deg)
- * wandered by +-0.006 between neighbouring rows from this noise; +-0.001 with the control. */
 /* The targets from the samples alone: I_k = Y^_k. */
 static void texel_targets_raw(texel *t, const workspace *ws)
 {
@@ -699,6 +683,22 @@ static void texel_targets_raw(texel *t, const workspace *ws)
     }
 }
 
+/* Control variate [Owen, "Monte Carlo theory, methods and examples", 2013, Sec. 8.9]: with an
+ * LTC D_0 close to the texel's lobe (lobe-frame parameters p0: the warm start, the previous
+ * texel's fit), whose integral over each light is known exactly, the target of light k becomes
+ *   I_k = Y^_k - beta_k (X^_k - magnitude C_k),
+ *   Y^_k = (1/N) sum_j y_j [w_j in P_k],  y_j = f cos / pdf (scaled to the quadrature magnitude),
+ *   X^_k = (1/N) sum_j x_j [w_j in P_k],  x_j = magnitude D_0(w_j) / pdf(w_j),
+ *   C_k  = integral of D_0 over P_k clipped to z >= 0 (where the sampler's density is positive),
+ * with beta_k = sum_j (x_j - X^_k)(y_j - Y^_k) / sum_j (x_j - X^_k)^2 (sums over all N directions,
+ * x_j and y_j 0 outside the light: the least-squares regression coefficient of y on x), clamped
+ * to [0, 1]: the estimate stays consistent for any p0, and beta_k -> 0 when D_0 / pdf is heavy
+ * tailed (a sliver LTC at grazing views of smooth BRDFs put a direction of weight 4600 x the
+ * others' into a light: beta = 1 turned targets of 0.9 into 0.2).  The same directions cross the
+ * same light edges in Y^_k and X^_k, so the edge noise of Y^_k (a direction entering or leaving a
+ * light between neighbouring texels) cancels to the extent that magnitude D_0 matches f cos.
+ * Measured at GGX alpha 1, 4096 samples: the weakly determined skew (view-frame d, 65-88 deg)
+ * wandered by +-0.006 between neighbouring rows from this noise; +-0.001 with the control. */
 static void texel_control_variate(texel *t, workspace *ws, const double p0[4])
 {
     mf_ltc ltc;
