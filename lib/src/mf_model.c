@@ -37,7 +37,7 @@ mf_vec3 mf_model_sample(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3
     if (m->sample)
         return m->sample(m, p, wo, u, pdf);
     mf_vec3 wi = mf_sample_cosine_hemisphere(u);
-    *pdf = mf_pdf_cosine_hemisphere(wi);
+    *pdf = wo.z > 0.0 ? mf_pdf_cosine_hemisphere(wi) : 0.0; /* nothing to sample for a view below the horizon */
     return wi;
 }
 
@@ -45,7 +45,7 @@ double mf_model_pdf(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo,
 {
     if (m->sample)
         return m->pdf(m, p, wo, wi);
-    return mf_pdf_cosine_hemisphere(wi);
+    return wo.z > 0.0 ? mf_pdf_cosine_hemisphere(wi) : 0.0;
 }
 
 void mf_model_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, int n, const double *u,

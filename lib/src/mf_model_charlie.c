@@ -57,5 +57,6 @@ static double charlie_eval_cos(const mf_brdf_model *m, const mf_brdf_params *p, 
 }
 
 const mf_brdf_model mf_model_charlie = {
-    "charlie", "Charlie sheen, Lambda fit, height-correlated G2 [Estevez & Kulla 2017]", MF_MODEL_RECIPROCAL,
+    "charlie", "Charlie sheen, Lambda fit, height-correlated G2, not energy conserving [Estevez & Kulla 2017]",
+    MF_MODEL_RECIPROCAL,
     charlie_eval_cos, NULL, NULL, NULL};

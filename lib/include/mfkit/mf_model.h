@@ -95,7 +95,8 @@ const mf_brdf_model *mf_brdf_model_find(const char *name);
 
 /* ---- using a model: the cosine-hemisphere fallback for models without a sampler ---------------- */
 
-/* The model's sampler, or the cosine hemisphere (pdf wi.z / pi). */
+/* The model's sampler, or the cosine hemisphere (pdf wi.z / pi; 0 for wo.z <= 0, as the models'
+ * own samplers). */
 mf_vec3 mf_model_sample(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, const double u[2], double *pdf);
 /* The density of mf_model_sample at wi. */
 double mf_model_pdf(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, mf_vec3 wi);
