@@ -15,7 +15,7 @@
  *     the horizon), LTC = magnitude * mf_ltc_integrate_polygon (clipped after the transform,
  *     one-sided): mean and 95th percentile of |LTC - MC| and of |LTC - MC| / max(MC, 0.01 albedo);
  *   - the albedo error at the same views: |magnitude(lookup) - quadrature| / quadrature
- *     (mf_ltc_gate_albedo, 128 x 128 Gauss-Legendre through the model's sampler);
+ *     (mf_model_albedo, 128 x 128 Gauss-Legendre through the model's sampler);
  *   - the LTC gate (quick) on the table's own texels;
  *   - with --fit: wall time, CPU time, time per entry, peak memory (getrusage), solver iterations
  *     per entry (each one objective + Jacobian evaluation), worst residual, unconverged entries.
@@ -204,7 +204,8 @@ int main(int argc, char **argv)
         w->cos_theta = c > cmin ? c : cmin;
         mf_vec3 wo = mf_ltc_gate_view(w->cos_theta);
         mf_result q;
-        if (mf_ltc_gate_albedo(model, w->alpha, wo, 128, &q) != MF_OK)
+        mf_brdf_params prm = mf_brdf_params_iso(w->alpha);
+        if (mf_model_albedo(model, &prm, wo, 128, &q) != MF_OK)
             return 5;
         w->albedo = q.val;
         w->albedo_err = q.err;

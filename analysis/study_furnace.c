@@ -42,22 +42,23 @@ static double mixture_sample(const mf_brdf_model *m, double alpha, mf_vec3 wo, c
 {
     mf_vec3 wi;
     double pdf_model = 0.0;
+    mf_brdf_params p = mf_brdf_params_iso(alpha);
     if (m->sample && pick < MODEL_WEIGHT)
-        wi = m->sample(m, alpha, wo, u, &pdf_model);
+        wi = m->sample(m, &p, wo, u, &pdf_model);
     else
         wi = mf_sample_cosine_hemisphere(u);
     if (!mf_vec3_isfinite(wi) || !(wi.z > 0.0))
         return 0.0;
     double pdf;
     if (m->sample) {
-        pdf_model = m->pdf(m, alpha, wo, wi);
+        pdf_model = m->pdf(m, &p, wo, wi);
         pdf = MODEL_WEIGHT * pdf_model + (1.0 - MODEL_WEIGHT) * mf_pdf_cosine_hemisphere(wi);
     } else {
         pdf = mf_pdf_cosine_hemisphere(wi);
     }
     if (!(pdf > 0.0))
         return 0.0;
-    return m->eval_cos(m, alpha, wo, wi) / pdf;
+    return m->eval_cos(m, &p, wo, wi) / pdf;
 }
 
 int main(int argc, char **argv)

@@ -12,7 +12,7 @@
  * For every tested texel (ir, iu) (every K-th along each axis, and the last one of each axis),
  * at the texel's own alpha and cos theta_o (mf_ltc_table_alpha / _cos_theta: the table's clamps),
  * with the texel's stored values (no interpolation; bench_ltc measures between texels):
- *  - albedo: the stored magnitude, the quadrature albedo (mf_ltc_gate_albedo, 128 x 128 graded
+ *  - albedo: the stored magnitude, the quadrature albedo (mf_model_albedo, 128 x 128 graded
  *    Gauss-Legendre through the model's sampler, with its error estimate) and their difference;
  *  - polygon shading: P random convex polygons (mf_ltc_gate_random_polygons: a third towards the
  *    lobe, a third across the horizon), the truth by Monte Carlo with N samples of the model's
@@ -150,7 +150,8 @@ static double model_pdf(const mf_brdf_model *m, double alpha, mf_vec3 wo, mf_vec
 {
     if (!(wi.z > 0.0))
         return 0.0;
-    return m->sample ? m->pdf(m, alpha, wo, wi) : mf_pdf_cosine_hemisphere(wi);
+    mf_brdf_params p = mf_brdf_params_iso(alpha);
+    return mf_model_pdf(m, &p, wo, wi);
 }
 
 /* lobe_l1 (see the header) with its standard error.  n samples, half from each sampler; the
@@ -162,6 +163,7 @@ static mf_status lobe_l1(const mf_brdf_model *m, double alpha, mf_vec3 wo, const
 {
     mf_pcg32 rng;
     mf_pcg32_seed(&rng, seed, stream);
+    mf_brdf_params prm = mf_brdf_params_iso(alpha);
     int half = n / 2;
     double s1[2] = {0.0, 0.0}, s2[2] = {0.0, 0.0};
     for (int which = 0; which < 2; ++which)
@@ -173,21 +175,16 @@ static mf_status lobe_l1(const mf_brdf_model *m, double alpha, mf_vec3 wo, const
             double h = 0.0;
             if (which == 0) { /* the model's sampler: kept above the horizon only (model_pdf) */
                 double pdf = 0.0;
-                if (m->sample)
-                    wi = m->sample(m, alpha, wo, u, &pdf);
-                else {
-                    wi = mf_sample_cosine_hemisphere(u);
-                    pdf = mf_pdf_cosine_hemisphere(wi);
-                }
+                wi = mf_model_sample(m, &prm, wo, u, &pdf);
                 if (pdf > 0.0 && mf_vec3_isfinite(wi) && wi.z > 0.0) {
-                    double d = mf_ltc_eval(ltc, wi), fc = m->eval_cos(m, alpha, wo, wi);
+                    double d = mf_ltc_eval(ltc, wi), fc = m->eval_cos(m, &prm, wo, wi);
                     h = fabs(magnitude * d - fc) / (0.5 * model_pdf(m, alpha, wo, wi) + 0.5 * d);
                 }
             } else { /* the LTC's sampler: its density is D itself (mf_ltc_pdf) */
                 wi = mf_ltc_sample(ltc, u);
                 double d = mf_ltc_eval(ltc, wi);
                 if (mf_vec3_isfinite(wi) && d > 0.0) {
-                    double fc = wi.z > 0.0 ? m->eval_cos(m, alpha, wo, wi) : 0.0;
+                    double fc = wi.z > 0.0 ? m->eval_cos(m, &prm, wo, wi) : 0.0;
                     h = fabs(magnitude * d - fc) / (0.5 * model_pdf(m, alpha, wo, wi) + 0.5 * d);
                 }
             }
@@ -410,7 +407,8 @@ int main(int argc, char **argv)
             int ok2 = npaths == 2 && texel_ltc(&tab[1], field[1], ir, iu, v2, &ltc2);
             mf_result q, l1 = {NAN, NAN};
             mf_ltc_gate_random_polygons(model, alpha, wo, seed, stream_of(STREAM_POLY, texel), npoly, polys);
-            if (mf_ltc_gate_albedo(model, alpha, wo, QUAD_N, &q) != MF_OK ||
+            mf_brdf_params prm = mf_brdf_params_iso(alpha);
+            if (mf_model_albedo(model, &prm, wo, QUAD_N, &q) != MF_OK ||
                 mf_ltc_gate_polygon_mc(model, alpha, wo, polys, npoly, nsamples, seed, stream_of(STREAM_MC, texel), mc,
                                        se, NULL) != MF_OK ||
                 (ok1 && lobe_l1(model, alpha, wo, &ltc1, v1[4], q.val, nsamples, seed, stream_of(STREAM_LOBE, texel),

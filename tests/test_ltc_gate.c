@@ -166,8 +166,8 @@ int main(int argc, char **argv)
                 for (int ir = 0; ir < 64 && ok; ++ir) {
                     mf_result q;
                     const int id[2] = {ir, iu};
-                    ok = mf_ltc_gate_albedo(ggx, mf_ltc_table_alpha(&big, ir),
-                                            mf_ltc_gate_view(mf_ltc_table_cos_theta(&big, iu)), 64, &q) == MF_OK;
+                    mf_brdf_params prm = mf_brdf_params_iso(mf_ltc_table_alpha(&big, ir));
+                    ok = mf_model_albedo(ggx, &prm, mf_ltc_gate_view(mf_ltc_table_cos_theta(&big, iu)), 64, &q) == MF_OK;
                     mf_table_record(&big, id)[MF_LTC_F_MAGNITUDE] = q.val;
                 }
             CHECK(ok);
@@ -240,7 +240,8 @@ int main(int argc, char **argv)
         if (ggx) {
             mf_result q, mc;
             mf_vec3 wo = mf_ltc_gate_view(0.3);
-            CHECK(mf_ltc_gate_albedo(ggx, 0.5, wo, 256, &q) == MF_OK);
+            mf_brdf_params prm = mf_brdf_params_iso(0.5);
+            CHECK(mf_model_albedo(ggx, &prm, wo, 256, &q) == MF_OK);
             CHECK(q.err < 5e-5 && q.val > 0.5 && q.val < 1.0);
             CHECK(mf_ltc_gate_polygon_mc(ggx, 0.5, wo, NULL, 0, 100000, seed, 3, NULL, NULL, &mc) == MF_OK);
             /* z = 4.5 (two-sided 7e-6), delta = the quadrature's error estimate. */

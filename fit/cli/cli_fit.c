@@ -26,17 +26,46 @@
 #include "mfkit/mf_table_io.h"
 #endif
 
+/* The registered models (mf_model.h): their names joined by ", " (usage, errors), or one per line
+ * as "name<TAB>description" (`--list`). */
+static void model_names(FILE *f)
+{
+    for (int i = 0; mf_brdf_models[i]; ++i)
+        fprintf(f, "%s%s", i ? ", " : "", mf_brdf_models[i]->name);
+}
+
+static int list_models(void)
+{
+    for (int i = 0; mf_brdf_models[i]; ++i)
+        printf("%s\t%s\n", mf_brdf_models[i]->name, mf_brdf_models[i]->description);
+    return fflush(stdout) == 0 && !ferror(stdout) ? 0 : 3;
+}
+
+/* argv[2..] of `fit ltc` holds --list. */
+static int wants_list(int argc, char **argv)
+{
+    for (int i = 2; i < argc; ++i)
+        if (!strcmp(argv[i], "--list"))
+            return 1;
+    return 0;
+}
+
 static void usage(FILE *f)
 {
     fprintf(f,
             "usage: mfkit fit ltc [--brdf NAME] [--size N | --size NRxNU] [--threads N] [--seed S]\n"
             "                     [--samples N] [--r-range LO:HI] [--u-range LO:HI] [--out DIR] [--resume]\n"
-            "                     [--force] [--quiet]\n\n"
+            "                     [--force] [--quiet]\n"
+            "       mfkit fit ltc --list\n\n"
             "Fits the isotropic LTC table of a BRDF (Ceres, exact Jacobians, an objective of polygon-lit\n"
             "shading), runs the gate (energy, normalisation, polygon shading against Monte Carlo,\n"
             "smoothness), prints its report, and exports the table into DIR only if every check passed.\n\n"
             "options:\n"
-            "  --brdf NAME     ggx (default), beckmann, lambert, oren-nayar, disney, charlie\n"
+            "  --brdf NAME     a registered model (default ggx): ");
+    model_names(f);
+    fprintf(f,
+            "\n"
+            "  --list          print the registered models, one per line: name, a tab, description\n"
             "  --size N        table size N x N (default 64), or NRxNU (roughness x view)\n"
             "  --threads N     worker threads (default: the number of online CPUs); the result does\n"
             "                  not depend on it, bit for bit\n"
@@ -62,6 +91,8 @@ static void usage(FILE *f)
 #ifndef MFKIT_HAVE_CXX_DEPS
 int cli_fit(int argc, char **argv)
 {
+    if (argc >= 2 && !strcmp(argv[1], "ltc") && wants_list(argc, argv))
+        return list_models();
     if (argc >= 2 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))) {
         usage(stdout);
         return 0;
@@ -312,6 +343,8 @@ int cli_fit(int argc, char **argv)
         return fit_ggx_proxy(argc, argv);
     if (strcmp(argv[1], "ltc"))
         return cli_error("fit", "unknown table kind '%s' ('ltc' or 'ggx-proxy')", argv[1]);
+    if (wants_list(argc, argv))
+        return list_models();
     const char *brdf = "ggx", *out = "out";
     int force = 0, quiet = 0, resume = 0;
     mf_ltcfit_options fo;
@@ -394,7 +427,7 @@ int cli_fit(int argc, char **argv)
     }
     const mf_brdf_model *model = mf_brdf_model_find(brdf);
     if (!model)
-        return cli_error(cmd, "unknown BRDF '%s' (ggx, beckmann, lambert, oren-nayar, disney, charlie)", brdf);
+        return cli_error(cmd, "unknown BRDF '%s' (see 'mfkit fit ltc --list')", brdf);
     if (make_dir(out) != 0) {
         cli_error(cmd, "%s: cannot create the output directory: %s", out, strerror(errno));
         return 3;

@@ -1,7 +1,6 @@
 /* mf_ltc_gate.c -- the LTC table gate (see mf_ltc_gate.h; bounds and reasons in docs/validation.md). */
 #include "mfkit/mf_ltc_gate.h"
 
-#include "mfkit/mf_quad.h"
 #include "mfkit/mf_rng.h"
 #include "mfkit/mf_sample.h"
 
@@ -53,56 +52,18 @@ mf_vec3 mf_ltc_gate_view(double cos_theta)
 static double model_weight(const mf_brdf_model *m, double alpha, mf_vec3 wo, const double u[2], mf_vec3 *wi)
 {
     double pdf;
-    if (m->sample) {
-        *wi = m->sample(m, alpha, wo, u, &pdf);
-    } else {
-        *wi = mf_sample_cosine_hemisphere(u);
-        pdf = mf_pdf_cosine_hemisphere(*wi);
-    }
+    mf_brdf_params p = mf_brdf_params_iso(alpha);
+    *wi = mf_model_sample(m, &p, wo, u, &pdf);
     if (!(pdf > 0.0) || !mf_vec3_isfinite(*wi) || wi->z <= 0.0)
         return 0.0;
-    return m->eval_cos(m, alpha, wo, *wi) / pdf;
+    return m->eval_cos(m, &p, wo, *wi) / pdf;
 }
 
-mf_status mf_ltc_gate_albedo(const mf_brdf_model *model, double alpha, mf_vec3 wo, int n, mf_result *out)
+/* The model's albedo by the fitter's rule (mf_model_albedo, GATE_QUAD_N points per axis). */
+static mf_status gate_albedo(const mf_brdf_model *model, double alpha, mf_vec3 wo, mf_result *out)
 {
-    if (!model || !out || n < 16 || n > 1024 || n % 16 != 0 || !(wo.z > 0.0))
-        return MF_ERR_DOMAIN;
-    double x8[8], w8[8];
-    if (mf_quad_gauss_legendre(8, x8, w8) != MF_OK)
-        return MF_ERR_INTERNAL;
-    double q[2];
-    for (int level = 0; level < 2; ++level) {
-        int panels = (level == 0 ? n : n / 2) / 8;
-        double h = 1.0 / panels, sum = 0.0;
-        for (int pi = 0; pi < panels; ++pi) {
-            for (int a = 0; a < 8; ++a) {
-                /* first coordinate graded towards 1 (u0 = 1 - (1 - t)^3, Jacobian 3 (1 - t)^2): u0 -> 1
-                 * is where the samplers reach grazing micro-normals and the integrand drops to 0 with a
-                 * kink as wi crosses the horizon; uniform panels resolve that kink badly (GGX alpha
-                 * 0.18 at normal incidence: uniform 64 x 64 gives 0.95412 with |Q64 - Q32| = 2e-5,
-                 * the truth is 0.956437 (1024 x 1024; Monte Carlo 0.95652 +- 9e-5)) */
-                double tt = h * (pi + 0.5 * (x8[a] + 1.0)), om = 1.0 - tt;
-                double u0 = 1.0 - om * om * om, wa = 0.5 * h * w8[a] * 3.0 * om * om;
-                double row = 0.0;
-                for (int pj = 0; pj < panels; ++pj) {
-                    for (int b = 0; b < 8; ++b) {
-                        double u[2] = {u0, h * (pj + 0.5 * (x8[b] + 1.0))};
-                        mf_vec3 wi;
-                        double g = model_weight(model, alpha, wo, u, &wi);
-                        if (!isfinite(g))
-                            return MF_ERR_DOMAIN;
-                        row += 0.5 * h * w8[b] * g;
-                    }
-                }
-                sum += wa * row;
-            }
-        }
-        q[level] = sum;
-    }
-    out->val = q[0];
-    out->err = fabs(q[0] - q[1]);
-    return MF_OK;
+    mf_brdf_params p = mf_brdf_params_iso(alpha);
+    return mf_model_albedo(model, &p, wo, GATE_QUAD_N, out);
 }
 
 /* ---- random polygons --------------------------------------------------------------------------- */
@@ -522,9 +483,8 @@ mf_status mf_ltc_gate_run(const mf_table *t, const mf_brdf_model *model, const m
                             size_t ti = (size_t)tr[k] + (size_t)nr * (size_t)tu[k];
                             if (isnan(qsm[ti])) {
                                 mf_result q;
-                                if (mf_ltc_gate_albedo(model, mf_ltc_table_alpha(t, tr[k]),
-                                                       mf_ltc_gate_view(mf_ltc_table_cos_theta(t, tu[k])), GATE_QUAD_N,
-                                                       &q) == MF_OK)
+                                if (gate_albedo(model, mf_ltc_table_alpha(t, tr[k]),
+                                                mf_ltc_gate_view(mf_ltc_table_cos_theta(t, tu[k])), &q) == MF_OK)
                                     qsm[ti] = q.val;
                                 else
                                     ok = 0;
@@ -608,7 +568,7 @@ mf_status mf_ltc_gate_run(const mf_table *t, const mf_brdf_model *model, const m
                 mf_result q;
                 double v = INFINITY;
                 const char *w = "quadrature failed (model NaN)";
-                if (mf_ltc_gate_albedo(model, alpha, mf_ltc_gate_view(ct), GATE_QUAD_N, &q) == MF_OK) {
+                if (gate_albedo(model, alpha, mf_ltc_gate_view(ct), &q) == MF_OK) {
                     size_t texel = (size_t)ir + (size_t)nr * (size_t)iu;
                     qalb[2 * texel] = q.val;
                     qalb[2 * texel + 1] = q.err;
@@ -637,7 +597,7 @@ mf_status mf_ltc_gate_run(const mf_table *t, const mf_brdf_model *model, const m
                 if (mf_ltc_gate_polygon_mc(model, alpha, wo, polys, npoly, nsamples, o.seed, stream_id(STREAM_MC, texel), mc,
                                            se, &alb) != MF_OK)
                     ok = 0;
-                if (isnan(q.val) && mf_ltc_gate_albedo(model, alpha, wo, GATE_QUAD_N, &q) != MF_OK)
+                if (isnan(q.val) && gate_albedo(model, alpha, wo, &q) != MF_OK)
                     ok = 0;
                 ++nent;
                 if (!ok) {

@@ -1,20 +1,26 @@
-/* mf_model.c -- the registry of the BRDF models that LTC tables are fitted to (mf_model.h). */
+/* mf_model.c -- the registry of the BRDF models that LTC tables are fitted to, and the
+ * cosine-hemisphere fallback for models without a sampler (mf_model.h). */
 #include "mfkit/mf_model.h"
 
-#include <stddef.h>
+#include "mfkit/mf_sample.h"
 
+#include <stddef.h>
 #include <string.h>
 
-extern const mf_brdf_model mf_model_ggx;
-extern const mf_brdf_model mf_model_beckmann;
-extern const mf_brdf_model mf_model_lambert;
-extern const mf_brdf_model mf_model_oren_nayar;
-extern const mf_brdf_model mf_model_disney;
-extern const mf_brdf_model mf_model_charlie;
+/* The registry, in the order `mfkit fit ltc --list` prints it: one X(name) per model, where
+ * lib/src/mf_model_<name>.c defines `const mf_brdf_model mf_model_<name>`. */
+#define MF_MODEL_LIST(X)                                                                                          \
+    X(ggx)                                                                                                        \
+    X(beckmann)                                                                                                   \
+    X(lambert)                                                                                                    \
+    X(oren_nayar)                                                                                                 \
+    X(disney)                                                                                                     \
+    X(charlie)
 
-const mf_brdf_model *const mf_brdf_models[] = {&mf_model_ggx,        &mf_model_beckmann, &mf_model_lambert,
-                                               &mf_model_oren_nayar, &mf_model_disney,   &mf_model_charlie,
-                                               NULL};
+#define MF_MODEL_DECLARE(id) extern const mf_brdf_model mf_model_##id;
+#define MF_MODEL_ENTRY(id) &mf_model_##id,
+MF_MODEL_LIST(MF_MODEL_DECLARE)
+const mf_brdf_model *const mf_brdf_models[] = {MF_MODEL_LIST(MF_MODEL_ENTRY) NULL};
 
 const mf_brdf_model *mf_brdf_model_find(const char *name)
 {
@@ -24,4 +30,33 @@ const mf_brdf_model *mf_brdf_model_find(const char *name)
         if (!strcmp(mf_brdf_models[i]->name, name))
             return mf_brdf_models[i];
     return NULL;
+}
+
+mf_vec3 mf_model_sample(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, const double u[2], double *pdf)
+{
+    if (m->sample)
+        return m->sample(m, p, wo, u, pdf);
+    mf_vec3 wi = mf_sample_cosine_hemisphere(u);
+    *pdf = wo.z > 0.0 ? mf_pdf_cosine_hemisphere(wi) : 0.0; /* nothing to sample for a view below the horizon */
+    return wi;
+}
+
+double mf_model_pdf(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, mf_vec3 wi)
+{
+    if (m->sample)
+        return m->pdf(m, p, wo, wi);
+    return wo.z > 0.0 ? mf_pdf_cosine_hemisphere(wi) : 0.0;
+}
+
+void mf_model_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, int n, const double *u,
+                             mf_vec3 *wi, double *pdf, double *w)
+{
+    if (m->sample && m->sample_weights) {
+        m->sample_weights(m, p, wo, n, u, wi, pdf, w);
+        return;
+    }
+    for (int i = 0; i < n; ++i) {
+        wi[i] = mf_model_sample(m, p, wo, u + 2 * i, &pdf[i]);
+        w[i] = pdf[i] > 0.0 && wi[i].z > 0.0 && mf_vec3_isfinite(wi[i]) ? m->eval_cos(m, p, wo, wi[i]) / pdf[i] : 0.0;
+    }
 }

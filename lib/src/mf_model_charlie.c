@@ -37,9 +37,10 @@ static double charlie_lambda(double r, double cos_t)
     return cos_t < 0.5 ? exp(charlie_l(r, cos_t)) : exp(2.0 * charlie_l(r, 0.5) - charlie_l(r, 1.0 - cos_t));
 }
 
-static double charlie_eval_cos(const mf_brdf_model *m, double alpha, mf_vec3 wo, mf_vec3 wi)
+static double charlie_eval_cos(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, mf_vec3 wi)
 {
     (void)m;
+    double alpha = p->alpha_x; /* isotropic: alpha_y is not read */
     if (isnan(wo.z) || isnan(wi.z) || !(alpha > 0.0))
         return NAN;
     if (!(wo.z > 0.0) || !(wi.z > 0.0))
@@ -56,5 +57,6 @@ static double charlie_eval_cos(const mf_brdf_model *m, double alpha, mf_vec3 wo,
 }
 
 const mf_brdf_model mf_model_charlie = {
-    "charlie", "Charlie sheen, Lambda fit, height-correlated G2 [Estevez & Kulla 2017]", charlie_eval_cos, NULL,
-    NULL, NULL};
+    "charlie", "Charlie sheen, Lambda fit, height-correlated G2, not energy conserving [Estevez & Kulla 2017]",
+    MF_MODEL_RECIPROCAL,
+    charlie_eval_cos, NULL, NULL, NULL};

@@ -20,9 +20,10 @@ static double pow5(double x)
     return x2 * x2 * x;
 }
 
-static double disney_eval_cos(const mf_brdf_model *m, double alpha, mf_vec3 wo, mf_vec3 wi)
+static double disney_eval_cos(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, mf_vec3 wi)
 {
     (void)m;
+    double alpha = p->alpha_x; /* isotropic: alpha_y is not read */
     if (isnan(wo.z) || isnan(wi.z) || !(alpha > 0.0))
         return NAN;
     if (!(wo.z > 0.0) || !(wi.z > 0.0))
@@ -35,5 +36,7 @@ static double disney_eval_cos(const mf_brdf_model *m, double alpha, mf_vec3 wo, 
     return MF_INV_PI * fl * fv * wi.z;
 }
 
-const mf_brdf_model mf_model_disney = {"disney", "Disney diffuse, roughness sqrt(alpha) [Burley 2012, Sec. 5.3]",
-                                       disney_eval_cos, NULL, NULL, NULL};
+const mf_brdf_model mf_model_disney = {"disney",
+                                       "Disney diffuse, roughness sqrt(alpha), not energy conserving "
+                                       "[Burley 2012, Sec. 5.3]",
+                                       MF_MODEL_RECIPROCAL, disney_eval_cos, NULL, NULL, NULL};

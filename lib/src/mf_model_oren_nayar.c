@@ -17,7 +17,7 @@
  * mf_sample_ndf_normal), and u runs over 2 x 2 panels of the 8-point Gauss-Legendre rule
  * (16 x 16 = 256 nodes).  The <.,.> kinks make it converge slowly: its accuracy has not been
  * measured separately (the fitter's albedo quadrature sees its values as exact).  mf_leadr_diffuse is not used: its grid is LEADR's truncated, renormalised one
- * (ERRATA L7), which does not converge to the integral at a fixed lambda, and it evaluates the
+ * (docs/math.md, "Grid"), which does not converge to the integral at a fixed lambda, and it evaluates the
  * irradiance callback (with an erfc per call) for every slope sample.
  * No sampler: the fitter uses cosine-hemisphere sampling (the lobe is close to Lambert).
  */
@@ -34,9 +34,10 @@ static const double gl8_w[8] = {0.1012285362903763, 0.2223810344533745, 0.313706
 #define ON_PANELS 2
 #define ON_N (8 * ON_PANELS)
 
-static double on_eval_cos(const mf_brdf_model *m, double alpha, mf_vec3 wo, mf_vec3 wi)
+static double on_eval_cos(const mf_brdf_model *m, const mf_brdf_params *prm, mf_vec3 wo, mf_vec3 wi)
 {
     (void)m;
+    double alpha = prm->alpha_x; /* isotropic: alpha_y is not read */
     if (isnan(wo.z) || isnan(wi.z) || !(alpha > 0.0))
         return NAN;
     if (!(wo.z > 0.0) || !(wi.z > 0.0))
@@ -74,5 +75,5 @@ static double on_eval_cos(const mf_brdf_model *m, double alpha, mf_vec3 wo, mf_v
 }
 
 const mf_brdf_model mf_model_oren_nayar = {
-    "oren-nayar", "LEADR rough diffuse, centred isotropic Beckmann slopes [Dupuy 2013, Eq. 20-21]", on_eval_cos,
-    NULL, NULL, NULL};
+    "oren-nayar", "LEADR rough diffuse, centred isotropic Beckmann slopes [Dupuy 2013, Eq. 20-21]",
+    MF_MODEL_ENERGY_CONSERVING | MF_MODEL_RECIPROCAL, on_eval_cos, NULL, NULL, NULL};

@@ -93,13 +93,6 @@ mf_status mf_ltc_gate_run(const mf_table *t, const mf_brdf_model *model, const m
 /* The view direction of the isotropic view frame: (sqrt(1 - cos^2), 0, cos). */
 mf_vec3 mf_ltc_gate_view(double cos_theta);
 
-/* Directional albedo of the model at (alpha, wo) by an n x n product of composite 8-point
- * Gauss-Legendre panels over the model's sampler's unit square (cosine hemisphere when it has
- * none), the first coordinate graded towards 1 (u0 = 1 - (1 - t)^3: grazing micro-normals);
- * out->err = |Q(n) - Q(n/2)|.  n a multiple of 16 in [16, 1024].  MF_ERR_DOMAIN otherwise or
- * for a non-finite integrand. */
-mf_status mf_ltc_gate_albedo(const mf_brdf_model *model, double alpha, mf_vec3 wo, int n, mf_result *out) MF_WARN_UNUSED;
-
 /* A fixed-seed set of n convex, front-facing polygons in the view frame (quads for even i,
  * triangles for odd i): centres towards the lobe (drawn with the model's sampler) or anywhere
  * in z >= -0.35, so about a third cross the horizon; sizes from 0.003 sr to about 2 sr. */

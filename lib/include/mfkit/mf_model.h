@@ -1,21 +1,33 @@
 /*
- * mf_model.h -- the BRDF models that LTC tables are fitted to (one small source file each).
+ * mf_model.h -- the registry of BRDF models that LTC tables are fitted to (one source file each).
  *
- * A model is an isotropic BRDF with one roughness parameter alpha (the table's roughness axis
- * gives alpha = max(r^2, MF_LTC_ALPHA_MIN)).  It evaluates the cosine-weighted BRDF
- * f(wo, wi) wi.z (per steradian of wi; 0 for wi.z <= 0), and optionally samples wi with a known
- * density (per steradian of wi) that covers the lobe well; models without a sampler get
- * cosine-hemisphere sampling.  Adding a BRDF is one file lib/src/mf_model_<name>.c defining an
- * `const mf_brdf_model mf_model_<name>` and one line in the registry (mf_model.c).
+ * A model evaluates the cosine-weighted BRDF f(wo, wi) wi.z (per steradian of wi; 0 for wo.z <= 0
+ * or wi.z <= 0) for the roughness in an mf_brdf_params record, and optionally samples wi with a
+ * known density (per steradian of wi) that covers the lobe well; models without a sampler are
+ * sampled from the cosine hemisphere (mf_model_sample and friends below do that fallback).
+ * Directions are unit vectors in the shading frame (z the normal, x the tangent along which
+ * alpha_x acts).
  *
- * Shipped models (names for `mfkit fit ltc --brdf NAME`):
- *   ggx          Walter microfacet, GGX, joint (height-correlated) masking-shadowing, F = 1
- *   beckmann     the same with Beckmann
+ * Each model declares what it claims in `flags` (MF_MODEL_*): anisotropic roughness, energy
+ * conservation (directional albedo <= 1), reciprocity (f(wo, wi) = f(wi, wo)); "has its own
+ * sampler" is `sample != NULL`.  tests/test_models.c loops over the registry and holds every model
+ * to its claims (chi-square of the sampler against its pdf, batched against single evaluation,
+ * zero below the horizon, reciprocity, albedo <= 1, finite values on the domain grid).
+ *
+ * Adding a model: one file lib/src/mf_model_<name>.c defining `const mf_brdf_model
+ * mf_model_<name>` (name, description with its reference, flags, functions), one line
+ * X(<name>) in MF_MODEL_LIST (lib/src/mf_model.c), and the file in lib/CMakeLists.txt.  The CLI's
+ * --brdf list, `mfkit fit ltc --list` and its usage text come from the registry; docs/cli.md's
+ * list is checked against `--list` by tests/test_cli.sh.
+ *
+ * Shipped models (names for `mfkit fit ltc --brdf NAME`; `mfkit fit ltc --list` prints them):
+ *   ggx          Walter microfacet, GGX, height-correlated masking-shadowing, F = 1; anisotropic
+ *   beckmann     the same with Beckmann; anisotropic
  *   lambert      1/pi (the identity LTC: a test of the pipeline)
  *   oren-nayar   LEADR's rough diffuse microfacet BRDF (Dupuy 2013, Eq. 21) for centred isotropic
  *                Beckmann slopes (alpha^2 = 2 sigma^2), which the paper relates to Oren-Nayar
  *   disney       Disney / Burley 2012 diffuse; Burley's roughness R = sqrt(alpha) (his alpha = R^2, so
- *                the table axis r is R), no Fresnel of the specular
+ *                the table axis r is R), no Fresnel of the specular; NOT energy conserving
  *   charlie      the Charlie sheen lobe (Estevez & Kulla 2017) with its Lambda fit, alpha as roughness
  */
 #ifndef MF_MODEL_H
@@ -29,30 +41,92 @@
 extern "C" {
 #endif
 
+/* The parameters of a model evaluation.  alpha_x, alpha_y: the roughness along the shading
+ * frame's x and y axes (for the microfacet models the NDF's alpha_x, alpha_y [Heitz 2014,
+ * Sec. 5.2]; each model's header comment says what its roughness means).  Isotropic models (no
+ * MF_MODEL_ANISOTROPIC flag) read alpha_x only and ignore alpha_y.  An LTC table's roughness axis
+ * gives alpha_x = alpha_y = max(r^2, MF_LTC_ALPHA_MIN).  New parameters are added at the end;
+ * initialise records with mf_brdf_params_iso() or a designated initializer so that added members
+ * are zero. */
+typedef struct mf_brdf_params {
+    double alpha_x, alpha_y;
+} mf_brdf_params;
+
+/* {alpha, alpha}: the isotropic record. */
+static inline mf_brdf_params mf_brdf_params_iso(double alpha)
+{
+    mf_brdf_params p = {alpha, alpha};
+    return p;
+}
+
+/* Claims of a model (mf_brdf_model.flags), each checked by tests/test_models.c. */
+enum {
+    MF_MODEL_ANISOTROPIC = 1 << 0,       /* reads alpha_y too (else alpha_x only) */
+    MF_MODEL_ENERGY_CONSERVING = 1 << 1, /* directional albedo <= 1 for every wo and parameter */
+    MF_MODEL_RECIPROCAL = 1 << 2         /* f(wo, wi) = f(wi, wo) (Helmholtz reciprocity) */
+};
+
 typedef struct mf_brdf_model mf_brdf_model;
 
 struct mf_brdf_model {
     const char *name;        /* stable identifier, [a-z0-9-] */
     const char *description; /* one line, with its reference */
-    /* f(wo, wi) wi.z for roughness alpha; unit directions in the shading frame; 0 for wo.z <= 0
-     * or wi.z <= 0; NaN outside the domain. */
-    double (*eval_cos)(const mf_brdf_model *m, double alpha, mf_vec3 wo, mf_vec3 wi);
+    unsigned flags;          /* MF_MODEL_* */
+    /* f(wo, wi) wi.z; 0 for wo.z <= 0 or wi.z <= 0; NaN for NaN directions or a roughness that is
+     * not > 0. */
+    double (*eval_cos)(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, mf_vec3 wi);
     /* Optional (NULL: cosine hemisphere): wi from u in [0,1)^2 and its density per steradian
-     * (*pdf may be 0 for a sample to discard). */
-    mf_vec3 (*sample)(const mf_brdf_model *m, double alpha, mf_vec3 wo, const double u[2], double *pdf);
-    /* Optional (NULL when sample is NULL): the density of `sample` at wi. */
-    double (*pdf)(const mf_brdf_model *m, double alpha, mf_vec3 wo, mf_vec3 wi);
+     * (*pdf is 0 for a sample to discard, e.g. below the horizon). */
+    mf_vec3 (*sample)(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, const double u[2], double *pdf);
+    /* Present iff sample is: the density of `sample` at wi (0 for wo.z <= 0 or wi.z <= 0). */
+    double (*pdf)(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, mf_vec3 wi);
     /* Optional (may be NULL; only with sample): n samples at once.  For u = (u[2i], u[2i+1]):
      * wi[i] and pdf[i] as `sample` gives them, and w[i] = eval_cos(wi[i]) / pdf[i] where
      * pdf[i] > 0 and wi[i] is finite with wi[i].z > 0, else w[i] = 0 -- bit for bit the separate
      * calls, with the work that depends on wo alone done once (the fitter's hot loop). */
-    void (*sample_weights)(const mf_brdf_model *m, double alpha, mf_vec3 wo, int n, const double *u, mf_vec3 *wi,
-                           double *pdf, double *w);
+    void (*sample_weights)(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, int n, const double *u,
+                           mf_vec3 *wi, double *pdf, double *w);
 };
 
-/* The registry: NULL-terminated array of the shipped models, and lookup by name (NULL if unknown). */
+/* The registry: NULL-terminated array of the shipped models, in the order `--list` prints them,
+ * and lookup by name (NULL if unknown). */
 extern const mf_brdf_model *const mf_brdf_models[];
 const mf_brdf_model *mf_brdf_model_find(const char *name);
+
+/* ---- using a model: the cosine-hemisphere fallback for models without a sampler ---------------- */
+
+/* The model's sampler, or the cosine hemisphere (pdf wi.z / pi; 0 for wo.z <= 0, as the models'
+ * own samplers). */
+mf_vec3 mf_model_sample(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, const double u[2], double *pdf);
+/* The density of mf_model_sample at wi. */
+double mf_model_pdf(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, mf_vec3 wi);
+/* n samples of mf_model_sample with their weights f cos / pdf (0 unless pdf > 0 and wi is finite
+ * with wi.z > 0): the model's sample_weights when it has one, which gives the same bits. */
+void mf_model_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, int n, const double *u,
+                             mf_vec3 *wi, double *pdf, double *w);
+
+/* ---- directional albedo ------------------------------------------------------------------------ */
+
+/* The default number of points per axis of mf_model_albedo: the rule of the LTC fitter's
+ * magnitude and of the LTC gate's albedo check. */
+#define MF_MODEL_ALBEDO_N 64
+
+/* Directional albedo rho(wo) = integral over wi.z > 0 of f(wo, wi) wi.z dwi of the model at wo
+ * (wo.z > 0), by a product rule over the unit square of mf_model_sample: n x n points, n / 8
+ * composite 8-point Gauss-Legendre panels per axis, the first coordinate graded towards 1 by
+ * u0 = 1 - (1 - t)^3 (Jacobian 3 (1 - t)^2; u0 -> 1 is where the micro-normal maps reach grazing
+ * normals and the integrand drops to 0 as wi crosses the horizon), integrand f cos / pdf.
+ * out->err = |Q(n) - Q(n/2)|.  n a multiple of 16 in [16, 1024] (MF_MODEL_ALBEDO_N by default).
+ * Measured against converged references in lib/src/mf_model_albedo.c.
+ * MF_ERR_DOMAIN for a bad argument or a non-finite integrand. */
+mf_status mf_model_albedo(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, int n,
+                          mf_result *out) MF_WARN_UNUSED;
+/* The same, and (fresnel may be NULL) the Schlick moment: the integral of f(wo, wi) wi.z
+ * (1 - wo.wh)^5 dwi, wh = normalize(wo + wi), from the same points with its own |Q(n) - Q(n/2)|
+ * error.  With Schlick's F = F0 + (1 - F0)(1 - wo.wh)^5 [Schlick 1994, Eq. 15] the albedo with
+ * Fresnel is F0 albedo + (1 - F0) moment: the LTC table's magnitude and Fresnel fields. */
+mf_status mf_model_albedo_fresnel(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, int n,
+                                  mf_result *albedo, mf_result *fresnel) MF_WARN_UNUSED;
 
 #ifdef __cplusplus
 }
