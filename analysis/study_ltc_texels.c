@@ -6,7 +6,7 @@
  *
  * TABLE (and SECOND_TABLE) is any LTC table mfkit reads: an mfkit table (.exr, .json, .npy written
  * by `mfkit fit ltc`, mf_table_read; a .dds holds only 4 fields, not a whole table) or the reference CSV layout
- * (../shared/reference/ltc_code_ggx_64.csv, mf_ltc_reference_read_csv), with the layout of
+ * (tests/data/reference/ltc_code_ggx_64.csv, mf_ltc_reference_read_csv), with the layout of
  * mf_ltc_table.h.  The BRDF is --brdf, else the table's "brdf" metadata, else ggx.
  *
  * For every tested texel (ir, iu) (every K-th along each axis, and the last one of each axis),
