@@ -6,7 +6,7 @@
  *                  [--polygons P] [--samples N] [--csv PATH] [TABLE ...]
  *
  * For every TABLE (an mfkit table: .json/.exr/.dds/.npy; or the reference CSV layout, e.g.
- * ../shared/reference/ltc_code_ggx_64.csv) and, with --fit, for a table fitted now by
+ * tests/data/reference/ltc_code_ggx_64.csv) and, with --fit, for a table fitted now by
  * mf_ltcfit_table (fit/include/mfkit/mf_ltcfit.h), it prints:
  *   - the polygon-shading error against Monte Carlo over V random views BETWEEN the texels
  *     ((r, u) uniform in [0, 1]^2), with the bilinear lookup a shader does (mf_table_lookup of

@@ -4,9 +4,9 @@
 #   analysis/make_figures.sh build out/figures
 # CSV files go to DATA_DIR (default: a scratch directory, removed afterwards; pass notebooks_data
 # to keep them locally -- they are generated, not committed), figures (PNG + PDF) to OUT_DIR.
-# bench_ltc's per-polygon CSV is added when bench_ltc was built (C++ dependencies on) and the
-# reference table ../shared/reference/ltc_code_ggx_64.csv exists, and so is study_ltc_texels'
-# per-texel CSV (paired with the table named by the environment variable MFKIT_LTC_TABLE, if set,
+# bench_ltc's per-polygon CSV of the reference table tests/data/reference/ltc_code_ggx_64.csv
+# (vendored; its absence is an error) is added when bench_ltc was built (C++ dependencies on), and
+# so is study_ltc_texels' per-texel CSV (paired with the table named by the environment variable MFKIT_LTC_TABLE, if set,
 # e.g. MFKIT_LTC_TABLE=out/ltc/ltc_ggx.exr analysis/make_figures.sh build out/figures).  Needs /usr/bin/python3 with
 # python3-numpy and python3-matplotlib.
 set -eu
@@ -31,31 +31,28 @@ echo "== study_smith";       "$bin/study_smith" --out "$data/smith_lambda.csv"
 echo "== study_furnace";     "$bin/study_furnace" --out "$data/furnace.csv"
 echo "== study_proxy";       "$bin/study_proxy" --out "$data/ggx_proxy.csv"
 echo "== study_leadr_grid";  "$bin/study_leadr_grid" --samples 65536 --out "$data/leadr_grid_convergence.csv" | tail -n 3
-ref=$src/../shared/reference/ltc_code_ggx_64.csv
-if [ -x "$bin/bench_ltc" ] && [ -f "$ref" ]; then
+ref=$src/tests/data/reference/ltc_code_ggx_64.csv
+[ -f "$ref" ] || { echo "make_figures.sh: the vendored reference table $ref is missing" >&2; exit 1; }
+if [ -x "$bin/bench_ltc" ]; then
     echo "== bench_ltc"
     "$bin/bench_ltc" --views 64 --polygons 16 --csv "$data/bench_ltc.csv" "$ref" >/dev/null
 fi
 # study_ltc_texels: the reference table's error per texel (every 4th texel: 17 x 17, ~10 s); with
 # MFKIT_LTC_TABLE=FILE (a 64 x 64 table of `mfkit fit ltc`, e.g. out/ltc/ltc_ggx.exr) paired with
-# that table too (figure ltc_texel_pair).  Without the reference, MFKIT_LTC_TABLE's own map.
-if [ -x "$bin/study_ltc_texels" ] && [ -f "$ref" ]; then
+# that table too (figure ltc_texel_pair).
+if [ -x "$bin/study_ltc_texels" ]; then
     echo "== study_ltc_texels"
     "$bin/study_ltc_texels" --stride 4 --out "$data/ltc_texels.csv" "$ref" ${MFKIT_LTC_TABLE:+"$MFKIT_LTC_TABLE"} >/dev/null
-elif [ -x "$bin/study_ltc_texels" ] && [ -n "${MFKIT_LTC_TABLE:-}" ]; then
-    echo "== study_ltc_texels ($MFKIT_LTC_TABLE)"
-    "$bin/study_ltc_texels" --stride 4 --out "$data/ltc_texels.csv" "$MFKIT_LTC_TABLE" >/dev/null
 fi
 # study_sh_irradiance: 30 x 60 normals (~10 s); study_half: the reference table's half-float error
-# (~1 s), when it was built (C++ dependencies on) and the table exists.
+# (~1 s), and of MFKIT_LTC_TABLE if set, when it was built (C++ dependencies on).
 [ -x "$bin/study_sh_irradiance" ] ||
     { echo "make_figures.sh: $bin/study_sh_irradiance not built (cmake --build $build)" >&2; exit 1; }
 echo "== study_sh_irradiance"
 "$bin/study_sh_irradiance" --thetas 30 --phis 60 --out "$data/sh_irradiance.csv"
-half_tables=()
-[ -f "$ref" ] && half_tables+=("$ref")
+half_tables=("$ref")
 [ -n "${MFKIT_LTC_TABLE:-}" ] && half_tables+=("$MFKIT_LTC_TABLE")
-if [ -x "$bin/study_half" ] && [ ${#half_tables[@]} -gt 0 ]; then
+if [ -x "$bin/study_half" ]; then
     echo "== study_half"
     "$bin/study_half" --out "$data/half_error.csv" "${half_tables[@]}"
 fi

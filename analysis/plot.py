@@ -180,7 +180,7 @@ def plot_smith(d, out_dir, made):
         fig, ax = new_figure(2, 1, width=5.4)
         a0, a1 = ax[0]
         a0.semilogx(nu, w["g1_exact"][order], label="exact (erfc form)")
-        a0.semilogx(nu, w["g1_ref"][order], "--", label="Walter 2007, Eq. 27 (clamped, ERRATA L4)")
+        a0.semilogx(nu, w["g1_ref"][order], "--", label="Walter 2007, Eq. 27 (clamped, docs/math.md, correction C-L4)")
         a0.set_xlabel(r"$\nu = \cot\theta / (\sqrt{2}\,\sigma)$ (dimensionless)")
         a0.set_ylabel(r"$G_1 = 1/(1+\Lambda)$")
         a0.set_title("Beckmann Smith $G_1$", fontsize=10)

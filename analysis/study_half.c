@@ -5,7 +5,7 @@
  *   build-dir/analysis/study_half [--brdf NAME] [--seed S] [--polygons P] [--out FILE] TABLE...
  *
  * TABLE: an mfkit table file (.json, .exr, .dds, .npy: mf_table_read) or the reference CSV layout
- * (e.g. ../shared/reference/ltc_code_ggx_64.csv: mf_ltc_reference_read_csv), chosen by extension
+ * (e.g. tests/data/reference/ltc_code_ggx_64.csv: mf_ltc_reference_read_csv), chosen by extension
  * as bench_ltc and `mfkit validate` do.  The table's values as read (doubles: the float32 of an
  * mfkit file, the 6-digit decimals of the reference CSV) are the reference.
  *

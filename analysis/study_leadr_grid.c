@@ -19,7 +19,7 @@
  *
  * Cases: 3 slope statistics (centred isotropic Beckmann alpha = 0.3; non-centred anisotropic
  * correlated; rough non-centred) x 2 views (theta 30 and 70 deg), N = 3, 5, ..., 31, lambda =
- * 0.8 .. 5.0 step 0.05, both layouts of ERRATA L7 (end points, cell centres).  Error of a setting
+ * 0.8 .. 5.0 step 0.05, both layouts (end points, cell centres: docs/math.md, correction C-L7).  Error of a setting
  * = mean over the 12 cases (3 statistics x 2 views x 2 quantities) of |grid - ref| / ref.
  *
  * Writes notebooks_data/leadr_grid_convergence.csv (or --out): '#' header lines (command, mfkit

@@ -6,7 +6,7 @@
  *
  * TABLE (and SECOND_TABLE) is any LTC table mfkit reads: an mfkit table (.exr, .json, .npy written
  * by `mfkit fit ltc`, mf_table_read; a .dds holds only 4 fields, not a whole table) or the reference CSV layout
- * (../shared/reference/ltc_code_ggx_64.csv, mf_ltc_reference_read_csv), with the layout of
+ * (tests/data/reference/ltc_code_ggx_64.csv, mf_ltc_reference_read_csv), with the layout of
  * mf_ltc_table.h.  The BRDF is --brdf, else the table's "brdf" metadata, else ggx.
  *
  * For every tested texel (ir, iu) (every K-th along each axis, and the last one of each axis),
@@ -18,15 +18,17 @@
  *    lobe, a third across the horizon), the truth by Monte Carlo with N samples of the model's
  *    sampler (mf_ltc_gate_polygon_mc), LTC = magnitude * mf_ltc_integrate_polygon of the unpacked
  *    matrix (mf_ltc_table_unpack; clipped after the transform, one-sided [Heitz et al. 2016;
- *    ERRATA T3, T4]): mean and worst |LTC - MC|, mean |LTC - MC| / max(MC, 0.01 albedo) (the
- *    relative error of bench_ltc and the gate), mean Monte Carlo standard error;
+ *    docs/math.md, corrections C-T3, C-T4]): mean and worst |LTC - MC|, mean |LTC - MC| /
+ *    max(MC, 0.01 albedo) (the relative error of bench_ltc and the gate), mean Monte Carlo
+ *    standard error;
  *  - the lobe's pointwise error, an L1 distance relative to the albedo:
  *        lobe_l1 = integral over the sphere of |magnitude D(w) - f(wo, w) max(w.z, 0)| dw / albedo
- *    (D the LTC's density, mf_ltc_eval [Nahmias Eq. 2.21 with the Jacobian of ERRATA T2]), estimated with N/2 samples of
- *    the model's sampler (kept only above the horizon) and N/2 of the LTC's (mf_ltc_sample), combined
- *    by the balance heuristic [Veach 1997, PhD thesis, Sec. 9.2.2: the multi-sample estimator
- *    with w_i = n_i p_i / sum_k n_k p_k], so every direction where either lobe is positive is
- *    sampled, including the LTC's mass below the horizon.  It bounds every light's error: for any
+ *    (D the LTC's density, mf_ltc_eval [Nahmias Eq. 2.21 with the Jacobian of correction
+ *    C-T2]), estimated with N/2 samples of the model's sampler (kept only above the horizon) and
+ *    N/2 of the LTC's (mf_ltc_sample), combined by the balance heuristic [Veach 1997, PhD
+ *    thesis, Sec. 9.2.2: the multi-sample estimator with w_i = n_i p_i / sum_k n_k p_k], so
+ *    every direction where either lobe is positive is sampled, including the LTC's mass below
+ *    the horizon.  It bounds every light's error: for any
  *    set A of directions, |LTC(A) - truth(A)| <= (lobe_l1 albedo + |magnitude - albedo|) / 2, with
  *    equality for the worst A (the standard identity sup_A |mu(A) - nu(A)| = (|mu - nu|(S) +
  *    |mu(S) - nu(S)|) / 2 for two finite measures; D integrates to 1 over the sphere);

@@ -5,11 +5,11 @@
  *
  * For an isotropic GGX of roughness alpha filtered over the square of full width dh centred on the
  * peak [Kaplanyan 2016, Eq. 16-20]:
- *  rect   the mean of P22 over the square: mf_filter_ggx_rect_mean (cancellation-free, ERRATA K1,
+ *  rect   the mean of P22 over the square: mf_filter_ggx_rect_mean (cancellation-free, docs/math.md, correction C-K1,
  *         K2) and the plain four-term difference of the antiderivative
  *         (mf_filter_ggx_rect_antiderivative, App. A) against nested adaptive Gauss-Kronrod of P22
  *         itself (one quadrant, by symmetry; split at alpha 10^k), at relative 1e-13 per level;
- *  proxy  alpha' from the exact peak condition (mf_filter_ggx_proxy_alpha, ERRATA K3) against the
+ *  proxy  alpha' from the exact peak condition (mf_filter_ggx_proxy_alpha, correction C-K3) against the
  *         paper's sqrt(alpha^2 + dh^2) (mf_filter_ggx_proxy_alpha_approx) and mfkit's fitted form
  *         (mf_proxy_alpha_fit): relative error of alpha'.
  * Grid: G x G, alpha in [1e-3, 1] and dh in [1e-3, 10], both log spaced.

@@ -6,18 +6,18 @@
  * Two parts, one CSV (long format, a `part` column):
  *  walter    Beckmann Lambda: the exact erfc form (mf_smith_lambda_beckmann_nu) against Walter's
  *            rational approximation (mf_smith_lambda_beckmann_walter_nu, [Walter 2007, Eq. 27],
- *            clamped at 0, ERRATA L4) over nu in [1e-3, 10] (log spaced, N points): relative error
+ *            clamped at 0, docs/math.md, correction C-L4) over nu in [1e-3, 10] (log spaced, N points): relative error
  *            of G1 = 1 / (1 + Lambda) and of Lambda (Lambda_walter = 0 for nu >= 1.6 while the
  *            exact Lambda is > 0, so its relative error is 1 there; G1's is what shading sees).
  *  gaussian  non-centred Gaussian slopes (isotropic, variance 0.125 = Beckmann alpha 0.5, mean
  *            slope (m, 0) with m in [-2, 2]): the closed form mf_smith_lambda_gaussian against
- *            Smith's construction relative to the mean plane (ERRATA L2),
+ *            Smith's construction relative to the mean plane (correction C-L2),
  *              Lambda = (1/a) integral_0^inf y p(a + y) dy,  a = (cot theta - mu(phi)) / sigma(phi),
  *            p the standard normal density, by adaptive Gauss-Kronrod (the integral of
  *            lib/src/mf_validate.c check_lambda, along the same independent path of angles), over
  *            a G x G grid of m and theta in [1, 89] deg, view azimuth phi = 0 (in the plane of the
  *            mean, where the mean tilts the mesosurface most).  Cells below the mesosurface
- *            (a <= 0: Lambda = +inf, ERRATA L3), where cot theta - mu cancels (condition > 1e6) and far in the tail (a > 30: Lambda < 1e-198) have
+ *            (a <= 0: Lambda = +inf, correction C-L3), where cot theta - mu cancels (condition > 1e6) and far in the tail (a > 30: Lambda < 1e-198) have
  *            rel_err = nan.  The Walter form of the same nu is written beside it.
  *
  * Columns: part, nu, mean_slope, theta_deg, lambda_exact, lambda_ref, g1_exact, g1_ref,

@@ -31,7 +31,7 @@ ok '[ "$(echo "$out" | head -1)" = "alpha_x,alpha_y,w_x,w_y,w_z,Lambda,Lambda_ap
 out=$(run "lambda --ndf ggx" "alpha_x,alpha_y,w_x,w_y,w_z" "0.3,0.3,0.6,0,-0.8")
 ok '[ "$(echo "$out" | tail -1)" = "0.3,0.3,0.6,0,-0.8,inf" ]' "lambda below horizon is inf: $out"
 out=$(run "lambda-gaussian" "mean_x,mean_y,var_x,var_y,cov_xy,w_x,w_y,w_z" "0,0.3,2,0.5,-0.9,0.4980973490458729,-0.8627299156628209,0.08715574274765814")
-ok 'echo "$out" | tail -1 | grep -q ",1.03105338564"' "lambda-gaussian ERRATA L2 value: $out"
+ok 'echo "$out" | tail -1 | grep -q ",1.03105338564"' "lambda-gaussian, the value of docs/math.md correction C-L2: $out"
 out=$(run "g2 --ndf ggx" "alpha_x,alpha_y,wo_x,wo_y,wo_z,wi_x,wi_y,wi_z" "0.3,0.3,0,0,1,0,0,1")
 ok '[ "$(echo "$out" | tail -1)" = "0.3,0.3,0,0,1,0,0,1,1,1,1,1" ]' "g2 at normal incidence: $out"
 out=$(printf 'alpha_x,alpha_y,wo_x,wo_y,wo_z,wi_x,wi_y,wi_z,f0\n0.3,0.3,0,0,1,0,0,1,0.04\n' | "$mfkit" eval brdf --ndf ggx --fresnel schlick)

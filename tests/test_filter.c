@@ -1,5 +1,5 @@
-/* test_filter.c -- NDF filtering over a pixel footprint (mf_filter.h), with ERRATA K1, K3, K4,
- * K5, K6 and L6.  Prints the measured accuracy of the rectangle mean and of the GGX proxies. */
+/* test_filter.c -- NDF filtering over a pixel footprint (mf_filter.h), with docs/math.md,
+ * corrections C-K1, C-K3, C-K4, C-K5, C-K6 and C-L6.  Prints the measured accuracy of the rectangle mean and of the GGX proxies. */
 #include "mf_test.h"
 #include "mfkit/mf_filter.h"
 #include "mfkit/mf_quad.h"
@@ -96,7 +96,7 @@ static double convolve_gaussian_with_p(const mf_gaussian_slopes *g, mf_sym2 p, d
     return sum;
 }
 
-/* ---- printed formulas, for the errata tests ------------------------------------------------ */
+/* ---- printed formulas, for the tests of the corrections (docs/math.md) -------------------------- */
 
 /* Appendix A's phi, literally */
 static double phi_printed(double x, double y, double g, double d)
@@ -105,7 +105,7 @@ static double phi_printed(double x, double y, double g, double d)
     return x * atan(g * y / (r * d)) / r;
 }
 
-/* Appendix A as printed: limits h -+ dh (half widths) and 1 / (2 pi |dh_s dh_t|) (ERRATA K1) */
+/* Appendix A as printed: limits h -+ dh (half widths) and 1 / (2 pi |dh_s dh_t|) (correction C-K1) */
 static double appendix_a_printed(double a, double b, double hs, double ht, double dhs, double dht)
 {
     double s0 = hs - dhs, s1 = hs + dhs, t0 = ht - dht, t1 = ht + dht;
@@ -115,7 +115,7 @@ static double appendix_a_printed(double a, double b, double hs, double ht, doubl
     return bracket / (2.0 * MF_PI * fabs(dhs * dht));
 }
 
-/* Eq. 20 as extracted (ERRATA K3): sqrt(dh^4 4 a^2 + dh^2) / (2 sqrt(atan(dh / sqrt(4a^2 + dh^2)))) */
+/* Eq. 20 as extracted (correction C-K3): sqrt(dh^4 4 a^2 + dh^2) / (2 sqrt(atan(dh / sqrt(4a^2 + dh^2)))) */
 static double eq20_printed(double a, double dh)
 {
     return sqrt(dh * dh * dh * dh * 4.0 * a * a + dh * dh) / (2.0 * sqrt(atan(dh / sqrt(4.0 * a * a + dh * dh))));
@@ -145,7 +145,7 @@ static double filtered_marginal_peak(double ax, double ay, double wx, double wy,
 
 static void test_half_slope_and_signs(mf_pcg32 *rng)
 {
-    /* ERRATA L6: h (mfkit) = -(wo + wi).xy / (wo + wi).z = -h (Kaplanyan Eq. 3); the GGX value
+    /* correction C-L6: h (mfkit) = -(wo + wi).xy / (wo + wi).z = -h (Kaplanyan Eq. 3); the GGX value
      * is the same at both (P22 is even), so centred filtering does not care. */
     for (int k = 0; k < 500; ++k) {
         double t1 = 1.4 * mf_pcg32_next_double(rng), p1 = 2 * MF_PI * mf_pcg32_next_double(rng);
@@ -214,7 +214,7 @@ static void test_jacobian_and_footprint(void)
 
 static void test_covariance_k4(mf_pcg32 *rng)
 {
-    /* ERRATA K4 numbers: dh_u = (0.1, -0.05), dh_v = (0.02, 0.04). */
+    /* correction C-K4 numbers: dh_u = (0.1, -0.05), dh_v = (0.02, 0.04). */
     double u[2] = {0.1, -0.05}, v[2] = {0.02, 0.04};
     mf_sym2 p = mf_filter_footprint_covariance(u, v, 1.0);
     CHECK_REL(p.xx, 0.0104, 4 * DBL_EPSILON);
@@ -246,7 +246,7 @@ static void test_covariance_k4(mf_pcg32 *rng)
     CHECK_MC(sxy, sqrt((qxy / n - sxy * sxy) / n), p.xy, 5.0, 0.0);
     CHECK_MC(syy, sqrt((qyy / n - syy * syy) / n), p.yy, 5.0, 0.0);
     CHECK(fabs(sxy - gram.xy) > 10 * sqrt((qxy / n - sxy * sxy) / n)); /* the Gram matrix is rejected */
-    /* the erratum's filtered density: Beckmann (0.2, 0.05) at h = (0, 0.05): 10.170 vs 10.542 (printed) */
+    /* C-K4's filtered density: Beckmann (0.2, 0.05) at h = (0, 0.05): 10.170 vs 10.542 (printed) */
     mf_gaussian_slopes gk = mf_filter_beckmann(0.2, 0.05, p), gg = mf_filter_beckmann(0.2, 0.05, gram);
     CHECK_ABS(mf_gaussian_p22(&gk, 0.0, 0.05), 10.170, 5e-4);
     CHECK_ABS(mf_gaussian_p22(&gg, 0.0, 0.05), 10.542, 1e-3); /* 10.5415 */
@@ -299,7 +299,7 @@ static void test_rect_and_clamps(void)
 
 static void test_beckmann_k5_k6(void)
 {
-    /* ERRATA K6 (correct formula): B' = diag(alpha^2/2) + P is the exact convolution. Reference:
+    /* correction C-K6 (correct formula): B' = diag(alpha^2/2) + P is the exact convolution. Reference:
      * 2D Gauss-Legendre convolution (converged to ~1e-14; tolerance 1e-11). */
     double u[2] = {0.1, -0.05}, v[2] = {0.02, 0.04};
     mf_sym2 p = mf_filter_footprint_covariance(u, v, 1.0);
@@ -335,7 +335,7 @@ static void test_beckmann_k5_k6(void)
     mf_gaussian_slopes badg = {0, 0, -1, 1, 0};
     CHECK(isnan(mf_filter_gaussian_add(&badg, pd).var_x));
 
-    /* ERRATA K5 (note): the GGX proxy sqrt(alpha^2 + dh^2) is not the Beckmann covariance sum:
+    /* correction C-K5 (note): the GGX proxy sqrt(alpha^2 + dh^2) is not the Beckmann covariance sum:
      * a box of full width dh (variance dh^2/12) gives alpha'^2 = alpha^2 + dh^2/6, a standard-
      * deviation vector of length dh gives alpha^2 + 2 dh^2. */
     double a = 0.1, dh = 0.05;
@@ -446,7 +446,7 @@ static void test_rect_mean(void)
 
 static void test_k1_appendix_a(void)
 {
-    /* ERRATA K1: the printed combination (half-width limits, 1/(2 pi dh_s dh_t)) is exactly 4x the
+    /* correction C-K1: the printed combination (half-width limits, 1/(2 pi dh_s dh_t)) is exactly 4x the
      * mean over [h -+ dh]; its sign pattern and phi are right (1/(8 pi ...) gives the mean).
      * Moderate rectangles (no cancellation in the literal formula): 1e-13. */
     const double cases[4][6] = {{0.1, 0.1, 0.0, 0.0, 0.05, 0.05},
@@ -489,7 +489,7 @@ static void test_proxy(void)
             double a = as[i], dh = dhs[j];
             double exact = mf_filter_ggx_proxy_alpha(a, dh);
             CHECK_REL(exact, bisect_proxy(a, dh), 1e-12);
-            /* the erratum's literal closed form (no rearrangement) where it does not cancel */
+            /* the literal closed form of C-K3 (no rearrangement) where it does not cancel */
             if (dh >= 1e-3 * a) {
                 double q = sqrt(4 * a * a + dh * dh);
                 CHECK_REL(exact * exact, dh * q / (4 * atan(dh / q)), 16 * DBL_EPSILON);
@@ -501,14 +501,14 @@ static void test_proxy(void)
     CHECK_REL(mf_filter_ggx_proxy_alpha(1e-4, 1e4), 1e4 / MF_SQRT_PI, 8 * DBL_EPSILON);
     CHECK(mf_filter_ggx_proxy_alpha(0.2, 0.0) == 0.2);
     CHECK(isnan(mf_filter_ggx_proxy_alpha(0.0, 0.1)) && isnan(mf_filter_ggx_proxy_alpha(0.1, -1.0)));
-    /* (c) ERRATA K3: the printed (extracted) Eq. 20 is far off somewhere on the grid */
+    /* (c) correction C-K3: the printed (extracted) Eq. 20 is far off somewhere on the grid */
     double worst_printed = 0.0;
     for (int i = 0; i < 5; ++i)
         for (int j = 0; j < 8; ++j)
             worst_printed = fmax(worst_printed, fabs(eq20_printed(as[i], dhs[j]) / mf_filter_ggx_proxy_alpha(as[i], dhs[j]) - 1));
     CHECK(worst_printed > 0.5);
     /* (d) accuracy of the paper's fit sqrt(alpha^2 + dh^2) over alpha in [1e-3, 1], dh in [1e-3, 10]
-     * (log grids, 61 x 81 points): it always overestimates; erratum values at dh = 0.1 alpha, alpha. */
+     * (log grids, 61 x 81 points): it always overestimates; the values of C-K3 at dh = 0.1 alpha, alpha. */
     double max_err = 0.0, sum_err = 0.0, max_a = 0, max_dh = 0, max_exact_err = 0.0;
     int n = 0;
     for (int i = 0; i <= 60; ++i)

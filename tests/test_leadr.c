@@ -140,7 +140,7 @@ int main(void)
                           4 * DBL_EPSILON);
             }
         }
-    /* ERRATA L7: discrete variance 0.8656 (end points) / 0.6981 (cell centres), N = 5, lambda = 1.8;
+    /* docs/math.md, correction C-L7: discrete variance 0.8656 (end points) / 0.6981 (cell centres), N = 5, lambda = 1.8;
      * closed forms: points (0, +-0.9, +-1.8) and (0, +-0.72, +-1.44) */
     {
         mf_leadr_grid ge, gc;
@@ -155,7 +155,7 @@ int main(void)
         CHECK_REL(mf_leadr_grid_variance(&gc), vc, 8 * DBL_EPSILON);
         CHECK_ABS(mf_leadr_grid_variance(&ge), 0.8656, 5e-5);
         CHECK_ABS(mf_leadr_grid_variance(&gc), 0.6981, 5e-5);
-        printf("ERRATA L7: grid variance N=5 lambda=1.8: end points %.5f, cell centres %.5f\n", mf_leadr_grid_variance(&ge),
+        printf("correction C-L7: grid variance N=5 lambda=1.8: end points %.5f, cell centres %.5f\n", mf_leadr_grid_variance(&ge),
                mf_leadr_grid_variance(&gc));
         /* sample area [Sec. 5.2]: cell centres = the printed (2 lambda max(sigma)/N)^2 */
         mf_gaussian_slopes g = {0.1, 0.0, 0.02, 0.05, 0.01};
@@ -218,7 +218,7 @@ int main(void)
     /* ================= masking-aware irradiance [Eq. 20, Algorithm 2] ================= */
     {
         /* Zero variance: Lambda = 0 above the mesosurface, so Algorithm 2 is the plain projection:
-         * ERRATA L1's lights P = 1, 2.5, 0.7 give L00 = Y00 * 4.2 = 1.184798 (printed form: 2.736321). */
+         * correction C-L1's lights P = 1, 2.5, 0.7 give L00 = Y00 * 4.2 = 1.184798 (printed form: 2.736321). */
         mf_gaussian_slopes flat = {0, 0, 0, 0, 0};
         mf_leadr_light l1[3] = {{{0, 0, 1}, 1.0}, {{0.6, 0, 0.8}, 2.5}, {{0, -0.28, 0.96}, 0.7}};
         double c[MF_SH_COEFFS];
@@ -304,7 +304,7 @@ int main(void)
         CHECK(mf_leadr_specular_env(&grid, &g, none, sac.wo, env_check_solid_angle, &sac, &v) == MF_OK);
         CHECK_ABS(sac.worst, 0.0, 1e-12);
 
-        /* ERRATA L5: the integral runs over the whole sphere: with a tilted mesosurface,
+        /* correction C-L5: the integral runs over the whole sphere: with a tilted mesosurface,
          * directions below the geometric horizon (but above the mesosurface) reflect light. */
         mf_gaussian_slopes tilt = {0.6, 0.0, 0.05, 0.05, 0.0};
         /* wi = (-0.95, 0, -0.1) is above the mesosurface (n ~ (-0.6, 0, 1)); its mirror wo is at 34 deg, phi = 0 */

@@ -1,6 +1,7 @@
 /*
  * test_ltc.c -- linearly transformed cosines (mf_ltc.h): normalisation, sampler, polygon
- * integral, ERRATA T2-T4, the isotropic form and its frame, and the sphere (cap) approximation.
+ * integral, docs/math.md corrections C-T2 to C-T4, the isotropic form and its frame, and the
+ * sphere (cap) approximation.
  *
  * Quadrature: composite Gauss-Legendre product rules (mf_quad_gauss_legendre, 16 points per
  * panel) over smooth integrands only -- every kink (the support boundary (M^-1 w).z = 0 of D, the
@@ -136,7 +137,7 @@ static double preimage_integrand(mf_vec3 wo, void *user)
     return mf_ltc_eval(l, mf_vec3_scale(mw, 1.0 / r)) * fabs(l->det) / (r * r * r);
 }
 
-/* ERRATA T2: integral of D over the sphere is 1 for every matrix, (a) in the pre-image, where the
+/* correction C-T2: integral of D over the sphere is 1 for every matrix, (a) in the pre-image, where the
  * integrand D(w(wo)) |dw/dwo| is wo.z / pi up to rounding -- this checks that eval's Jacobian is
  * the inverse of the forward one to ~cond(M) eps for any M; and (b) directly on the sphere for
  * the well-conditioned ones, over the support hemisphere (D is analytic there).  Tolerances:
@@ -387,10 +388,10 @@ static mf_polygon clip_z(const mf_polygon *p)
     return r;
 }
 
-/* ERRATA T3 and T4, each with a check that fails on the printed or wrong form. */
+/* corrections C-T3 and C-T4, each with a check that fails on the printed or wrong form. */
 static void test_errata(mf_pcg32 *rng)
 {
-    /* T3: identity M.  The integral of D over P is E(P) of the normalised cosine max(0,z)/pi
+    /* C-T3: identity M.  The integral of D over P is E(P) of the normalised cosine max(0,z)/pi
      * (= hit fraction of cosine samples), not the irradiance E_cos = pi E. */
     mf_ltc id = make_ltc(mf_mat3_identity());
     mf_vec3 tv[4] = {v3(-0.4, -0.3, 0.6), v3(0.7, -0.2, 0.6), v3(0.6, 0.8, 0.6), v3(-0.5, 0.6, 0.6)};
@@ -402,9 +403,9 @@ static void test_errata(mf_pcg32 *rng)
     CHECK_MC(est, binomial_se(i_ltc), i_ltc, MC_Z, MC_DELTA);
     double printed = MF_PI * e; /* "E = irradiance" of the printed Eq. 2.33 */
     CHECK(fabs(est - printed) > 100.0 * binomial_se(i_ltc));
-    printf("ERRATA T3: identity M: integral %.6f = E_cos/pi (E_cos = %.6f), MC %.6f\n", i_ltc, printed, est);
+    printf("correction C-T3: identity M: integral %.6f = E_cos/pi (E_cos = %.6f), MC %.6f\n", i_ltc, printed, est);
 
-    /* T4: a sheared M (the isotropic form at a grazing view: its lobe leans to +x and reaches
+    /* C-T4: a sheared M (the isotropic form at a grazing view: its lobe leans to +x and reaches
      * below the horizon) and a vertical quad crossing the horizon.  Clipping P at the shading
      * horizon before the transform gives a different (wrong) value; Monte Carlo decides. */
     mf_ltc gr = make_ltc(mf_ltc_matrix_isotropic(0.3, 0.9, 0.4, -0.7));
@@ -416,7 +417,7 @@ static void test_errata(mf_pcg32 *rng)
     est = mc_ltc(&gr, &quad, rng);
     CHECK_MC(est, binomial_se(right), right, MC_Z, MC_DELTA);
     CHECK(fabs(est - wrong) > 20.0 * binomial_se(right));
-    printf("ERRATA T4: sheared M, vertical quad: clip after M^-1 %.6f, clip before %.6f, MC %.6f\n", right, wrong, est);
+    printf("correction C-T4: sheared M, vertical quad: clip after M^-1 %.6f, clip before %.6f, MC %.6f\n", right, wrong, est);
 
     /* ... and a triangle entirely below the horizon still receives light from a lobe that
      * reaches below it: clip-before gives 0. */
@@ -428,7 +429,7 @@ static void test_errata(mf_pcg32 *rng)
     CHECK(below > 1e-3);
     CHECK(clip_z(&tri).n == 0); /* nothing left to integrate when clipping first */
     CHECK_MC(est, binomial_se(below), below, MC_Z, MC_DELTA);
-    printf("ERRATA T4: triangle below the horizon: %.6f (clip before: 0), MC %.6f\n", below, est);
+    printf("correction C-T4: triangle below the horizon: %.6f (clip before: 0), MC %.6f\n", below, est);
 }
 
 /* ---- chi-square test of the sampler ----------------------------------------------------------

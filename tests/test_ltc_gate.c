@@ -8,7 +8,7 @@
  * which we do not need: the gate only requires 0 <= fresnel <= magnitude, so we store 0.
  *
  * usage: test_ltc_gate [REFERENCE_DIR]   (default: the compile definition MFKIT_REFERENCE_DIR,
- * ../shared/reference beside the source tree; that part is skipped with a message if absent)
+ * the vendored tests/data/reference of the source tree; a missing table is a failure)
  */
 #include "mf_test.h"
 
@@ -263,7 +263,8 @@ int main(int argc, char **argv)
         snprintf(path, sizeof path, "%s/ltc_code_ggx_64.csv", dir ? dir : ".");
         FILE *f = dir ? fopen(path, "rb") : NULL;
         if (!f) {
-            printf("SKIP: reference table %s not found (../shared/reference beside the source tree)\n", path);
+            MF_FAIL_AT("reference table %s cannot be opened: it is vendored in tests/data/reference "
+                       "(or pass the directory as the argument)", path);
         } else {
             fclose(f);
             mf_table ref;

@@ -1,5 +1,5 @@
 /* test_moments.c -- LEAN/LEADR slope moments, Hery bump roughness, symmetric 2x2 eigen-solver and
- * Toksvig (mf_moments.h), with ERRATA N4, N5, H1, H2, H5, H6. */
+ * Toksvig (mf_moments.h), with docs/math.md, corrections C-N4, C-N5, C-H1, C-H2, C-H5, C-H6. */
 #include "mf_test.h"
 #include "mfkit/mf_moments.h"
 #include "mfkit/mf_rng.h"
@@ -90,7 +90,7 @@ static void test_lean_moments(void)
     CHECK_ABS(g.var_x, 0.5 * (s1 * s1 + s2 * s2 + s3 * s3), 1e-14);
     CHECK_ABS(g.mean_x, 0.15, 1e-15);
 
-    /* ERRATA N4: LEAN's B = n.xy/n.z is minus the height gradient; mfkit (LEADR) mean = -B. */
+    /* correction C-N4: LEAN's B = n.xy/n.z is minus the height gradient; mfkit (LEADR) mean = -B. */
     mf_vec3 n = hf_normal(&field_a, 0.3, 0.7);
     double hx, hy;
     hf_gradient(&field_a, 0.3, 0.7, &hx, &hy);
@@ -139,7 +139,7 @@ static void test_base_roughness_n5(void)
     CHECK_REL(mbp.m_xx, 1.0 / s, 2 * DBL_EPSILON);
     CHECK(isnan(mf_moments_add_beckmann(&flat, -0.1, 0.1).m_xx));
 
-    /* ERRATA N5(c): LEAN's Fig. 15/16 pack B / sc and M / sc^2 but add 1/s to the scaled M; after
+    /* correction C-N5(c): LEAN's Fig. 15/16 pack B / sc and M / sc^2 but add 1/s to the scaled M; after
      * unpacking (x sc^2) the base variance is sc^2 / s (16x for sc = 4).  Adding 1/(s sc^2) before
      * unscaling (or 1/s after) gives 1/s. */
     double sc = 4.0;
@@ -263,7 +263,7 @@ static void test_eigen(mf_pcg32 *rng)
         mf_sym2 a = {sc * (2 * mf_pcg32_next_double(rng) - 1), sc * (2 * mf_pcg32_next_double(rng) - 1),
                      sc * (2 * mf_pcg32_next_double(rng) - 1)};
         if (k % 4 == 0)
-            a.xy = 0.0; /* diagonal (ERRATA H6) */
+            a.xy = 0.0; /* diagonal (correction C-H6) */
         if (k % 8 == 1)
             a.yy = a.xx; /* equal diagonal */
         mf_eigen2 e = mf_sym2_eigen(a);
@@ -276,7 +276,7 @@ static void test_eigen(mf_pcg32 *rng)
         double rxy = e.l1 * e.v1[0] * e.v1[1] + e.l2 * e.v2[0] * e.v2[1];
         CHECK_ABS(rxy, a.xy, 8 * DBL_EPSILON * norm);
     }
-    /* ERRATA H6: diagonal covariance, b = 0.  Hery's code takes v = (1, (l - a)/b): 0/0 and x/0. */
+    /* correction C-H6: diagonal covariance, b = 0.  Hery's code takes v = (1, (l - a)/b): 0/0 and x/0. */
     mf_sym2 d = {0.04, 0.0, 0.01};
     double del = sqrt(d.xx * d.xx + 4 * d.xy * d.xy - 2 * d.xx * d.yy + d.yy * d.yy);
     double l1 = 0.5 * (d.xx + d.yy + del), l2 = 0.5 * (d.xx + d.yy - del);
@@ -316,7 +316,7 @@ static void test_eigen(mf_pcg32 *rng)
 
 static void test_hery(void)
 {
-    /* ERRATA H1: displacement w(u, v) on R(u, v) = (2.5 u, 0.6 v, 0).  Reference: the normals of
+    /* correction C-H1: displacement w(u, v) on R(u, v) = (2.5 u, 0.6 v, 0).  Reference: the normals of
      * the displaced surface P = R + w z from the cross product P_u x P_v = (-0.6 w_u, -2.5 w_v, 1.5),
      * sampled over one period; their world-slope covariance is var(w_u)/2.5^2, ... (slope per arc
      * length).  The printed s_u = w_u |R_u|^(1/2) gives var(w_u) * 2.5 instead. */
@@ -344,7 +344,7 @@ static void test_hery(void)
     CHECK(fabs(printed_xx / gw.var_x - 1.0) > 1.0);
     CHECK(isnan(mf_hery_slope_covariance(&dw, 0.0, lv).xx));
 
-    /* ERRATA H2: isotropic displacement, variance 0.02 per axis, m_orig = 0.2: Eq. 3/8 give
+    /* correction C-H2: isotropic displacement, variance 0.02 per axis, m_orig = 0.2: Eq. 3/8 give
      * m_eff = sqrt(m^2 + 2 sigma^2) = 0.28284; the printed Eq. 10 factor 1/2 gives 0.22361. */
     mf_sym2 iso = {0.02, 0.0, 0.02};
     mf_aniso_roughness r = mf_hery_bump_roughness(0.2, 0.2, iso);
@@ -355,7 +355,7 @@ static void test_hery(void)
     CHECK_ABS(printed, 0.22361, 1e-5);
     CHECK(fabs(printed - r.alpha1) > 0.05);
 
-    /* ERRATA H5: anisotropic base (0.3, 0.1) with displacement eigenvectors at 30 degrees.  The
+    /* correction C-H5: anisotropic base (0.3, 0.1) with displacement eigenvectors at 30 degrees.  The
      * general form decomposes diag(m^2) + 2 Sigma; Eq. 12 (m_orig,k^2 + l_k of 2 Sigma alone) is
      * only right when they are aligned.  Check: the anisotropic Beckmann returned is the Gaussian of
      * covariance diag(m^2/2) + Sigma (the exact convolution), rebuilt from alphas and directions. */

@@ -1,4 +1,4 @@
-/* test_ndf.c -- GGX, Beckmann, non-centred Gaussian NDFs (mf_ndf.h), with ERRATA N1, N2, L6. */
+/* test_ndf.c -- GGX, Beckmann, non-centred Gaussian NDFs (mf_ndf.h), with docs/math.md, corrections C-N1, C-N2, C-L6. */
 #include "mf_test.h"
 #include "mfkit/mf_ndf.h"
 #include "mfkit/mf_quad.h"
@@ -73,7 +73,7 @@ int main(void)
     CHECK(isnan(mf_ndf_p22(mf_ndf_make(MF_NDF_BECKMANN, NAN, 0.3), 0, 0)));
     CHECK(isnan(mf_ndf_d(mf_ndf_make(MF_NDF_GGX, 0.3, 0.3), mf_vec3_make(NAN, 0, 1))));
 
-    /* ERRATA N1: LEAN Eq. 1 prints the normalisation 1/(sqrt(2 pi)|S|); the 2D Gaussian needs
+    /* correction C-N1: LEAN Eq. 1 prints the normalisation 1/(sqrt(2 pi)|S|); the 2D Gaussian needs
      * 1/(2 pi sqrt|S|).  Our P22 integrates to 1 (box quadrature, 1e-12: converged rule) and its
      * peak is 1/(2 pi sqrt|S|); the printed peak would integrate to 125.33 for S = 0.02 I. */
     mf_gaussian_slopes g = {0.3, -0.2, 0.02, 0.02, 0.0};
@@ -81,10 +81,10 @@ int main(void)
     CHECK_REL(mf_gaussian_p22(&g, 0.3, -0.2), 1.0 / (2 * MF_PI * 0.02), 4 * DBL_EPSILON);
     double printed_peak = 1.0 / (sqrt(2 * MF_PI) * 0.02 * 0.02);
     CHECK(fabs(printed_peak * 2 * MF_PI * 0.02 - 1.0) > 100.0); /* the printed form is off by ~125x */
-    mf_gaussian_slopes gc = {-1.5, 1.3, 2.0, 0.5, -0.9}; /* correlated, the ERRATA L2 covariance */
+    mf_gaussian_slopes gc = {-1.5, 1.3, 2.0, 0.5, -0.9}; /* correlated, the correction C-L2 covariance */
     CHECK_REL(integrate_p22_box(&gc), 1.0, 1e-12);
 
-    /* ERRATA N2: cos^s ~ exp(-(s/2) tan^2) is normalised by s / (2 pi), not s / sqrt(2 pi):
+    /* correction C-N2: cos^s ~ exp(-(s/2) tan^2) is normalised by s / (2 pi), not s / sqrt(2 pi):
      * the Beckmann P22 with alpha = sqrt(2/s) equals (s / 2 pi) exp(-(s/2)|h|^2). */
     double s_exp = 64.0, alpha = mf_ndf_beckmann_alpha_from_blinn_phong(s_exp);
     CHECK_REL(alpha, sqrt(2.0 / 64.0), DBL_EPSILON);
@@ -95,7 +95,7 @@ int main(void)
     CHECK(isnan(mf_ndf_beckmann_alpha_from_blinn_phong(0.0)));
     CHECK(isnan(mf_ndf_blinn_phong_from_beckmann_alpha(-1.0)));
 
-    /* ERRATA L6: slopes are the height gradient (-m.x/m.z, -m.y/m.z); a mean slope of +0.3 in x
+    /* correction C-L6: slopes are the height gradient (-m.x/m.z, -m.y/m.z); a mean slope of +0.3 in x
      * tilts the mesonormal towards -x [Dupuy 2013, Eq. 11]. */
     double sl[2];
     mf_slope_from_normal(mf_vec3_make(0.6, 0.0, 0.8), sl);

@@ -2,7 +2,7 @@
 # test_plots: the accuracy studies (tiny grids) and analysis/plot.py end to end (issue 6).
 #   test_plots.sh SOURCE_DIR STUDY_SMITH STUDY_FURNACE STUDY_PROXY STUDY_LEADR_GRID
 # MFKIT_STUDY_LTC_TEXELS (environment; unset without the C++ dependencies) is run on the reference
-# table ../shared/reference/ltc_code_ggx_64.csv (skipped with a message when either is absent).
+# table tests/data/reference/ltc_code_ggx_64.csv (vendored: if it is missing, the test fails).
 # MFKIT_STUDY_SH_IRRADIANCE and MFKIT_STUDY_HALF (environment, set by tests/CMakeLists.txt; the
 # latter only with the C++ dependencies) name study_sh_irradiance and study_half.
 # Runs each study into a scratch directory, checks the provenance header, plots with
@@ -31,12 +31,11 @@ done
 # study_ltc_texels: 4 x 4 texels of the reference table paired with itself (every difference must be
 # exactly 0), its provenance header, its error paths (no output left behind).
 ltc_figs=
-ref=$src/../shared/reference/ltc_code_ggx_64.csv
+ref=$src/tests/data/reference/ltc_code_ggx_64.csv
+[ -f "$ref" ] || fail "the vendored reference table $ref is missing"
 texels=${MFKIT_STUDY_LTC_TEXELS:-}
 if [ -z "$texels" ]; then
     echo "test_plots: MFKIT_STUDY_LTC_TEXELS not set (study_ltc_texels needs MFKIT_WITH_CXX_DEPS=ON): its figures are not checked"
-elif ! [ -f "$ref" ]; then
-    echo "test_plots: $ref not found: study_ltc_texels and its figures are not checked"
 else
     lt=$tmp/data/ltc_texels.csv
     "$texels" --help | grep -q '^usage: study_ltc_texels' || fail "study_ltc_texels --help"
@@ -81,11 +80,9 @@ awk -F, 'NR > 2 && $2 == "none" && !($10 + 0 <= 0.09375 + 1e-12) { print "norm_e
 ! ls "$tmp"/bad.csv* >/dev/null 2>&1 || fail "study_sh_irradiance left output behind after an error"
 sh_figs="sh_irradiance_error sh_irradiance_curves"
 half_figs=
-half_ref=$src/../shared/reference/ltc_code_ggx_64.csv
+half_ref=$ref
 if [ -z "${MFKIT_STUDY_HALF:-}" ]; then
     echo "test_plots: study_half not built (MFKIT_WITH_CXX_DEPS=OFF): its figures are not checked"
-elif ! [ -f "$half_ref" ]; then
-    echo "test_plots: $half_ref not found: study_half and its figures are not checked"
 else
     hc=$tmp/data/half_error.csv
     "$MFKIT_STUDY_HALF" --help | grep -q '^usage: study_half' || fail "study_half --help"

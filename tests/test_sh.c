@@ -142,7 +142,7 @@ int main(void)
     mf_pcg32_seed(&rng, seed, 11);
 
     /* ---- constants: the literals are the exact forms to 1 ulp; R&H's 6-digit values are
-     * their correct roundings (|printed - exact| <= 5e-7, ERRATA L9) ---- */
+     * their correct roundings (|printed - exact| <= 5e-7, docs/math.md, correction C-L9) ---- */
     {
         const double exact[5] = {1.0 / (2.0 * sqrt(MF_PI)), sqrt(3.0 / (4.0 * MF_PI)), sqrt(15.0 / (4.0 * MF_PI)),
                                  sqrt(5.0 / (16.0 * MF_PI)), sqrt(15.0 / (16.0 * MF_PI))};
@@ -251,7 +251,7 @@ int main(void)
     }
 
     /* ---- mf_sh_irradiance = R&H Eq. 13 written out with the exact constants (16 eps of the
-     * sum of |terms|), and with the printed 6-digit constants to 2e-6 of it (ERRATA L9) ---- */
+     * sum of |terms|), and with the printed 6-digit constants to 2e-6 of it (correction C-L9) ---- */
     for (int k = 0; k < 200; ++k) {
         double L[MF_SH_COEFFS];
         for (int i = 0; i < MF_SH_COEFFS; ++i)
@@ -320,7 +320,7 @@ int main(void)
                worst / P, 3.0 / 32.0, at, emin / P, at_min);
     }
 
-    /* ---- ERRATA L1: three lights P = 1, 2.5, 0.7.  Corrected L00 = Y00 (1 + 2.5 + 0.7) =
+    /* ---- correction C-L1: three lights P = 1, 2.5, 0.7.  Corrected L00 = Y00 (1 + 2.5 + 0.7) =
      * 1.184798 (1.184799 with the 6-digit constant); the printed recurrence L00 += L00 + 0.282095 P
      * gives 2.736321. ---- */
     {
@@ -338,13 +338,13 @@ int main(void)
         CHECK_ABS(corrected6, 1.184799, 5e-7);
         CHECK_ABS(printed, 2.736321, 1e-6);
         CHECK(fabs(c[0] - printed) > 1.5);
-        printf("ERRATA L1: L00 = %.6f (printed recurrence %.6f)\n", c[0], printed);
+        printf("correction C-L1: L00 = %.6f (printed recurrence %.6f)\n", c[0], printed);
         /* NaN propagation for invalid lights */
         mf_sh_add_directional(c, mf_vec3_make(0, 0, 2), 1.0);
         CHECK(isnan(c[0]) && isnan(c[5]));
     }
 
-    /* ---- exact at order 2 (ERRATA, additional observations): L = max(0, z)^2 and L = 1 + z.
+    /* ---- exact at order 2 (docs/math.md, correction C-X1): L = max(0, z)^2 and L = 1 + z.
      * The split projection rule integrates max(0,z)^2 Y_i exactly (polynomial per hemisphere),
      * so E_SH must equal the brute-force convolution to the latter's tolerance (1e-12). ---- */
     {
@@ -361,7 +361,7 @@ int main(void)
         }
         irradiance_error(f_one_plus_z, 0, c, 30, &max_err, &max_e, &max_rel);
         CHECK_ABS(max_err, 0.0, 1e-12);
-        /* not exact: max(0, z) and max(0, z)^4 (l >= 4 even parts): ERRATA quotes max errors
+        /* not exact: max(0, z) and max(0, z)^4 (l >= 4 even parts): correction C-X1 quotes max errors
          * 0.01636 and 0.01496 (absolute, for unit-scale L); the extremes are at the poles
          * (an independent mpmath scan of n.z in [-1, 1] gives the same values and places). */
         CHECK(mf_sh_project_fn(f_zplus, NULL, 8, c, &err) == MF_OK);

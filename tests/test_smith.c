@@ -1,4 +1,4 @@
-/* test_smith.c -- Smith Lambda, G1, G2 (mf_smith.h), with ERRATA L2, L3, L4 and the GGX
+/* test_smith.c -- Smith Lambda, G1, G2 (mf_smith.h), with docs/math.md, corrections C-L2, C-L3, C-L4 and the GGX
  * small-angle note. */
 #include "mf_test.h"
 #include "mfkit/mf_smith.h"
@@ -27,7 +27,7 @@ int main(void)
     double below = mf_smith_lambda_beckmann_nu(nextafter(2.0, 0.0)), at = mf_smith_lambda_beckmann_nu(2.0);
     CHECK_REL(below, at, 1e-14);
 
-    /* ERRATA L3: nu <= 0 means below the (meso)surface: Lambda = +inf, G2 = 0.  The printed
+    /* correction C-L3: nu <= 0 means below the (meso)surface: Lambda = +inf, G2 = 0.  The printed
      * formulas give finite negative values there (-1.1996 and -1.4142 at nu = -0.5). */
     CHECK(isinf(mf_smith_lambda_beckmann_nu(-0.5)) && mf_smith_lambda_beckmann_nu(-0.5) > 0);
     CHECK(isinf(mf_smith_lambda_beckmann_nu(0.0)));
@@ -39,7 +39,7 @@ int main(void)
     }
     CHECK(isnan(mf_smith_lambda_beckmann_nu(NAN)));
 
-    /* ERRATA L4: Walter's rational form is negative on (1.548, 1.6); mfkit clamps to 0 so G1 <= 1. */
+    /* correction C-L4: Walter's rational form is negative on (1.548, 1.6); mfkit clamps to 0 so G1 <= 1. */
     for (double nu = 1.549; nu < 1.6; nu += 0.001) {
         double printed = (1.0 - 1.259 * nu + 0.396 * nu * nu) / (3.535 * nu + 2.181 * nu * nu);
         CHECK(printed < 0.0);
@@ -49,8 +49,8 @@ int main(void)
     CHECK_REL(mf_smith_lambda_beckmann_walter_nu(0.5), (1 - 1.259 * 0.5 + 0.396 * 0.25) / (3.535 * 0.5 + 2.181 * 0.25),
               DBL_EPSILON);
 
-    /* ERRATA L2: for non-centred slopes the closed form is Smith's construction relative to the
-     * mean plane.  Configuration of the erratum: mean (0, 0.3), S = [2, 0.5, -0.9], theta 85 deg,
+    /* correction C-L2: for non-centred slopes the closed form is Smith's construction relative to the
+     * mean plane.  Configuration of C-L2: mean (0, 0.3), S = [2, 0.5, -0.9], theta 85 deg,
      * phi 300 deg: closed form 1.031053385642978 (mpmath, 40 digits), the literal printed
      * definition tan(theta) (cot - mu) x closed = 4.0928846743111. 1e-13: nu's own rounding. */
     mf_gaussian_slopes g = {0.0, 0.3, 2.0, 0.5, -0.9};
@@ -73,7 +73,7 @@ int main(void)
             CHECK_ABS(mf_smith_lambda_gaussian_walter(&gb, d), mf_smith_lambda_beckmann_walter(0.3, 0.05, d), 1e-14);
         }
     /* A direction below the geometric horizon but above a tilted mesosurface has finite Lambda
-     * (ERRATA L3): mean slope (2, 0), theta 100 deg towards -x. */
+     * (correction C-L3): mean slope (2, 0), theta 100 deg towards -x. */
     mf_gaussian_slopes tilt = {2.0, 0.0, 0.1, 0.1, 0.0};
     mf_vec3 under = mf_vec3_spherical(100.0 * MF_PI / 180.0, MF_PI);
     CHECK(isfinite(mf_smith_lambda_gaussian(&tilt, under)));
@@ -86,7 +86,7 @@ int main(void)
     CHECK(mf_smith_lambda_gaussian(&zero, mf_vec3_spherical(1.0, 0.3)) == 0.0);
     CHECK(isinf(mf_smith_lambda_gaussian(&zero, mf_vec3_spherical(1.5, 0.0))));
 
-    /* GGX near normal incidence (ERRATA, additional observations): alpha 1e-3, theta 0.001 deg:
+    /* GGX near normal incidence (docs/math.md, correction C-X2): alpha 1e-3, theta 0.001 deg:
      * Lambda = (alpha tan)^2 / 4 to first order = 7.6e-17; the naive (-1 + sqrt(1 + t))/2 gives 0. */
     double th = 0.001 * MF_PI / 180.0;
     double t = 1e-3 * tan(th);

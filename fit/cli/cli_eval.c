@@ -29,7 +29,7 @@ typedef struct {
     mf_polygon_sided sided;
     long grid;                      /* leadr: N of the N x N grid */
     double lambda;                  /* leadr: extent of the grid in standard deviations */
-    mf_leadr_grid_layout layout;    /* leadr: end points or cell centres (ERRATA L7) */
+    mf_leadr_grid_layout layout;    /* leadr: end points or cell centres (docs/math.md, correction C-L7) */
 } eval_opts;
 
 /* Options a function accepts (eval_function.options). */
@@ -303,7 +303,7 @@ void cli_eval_usage(FILE *f)
             "  --grid N                leadr: the N x N Gaussian grid of LEADR Sec. 5.1 (default 5)\n"
             "  --lambda L              leadr: the grid covers [-L, L] standard deviations (default 1.8)\n"
             "  --grid-layout end-points|cell-centres\n"
-            "                          leadr: the two readings of Sec. 5.1 (ERRATA L7; default end-points)\n\n"
+            "                          leadr: the two readings of Sec. 5.1 (docs/math.md, correction C-L7; default end-points)\n\n"
             "Polygons: n (3..8) vertices v0..v7 (positions relative to the shading point); columns v3..v7\n"
             "may be absent and empty vertex fields are unused.\n\n"
             "functions (inputs -> outputs):\n");

@@ -243,7 +243,7 @@ static void proxy_usage(FILE *f)
 {
     fprintf(f,
             "usage: mfkit fit ggx-proxy [--out DIR] [--size N] [--quiet]\n\n"
-            "Tabulates the exact GGX proxy roughness alpha'(alpha, dh) of Kaplanyan 2016 Eq. 19 (ERRATA K3)\n"
+            "Tabulates the exact GGX proxy roughness alpha'(alpha, dh) of Kaplanyan 2016 Eq. 19 (docs/math.md, correction C-K3)\n"
             "on an N x N grid log-spaced in alpha in [1e-3, 1] and dh in [1e-3, 10], fits (Ceres, analytic\n"
             "Jacobian, least squares of the relative error of alpha') the shader form\n"
             "  alpha'^2 = alpha^2 + dh^2 R(x), x = dh^2/(alpha^2 + dh^2), R = (1-x)/3 + x/pi + x(1-x) c/(1+q x)\n"

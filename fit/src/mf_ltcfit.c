@@ -161,7 +161,7 @@ static inline dvec3 dnormalize(dvec3 a)
  * with its derivatives: the polygon is transformed by the positively scaled inverse
  *   M^-1 ~ [[1, 0, -b], [0, (a - b d)/c, 0], [-d, 0, a]]      ((a - b d) M^-1, det M = c (a - b d))
  * (the integral is invariant under positive scalings of M^-1), clipped at z >= 0 after the
- * transform (ERRATA T4), and integrated by Lambert's edge sum
+ * transform (docs/math.md, correction C-T4), and integrated by Lambert's edge sum
  *   E = 1/(2 pi) sum_i theta_i (u_i x u_i+1).z / |u_i x u_i+1|,  theta_i = atan2(|u_i x u_i+1|, u_i.u_i+1)
  * [Nahmias Eq. 2.23, 2.32-2.33] (signed: positive for the front-facing lights used here). */
 static dual ltc_integral_dual(const mf_polygon *p, const double prm[4])

@@ -252,7 +252,7 @@ mf_status mf_proxyfit_run(const mf_proxyfit_options *o, mf_proxyfit_result *resu
     char buf[MF_TABLE_TEXT_LEN];
     snprintf(buf, sizeof buf, "%.17g %.17g", p[0], p[1]);
     if (mf_table_set_meta(&t, "tool", "mfkit fit ggx-proxy") != MF_OK ||
-        mf_table_set_meta(&t, "quantity", "GGX proxy roughness alpha' (Kaplanyan 2016 Eq. 19, ERRATA K3)") != MF_OK ||
+        mf_table_set_meta(&t, "quantity", "GGX proxy roughness alpha' (Kaplanyan 2016 Eq. 19, docs/math.md, correction C-K3)") != MF_OK ||
         mf_table_set_meta(&t, "axes", "alpha = 10^log10_alpha, dh = 10^log10_dh (full width of the square)") != MF_OK ||
         mf_table_set_meta(&t, "fit_form", "a'^2 = a^2 + dh^2 R(x), x = dh^2/(a^2+dh^2), R = (1-x)/3 + x/pi + x(1-x) c/(1+q x)") != MF_OK ||
         mf_table_set_meta(&t, "fit_coefficients_c_q", buf) != MF_OK) {
@@ -392,7 +392,7 @@ static void json_err(sbuf *b, const char *name, const mf_proxyfit_error *e, int 
 static void emit_json(sbuf *b, const mf_proxyfit_options *o, const mf_proxyfit_result *r, const char *tool)
 {
     sb_printf(b, "{\n  \"tool\": \"%s\",\n", tool ? tool : "mfkit fit ggx-proxy");
-    sb_printf(b, "  \"quantity\": \"GGX proxy roughness alpha'(alpha, dh), Kaplanyan 2016 Eq. 19 (ERRATA K3)\",\n");
+    sb_printf(b, "  \"quantity\": \"GGX proxy roughness alpha'(alpha, dh), Kaplanyan 2016 Eq. 19 (docs/math.md, correction C-K3)\",\n");
     sb_printf(b, "  \"form\": \"alpha'^2 = alpha^2 + dh^2 R(x), x = dh^2/(alpha^2 + dh^2), "
                  "R(x) = (1 - x)/3 + x/pi + x (1 - x) c / (1 + q x)\",\n");
     sb_printf(b, "  \"coefficients\": {\"c\": %.17g, \"q\": %.17g},\n", r->coef[0], r->coef[1]);

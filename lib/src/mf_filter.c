@@ -13,7 +13,7 @@ void mf_filter_half_slope(mf_vec3 wo, mf_vec3 wi, double h[2])
         h[0] = h[1] = NAN;
         return;
     }
-    /* [Kaplanyan 2016, Eq. 3] h_w = (i + o) / (n . (i + o)), T = identity; mfkit sign (L6) */
+    /* [Kaplanyan 2016, Eq. 3] h_w = (i + o) / (n . (i + o)), T = identity; mfkit sign (C-L6) */
     h[0] = -s.x / s.z;
     h[1] = -s.y / s.z;
 }
@@ -65,7 +65,7 @@ mf_sym2 mf_filter_footprint_covariance(const double dh_u[2], const double dh_v[2
         mf_sym2 bad = {NAN, NAN, NAN};
         return bad;
     }
-    /* [Kaplanyan 2016, Eq. 13] corrected (ERRATA K4): J^T J = sum of outer products */
+    /* [Kaplanyan 2016, Eq. 13] corrected (docs/math.md, correction C-K4): J^T J = sum of outer products */
     double s_sq = s * s;
     mf_sym2 p = {s_sq * (dh_u[0] * dh_u[0] + dh_v[0] * dh_v[0]), s_sq * (dh_u[0] * dh_u[1] + dh_v[0] * dh_v[1]),
                  s_sq * (dh_u[1] * dh_u[1] + dh_v[1] * dh_v[1])};
@@ -308,7 +308,7 @@ static double unit_rect_mean(rect_side u, rect_side v)
         double c_sq = 1.0 + vm * vm;
         return strip_integral(u.a0, u.a1, u.w, sqrt(c_sq), c_sq) / (MF_PI * u.w);
     }
-    /* Closed form [Kaplanyan 2016, Appendix A, ERRATA K1], regrouped by edges (docs/math.md). */
+    /* Closed form [Kaplanyan 2016, Appendix A, correction C-K1], regrouped by edges (docs/math.md). */
     double e1 = edge_term(u.a1, v.a0, v.a1, v.w), e2 = edge_term(u.a0, v.a0, v.a1, v.w);
     double e3 = edge_term(v.a1, u.a0, u.a1, u.w), e4 = edge_term(v.a0, u.a0, u.a1, u.w);
     double sum = (e1 - e2) + (e3 - e4);
@@ -366,7 +366,7 @@ double mf_filter_ggx_proxy_alpha(double alpha, double dh)
         return NAN;
     if (dh == 0.0)
         return alpha;
-    /* [Kaplanyan 2016, Eq. 19] solved exactly (ERRATA K3):
+    /* [Kaplanyan 2016, Eq. 19] solved exactly (correction C-K3):
      *   alpha'^2 = dh q / (4 atan(dh / q)),  q = sqrt(4 alpha^2 + dh^2).
      * Rearranged with dh q = (dh^2 / t) ... = 4 (alpha^2 + dh^2/4) t: no 0/0 as dh -> 0. */
     double q = hypot(2.0 * alpha, dh), t = dh / q;

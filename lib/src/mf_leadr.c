@@ -17,7 +17,7 @@ static int lights_valid(const mf_leadr_light *lights, int n_lights)
     return 1;
 }
 
-/* Lambda(wo), +inf when wo is on or below the mesosurface (ERRATA L3). */
+/* Lambda(wo), +inf when wo is on or below the mesosurface (docs/math.md, correction C-L3). */
 static double lambda_view(const mf_gaussian_slopes *g, mf_vec3 wo)
 {
     return mf_smith_lambda_gaussian(g, wo);
@@ -61,7 +61,7 @@ mf_status mf_leadr_irradiance_sh(const mf_gaussian_slopes *g, mf_vec3 wo, const 
     double lo = lambda_view(g, wo);
     if (isinf(lo))
         return MF_OK;
-    /* [Dupuy 2013, Algorithm 2], ERRATA L1 fixed inside mf_sh_add_directional */
+    /* [Dupuy 2013, Algorithm 2], correction C-L1 fixed inside mf_sh_add_directional */
     for (int k = 0; k < n_lights; ++k) {
         double li = mf_smith_lambda_gaussian(g, lights[k].wi);
         if (isinf(li))
@@ -95,7 +95,7 @@ mf_status mf_leadr_grid_init(mf_leadr_grid *grid, int n, double lambda, mf_leadr
         grid->spacing = 2.0 * lambda;
         grid->p[0] = 0.0;
     } else {
-        /* [Dupuy 2013, Sec. 5.1], the two readings of ERRATA L7; p_{N-1-j} = -p_j exactly */
+        /* [Dupuy 2013, Sec. 5.1], the two readings of correction C-L7; p_{N-1-j} = -p_j exactly */
         grid->spacing = (layout == MF_LEADR_GRID_END_POINTS) ? 2.0 * lambda / (n - 1) : 2.0 * lambda / n;
         for (int j = 0; j < n; ++j) {
             double t = (layout == MF_LEADR_GRID_END_POINTS) ? (2.0 * j - (n - 1)) / (n - 1)
@@ -157,7 +157,7 @@ double mf_leadr_grid_sample_area(const mf_leadr_grid *grid, const mf_gaussian_sl
     if (!grid_valid(grid) || !mf_gaussian_valid(g))
         return NAN;
     double s = grid->spacing * sqrt(fmax(g->var_x, g->var_y));
-    return s * s; /* [Dupuy 2013, Sec. 5.2], spacing per ERRATA L7 */
+    return s * s; /* [Dupuy 2013, Sec. 5.2], spacing per correction C-L7 */
 }
 
 /* ---- shading -------------------------------------------------------------------------- */
@@ -207,7 +207,7 @@ mf_status mf_leadr_specular_env(const mf_leadr_grid *grid, const mf_gaussian_slo
                 continue;
             mf_vec3 wi = mf_vec3_sub(mf_vec3_scale(wn, 2.0 * cos_no), wo); /* [Eq. 18] */
             double li = mf_smith_lambda_gaussian(g, wi);
-            if (isinf(li)) /* wi on or below the mesosurface: shadowed (ERRATA L3) */
+            if (isinf(li)) /* wi on or below the mesosurface: shadowed (correction C-L3) */
                 continue;
             double cos_ng = wn.z;
             /* [Dupuy 2013, Sec. 5.2]: alpha = 4 |wn.wo| |wn.g|^3 A */
@@ -215,7 +215,7 @@ mf_status mf_leadr_specular_env(const mf_leadr_grid *grid, const mf_gaussian_slo
             double radiance = env(wi, solid_angle, user);
             if (!isfinite(radiance))
                 return MF_ERR_DOMAIN;
-            /* [Dupuy 2013, Eq. 22 / Algorithm 1], ERRATA L8: wn per sample; F(wn.wi) = F(wn.wo) */
+            /* [Dupuy 2013, Eq. 22 / Algorithm 1], correction C-L8: wn per sample; F(wn.wi) = F(wn.wo) */
             double f = mf_fresnel_eval(fresnel, cos_no);
             sum += w * radiance * f * (cos_no / cos_ng) / (1.0 + lo + li);
         }

@@ -40,7 +40,7 @@ double mf_ltc_eval(const mf_ltc *ltc, mf_vec3 w)
     double r = mf_vec3_length(u);
     if (!(u.z > 0.0))
         return 0.0;
-    /* D_o(u/r) |det M^-1| / r^3 with D_o(wo) = wo.z / pi [Nahmias Eq. 2.21, 2.24; ERRATA T2];
+    /* D_o(u/r) |det M^-1| / r^3 with D_o(wo) = wo.z / pi [Nahmias Eq. 2.21, 2.24; docs/math.md, correction C-T2];
      * written as (u.z / r) (|det M^-1| / r^3) so that neither factor overflows first. */
     return (u.z / r) * (ltc->abs_det_inv / (r * r * r)) * MF_INV_PI;
 }
@@ -77,7 +77,7 @@ double mf_ltc_integrate_polygon(const mf_ltc *ltc, const mf_polygon *p, mf_polyg
     if (!transform_polygon(ltc, p, &po) || (sided != MF_POLYGON_ONE_SIDED && sided != MF_POLYGON_TWO_SIDED))
         return NAN;
     /* integral over P of D = integral over P_o of D_o [Nahmias Eq. 2.23]: the normalised cosine
-     * integral of P_o clipped to z_o >= 0 AFTER the transform (ERRATA T3, T4). */
+     * integral of P_o clipped to z_o >= 0 AFTER the transform (corrections C-T3, C-T4). */
     double e = orientation_sign(ltc) * mf_polygon_integrate_cosine_signed(&po);
     return sided == MF_POLYGON_TWO_SIDED ? fabs(e) : fmax(0.0, e);
 }

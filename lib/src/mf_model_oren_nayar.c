@@ -17,7 +17,7 @@
  * mf_sample_ndf_normal), and u runs over 2 x 2 panels of the 8-point Gauss-Legendre rule
  * (16 x 16 = 256 nodes).  The <.,.> kinks make it converge slowly: its accuracy has not been
  * measured separately (the fitter's albedo quadrature sees its values as exact).  mf_leadr_diffuse is not used: its grid is LEADR's truncated, renormalised one
- * (docs/math.md, "Grid"), which does not converge to the integral at a fixed lambda, and it evaluates the
+ * (docs/math.md, correction C-L7), which does not converge to the integral at a fixed lambda, and it evaluates the
  * irradiance callback (with an erfc per call) for every slope sample.
  * No sampler: the fitter uses cosine-hemisphere sampling (the lobe is close to Lambert).
  */

@@ -21,7 +21,7 @@ mf_slope_moments mf_moments_from_slope(double sx, double sy)
 {
     if (!isfinite(sx) || !isfinite(sy))
         return moments_nan();
-    /* [Olano 2010, Eq. 3-4] in the mfkit sign (ERRATA N4). */
+    /* [Olano 2010, Eq. 3-4] in the mfkit sign (docs/math.md, correction C-N4). */
     mf_slope_moments m = {sx, sy, sx * sx, sx * sy, sy * sy};
     return m;
 }
@@ -36,7 +36,7 @@ mf_slope_moments mf_moments_from_normal(mf_vec3 n)
 
 mf_slope_moments mf_moments_from_lean(double bx, double by, double mxx, double mxy, double myy)
 {
-    mf_slope_moments m = {-bx, -by, mxx, mxy, myy}; /* ERRATA N4: LEADR mean = -B */
+    mf_slope_moments m = {-bx, -by, mxx, mxy, myy}; /* correction C-N4: LEADR mean = -B */
     if (!moments_finite(&m))
         return moments_nan();
     return m;
@@ -181,7 +181,7 @@ mf_eigen2 mf_sym2_eigen(mf_sym2 s)
         e.l1 = e.l2 = e.v1[0] = e.v1[1] = e.v2[0] = e.v2[1] = NAN;
         return e;
     }
-    if (b == 0.0) { /* diagonal (ERRATA H6): exact eigenvalues, axis-aligned vectors */
+    if (b == 0.0) { /* diagonal (correction C-H6): exact eigenvalues, axis-aligned vectors */
         int x_first = a >= c;
         e.l1 = x_first ? a : c;
         e.l2 = x_first ? c : a;
@@ -248,8 +248,8 @@ mf_sym2 mf_hery_slope_covariance(const mf_slope_moments *dw, double len_ru, doub
     mf_gaussian_slopes g = mf_moments_to_gaussian(dw);
     if (!mf_gaussian_valid(&g))
         return bad;
-    /* Eq. 6, 8, 10 with the slope per unit arc length w_u / |R_u| (ERRATA H1; the printed
-     * Eq. 4-5 multiply by |R_u|^(1/2)).  No factor 1/2 here (ERRATA H2: see bump_roughness). */
+    /* Eq. 6, 8, 10 with the slope per unit arc length w_u / |R_u| (correction C-H1; the printed
+     * Eq. 4-5 multiply by |R_u|^(1/2)).  No factor 1/2 here (correction C-H2: see bump_roughness). */
     mf_sym2 s = {g.var_x / (len_ru * len_ru), g.cov_xy / (len_ru * len_rv), g.var_y / (len_rv * len_rv)};
     return s;
 }
@@ -261,7 +261,7 @@ mf_aniso_roughness mf_hery_bump_roughness(double m_orig_x, double m_orig_y, mf_s
         mf_aniso_roughness bad = {NAN, NAN, {NAN, NAN}, {NAN, NAN}};
         return bad;
     }
-    /* ERRATA H2 + H5: roughness matrix diag(m_orig^2) + 2 Sigma; alpha_k = sqrt(l_k).
+    /* corrections C-H2 and C-H5: roughness matrix diag(m_orig^2) + 2 Sigma; alpha_k = sqrt(l_k).
      * Written as the covariance diag(m_orig^2 / 2) + Sigma so that alpha_k = sqrt(2 l_k). */
     mf_sym2 cov = {0.5 * m_orig_x * m_orig_x + slope_cov.xx, slope_cov.xy, 0.5 * m_orig_y * m_orig_y + slope_cov.yy};
     return mf_roughness_from_covariance(cov);

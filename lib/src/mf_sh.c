@@ -22,7 +22,7 @@ void mf_sh_eval(mf_vec3 w, double y[MF_SH_COEFFS])
         fill_nan(y);
         return;
     }
-    /* [R&H 2001, Eq. 3], exact constants (ERRATA L9) */
+    /* [R&H 2001, Eq. 3], exact constants (docs/math.md, correction C-L9) */
     y[0] = MF_SH_Y00;
     y[1] = MF_SH_Y1 * w.y;
     y[2] = MF_SH_Y1 * w.z;
@@ -86,7 +86,7 @@ void mf_sh_add_directional(double c[MF_SH_COEFFS], mf_vec3 d, double power)
         return;
     }
     mf_sh_eval(d, y); /* NaNs for a non-unit d, which then propagate */
-    /* [Dupuy 2013, Algorithm 2] with ERRATA L1: every line is c += Y P, including L00 */
+    /* [Dupuy 2013, Algorithm 2] with correction C-L1: every line is c += Y P, including L00 */
     for (int i = 0; i < MF_SH_COEFFS; ++i)
         c[i] += power * y[i];
 }

@@ -5,7 +5,7 @@ double mf_smith_lambda_beckmann_nu(double nu)
 {
     if (isnan(nu))
         return NAN;
-    if (nu <= 0.0) /* at or below the (meso)surface: fully masked (ERRATA L3) */
+    if (nu <= 0.0) /* at or below the (meso)surface: fully masked (docs/math.md, correction C-L3) */
         return INFINITY;
     if (nu < 2.0) /* [Dupuy 2013, after Eq. 15] directly; cancellation costs < 1 digit here */
         return exp(-nu * nu) / (2.0 * nu * MF_SQRT_PI) - 0.5 * erfc(nu);
@@ -34,7 +34,7 @@ double mf_smith_lambda_beckmann_walter_nu(double nu)
     if (nu >= 1.6)
         return 0.0;
     /* [Walter 2007, Eq. 27] as 1/G1 - 1, printed in [Dupuy 2013, after Eq. 15]; clamped at 0
-     * because the numerator is negative on (1.5497, 1.6) (ERRATA L4). */
+     * because the numerator is negative on (1.5497, 1.6) (correction C-L4). */
     double l = (1.0 - 1.259 * nu + 0.396 * nu * nu) / (3.535 * nu + 2.181 * nu * nu);
     return l > 0.0 ? l : 0.0;
 }

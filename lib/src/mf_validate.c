@@ -31,7 +31,7 @@ static const double k_phis[] = {0.0, 0.7, 0.5 * MF_PI, 4.0};
 
 static const double k_means[][2] = {{0.0, 0.0}, {0.3, 0.0}, {0.0, -0.3}, {1.0, -0.5}, {-1.5, 1.3}, {2.0, 0.0}};
 /* var_x, var_y, cov_xy: Beckmann alpha = 0.1 and 1 (var = alpha^2/2), 1:10 anisotropy,
- * a correlated one (the ERRATA L2 configuration), alpha = 1e-4, and a 1:100 one. */
+ * a correlated one (the configuration of docs/math.md, correction C-L2), alpha = 1e-4, and a 1:100 one. */
 static const double k_covs[][3] = {{0.005, 0.005, 0.0}, {0.5, 0.5, 0.0}, {0.5, 0.005, 0.0},
                                    {2.0, 0.5, -0.9}, {5e-9, 5e-9, 0.0}, {0.02, 2e-6, 0.0}};
 #define N_MEANS ((int)(sizeof k_means / sizeof k_means[0]))
@@ -278,7 +278,7 @@ typedef struct {
 
 /* Eq. 16's integrand over wi, written over the half vector wh: dwi = 4 (wo.wh) dwh
  * [Walter 2007, Eq. 14] and dwh = wh.z^3 d^2s.  Every wi of the sphere with D(wh) > 0 is the
- * mirror of exactly one wh with wo.wh > 0 and wh.z > 0 (ERRATA L5: the full sphere). */
+ * mirror of exactly one wh with wo.wh > 0 and wh.z > 0 (correction C-L5: the full sphere). */
 static double leadr_integrand(double sx, double sy, void *user)
 {
     const leadr_ctx *p = user;
@@ -347,7 +347,7 @@ static double smith_integrand(double y, void *user)
     return y * unit_marginal(s->family, s->a + y);
 }
 
-/* Smith's Lambda relative to the mean plane (ERRATA L2):
+/* Smith's Lambda relative to the mean plane (correction C-L2):
  * Lambda = 1/(c - mu) * integral_c^inf (x - c) P2(x) dx = (1/a) integral_0^inf y p(a + y) dy
  * with a = (c - mu)/scale, c = cot(theta), in units of the marginal's scale. */
 static double smith_lambda_integral(int family, double a, int *failed)
@@ -396,7 +396,7 @@ static void check_lambda(mf_check *c)
                     }
             }
     /* non-centred Gaussian, including directions below the geometric horizon but above the
-     * mesosurface (nu > 0, ERRATA L3) */
+     * mesosurface (nu > 0, correction C-L3) */
     static const double thetas_g[] = {15.0, 45.0, 75.0, 89.0, 89.99, 95.0, 120.0};
     for (int im = 0; im < N_MEANS; ++im)
         for (int ic = 0; ic < N_COVS; ++ic)
@@ -430,7 +430,7 @@ static void check_lambda(mf_check *c)
 static void check_walter(mf_check *c)
 {
     check_init(c, "walter_g1_error",
-               "max relative |G1 Walter - G1 exact| over nu in (0, 10], Beckmann/Gaussian (ERRATA L4: 0.31 %)",
+               "max relative |G1 Walter - G1 exact| over nu in (0, 10], Beckmann/Gaussian (docs/math.md, correction C-L4: 0.31 %)",
                3.2e-3);
     char at[200];
     for (int i = 1; i <= 20000; ++i) {
@@ -867,7 +867,7 @@ static double sph_outer(double phi, void *vctx)
 static void check_ltc_normalisation(mf_check *c)
 {
     check_init(c, "ltc_normalisation",
-               "|integral of D(w) dw over the sphere - 1| (ERRATA T2 Jacobian), 8 matrices incl. det<0, shear, 1:1e3",
+               "|integral of D(w) dw over the sphere - 1| (docs/math.md, correction C-T2 Jacobian), 8 matrices incl. det<0, shear, 1:1e3",
                1e-9);
     char at[200], name[64];
     for (int i = 0; i < N_VMATS; ++i) {
@@ -961,12 +961,12 @@ static double rect_outer(double s, void *vctx)
     return integrate_pieces(rect_inner, c, c->y0, c->y1, pts, n, 1e-12, 0.0, &c->failed);
 }
 
-/* The closed-form mean of GGX's P22 over rectangles [Kaplanyan 2016, Eq. 16, App. A; ERRATA K1]
+/* The closed-form mean of GGX's P22 over rectangles [Kaplanyan 2016, Eq. 16, App. A; correction C-K1]
  * against nested adaptive Gauss-Kronrod of P22 itself (independent of the antiderivative). */
 static void check_ggx_rect(mf_check *c)
 {
     check_init(c, "ggx_rect_vs_quadrature",
-               "GGX slope-density mean over rectangles (Eq. 16, App. A, ERRATA K1) vs nested adaptive quadrature",
+               "GGX slope-density mean over rectangles (Eq. 16, App. A, docs/math.md, correction C-K1) vs nested adaptive quadrature",
                1e-10);
     static const double k_rect_alphas[][2] = {{1e-3, 1e-3}, {0.1, 0.01}, {1.0, 0.5}};
     /* centre and full width in units of alpha_x, alpha_y: tiny at the peak, unit, wide, near the
@@ -1055,12 +1055,12 @@ static void check_beckmann_convolution(mf_check *c)
 }
 
 /* The exact proxy alpha' satisfies the peak equation 1/(pi alpha'^2) = mean of P22 over the
- * centred square of width dh [Kaplanyan 2016, Eq. 19; ERRATA K3], and the joint anisotropic solve
+ * centred square of width dh [Kaplanyan 2016, Eq. 19; correction C-K3], and the joint anisotropic solve
  * 1/(pi a'_x a'_y) = mean over the rectangle; mfkit's fitted form stays within its bound. */
 static void check_ggx_proxy_peak(mf_check *c)
 {
     check_init(c, "ggx_proxy_peak",
-               "exact GGX proxy alpha' (ERRATA K3; joint anisotropic solve) satisfies 1/(pi a'^2) = rect mean (Eq. 19)",
+               "exact GGX proxy alpha' (docs/math.md, correction C-K3; joint anisotropic solve) satisfies 1/(pi a'^2) = rect mean (Eq. 19)",
                64 * DBL_EPSILON);
     static const double k_px_alpha[] = {1e-4, 1e-3, 1e-2, 0.1, 0.5, 1.0};
     static const double k_px_ratio[] = {0.0, 1e-6, 1e-3, 0.1, 1.0, 3.0, 10.0, 1e3, 1e5};

@@ -1,6 +1,6 @@
 /*
  * mf_ltc_reference.h -- read LTC tables that mfkit did not write: the CSV conversion of the public
- * reference table of Heitz et al. 2016 (`ltc_code`, fit/results/; ../shared/reference/README.md).
+ * reference table of Heitz et al. 2016 (`ltc_code`, fit/results/; tests/data/reference/README.md).
  *
  * The CSV has one row per texel with named columns; the reader uses
  *   i_alpha, i_theta                      texel indices (a = 0..n_r-1 along r, t = 0..n_u-1 along u)

@@ -2,7 +2,7 @@
  * mf_proxyfit.h -- fitting the closed form of the GGX proxy roughness (mf_proxy.h) with Ceres.
  *
  * What it does.  Tabulates the exact proxy roughness alpha'(alpha, dh) of [Kaplanyan 2016,
- * Eq. 19] (mf_filter_ggx_proxy_alpha, ERRATA K3) on a grid log-spaced in both alpha and dh,
+ * Eq. 19] (mf_filter_ggx_proxy_alpha, docs/math.md, correction C-K3) on a grid log-spaced in both alpha and dh,
  * then fits the coefficients (c, q) of
  *   alpha'^2 = alpha^2 + dh^2 R(x),  x = dh^2/(alpha^2 + dh^2),
  *   R(x) = (1 - x)/3 + x/pi + x (1 - x) c / (1 + q x)
@@ -25,7 +25,8 @@
  *   <dir>/ggx_proxy_fit.glsl   GLSL function mf_ggx_proxy_alpha(alpha, dh);
  *   <dir>/ggx_proxy_fit.json   the form, coefficients, domain, grid, error report, solver summary.
  *
- * References: [Kaplanyan 2016] (papers/002), Eq. 18-20; docs/math.md "GGX proxy: fitted form".
+ * References: [Kaplanyan 2016] Kaplanyan, Hill, Patney, Lefohn. Filtering Distributions of Normals
+ * for Shading Antialiasing. HPG 2016, Eq. 18-20; docs/math.md "GGX proxy: fitted form".
  */
 #ifndef MF_PROXYFIT_H
 #define MF_PROXYFIT_H

@@ -35,8 +35,8 @@ double mf_brdf_microfacet(const mf_microfacet *m, mf_vec3 wo, mf_vec3 wi);
 
 /* LEADR specular under a directional light, the ratio I / L of [Dupuy 2013, Eq. 17]: this is
  * f(wo, wi) wi.z, defined for wi on the whole sphere (the normalisation identity after Eq. 16
- * needs the full sphere, ERRATA L5).  0 when wo or wi is on or below the mesosurface (nu <= 0,
- * ERRATA L3).  The geometric normal g is +z and n the mesonormal of Eq. 11.
+ * needs the full sphere, docs/math.md, correction C-L5).  0 when wo or wi is on or below the mesosurface (nu <= 0,
+ * correction C-L3).  The geometric normal g is +z and n the mesonormal of Eq. 11.
  * Reciprocity: because of the mesosurface normalisation (n.g)/(n.wo), f itself is reciprocal
  * only for centred slopes; f(wo, wi) (n.wo) wi.z is symmetric in general (tests/). */
 double mf_leadr_specular(const mf_gaussian_slopes *g, mf_fresnel fresnel, mf_vec3 wo, mf_vec3 wi);

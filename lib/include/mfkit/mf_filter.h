@@ -7,21 +7,21 @@
  *     the footprint vectors dx_u, dx_v (ray differentials on the tangent plane) to
  *     dh_u = M dx_u, dh_v = M dx_v (Eq. 5);
  *  3. a Gaussian pixel filter carried into slope space has covariance
- *     P = dh_u dh_u^T + dh_v dh_v^T (Eq. 13 corrected, ERRATA K4), and the parallelogram
+ *     P = dh_u dh_u^T + dh_v dh_v^T (Eq. 13 corrected, docs/math.md, correction C-K4), and the parallelogram
  *     {h + a dh_u + b dh_v : |a|, |b| <= 1/2} has an axis-aligned bounding rectangle (Sec. 4.3);
  *     both are clamped as in Sec. 5.2;
  *  4. Beckmann: convolution = covariance sum B' = diag(alpha^2/2) + P (Eq. 14-15), also with LEAN
  *     statistics (Eq. 21); GGX: the mean of the slope density over the rectangle (Eq. 16,
- *     Appendix A corrected, ERRATA K1), or a GGX "proxy" roughness alpha' matching its peak (Eq. 19).
+ *     Appendix A corrected, correction C-K1), or a GGX "proxy" roughness alpha' matching its peak (Eq. 19).
  *
- * Slopes and signs (ERRATA L6).  mfkit slopes are height gradients, (-m.x/m.z, -m.y/m.z)
+ * Slopes and signs (correction C-L6).  mfkit slopes are height gradients, (-m.x/m.z, -m.y/m.z)
  * (docs/conventions.md).  Kaplanyan writes h = (i + o).xy / |n . (i + o)| (+ sign).  So
  *   h (mfkit) = -h (Kaplanyan),  M (mfkit) = -M (Kaplanyan),  dh (mfkit) = -dh (Kaplanyan),
  * while P, the rectangle widths and every centred NDF value D(h) = D(-h) are the same in both;
  * only the rectangle's centre flips.  Statistics with a non-zero mean (LEAN) must be converted
- * with mf_moments_from_lean (ERRATA N4) before they are combined with anything here.
+ * with mf_moments_from_lean (correction C-N4) before they are combined with anything here.
  *
- * Measures.  "Slope density" is P22, per unit slope area (docs/conventions.md; ERRATA K2: the
+ * Measures.  "Slope density" is P22, per unit slope area (docs/conventions.md; docs/math.md, correction C-K2: the
  * D(s, t) of Kaplanyan Eq. 16 and Appendix A is P22, not D(m)).  Means over rectangles are in
  * the same units (per unit slope area).  To use a filtered P22 as an NDF per steradian divide by
  * wm.z^4 as for any P22 (mf_ndf.h).
@@ -32,8 +32,9 @@
  *
  * References
  *  [Kaplanyan 2016] Kaplanyan, Hill, Patney, Lefohn. Filtering Distributions of Normals for
- *                   Shading Antialiasing. HPG 2016 (papers/002), Eq. 3-21, Appendix A, ERRATA K1-K6.
- *  [Olano 2010]     LEAN mapping (papers/001), Eq. 5 (the covariance added by Eq. 21).
+ *                   Shading Antialiasing. HPG 2016, Eq. 3-21, Appendix A, with docs/math.md,
+ *                   corrections C-K1 to C-K6.
+ *  [Olano 2010]     Olano, Baker. LEAN Mapping. I3D 2010, Eq. 5 (the covariance added by Eq. 21).
  *  Derivations: docs/math.md, section "NDF filtering and slope moments".
  */
 #ifndef MF_FILTER_H
@@ -78,7 +79,7 @@ void mf_filter_footprint_to_slope(const double jac[2][2], const double dx_u[2], 
 /* Covariance in slope space of a Gaussian pixel filter [Kaplanyan 2016, Eq. 13 corrected]:
  *   P = s^2 (dh_u dh_u^T + dh_v dh_v^T)   (= J^T J with J the matrix of rows dh_u, dh_v),
  * the covariance of s (a dh_u + b dh_v) with a, b ~ N(0, 1).  Differs from the printed paper
- * (ERRATA K4): Eq. 13 read with row vectors is J J^T, the Gram matrix [dh_u.dh_u, dh_u.dh_v; ...],
+ * (correction C-K4): Eq. 13 read with row vectors is J J^T, the Gram matrix [dh_u.dh_u, dh_u.dh_v; ...],
  * which has the same eigenvalues but not the same eigenvectors.  s >= 0 is the filter's standard
  * deviation in pixel steps: Sec. 4.3 takes dh_u, dh_v themselves as the standard-deviation
  * vectors (s = 1) while naming sigma = 0.5 pixel -- pass s = 0.5 if dh_u, dh_v are one-pixel
@@ -131,13 +132,13 @@ mf_gaussian_slopes mf_filter_gaussian_add(const mf_gaussian_slopes *g, mf_sym2 p
  *   phi(x, y, g, d) = x atan(g y / (d sqrt(x^2 + g^2))) / sqrt(x^2 + g^2),
  * with d^2 F / ds dt = P22_GGX(s, t) and F(0, t) = F(s, 0) = 0, so F(s, t) is the probability
  * mass of the rectangle between (0, 0) and (s, t) (dimensionless).  Differs from the printed
- * paper (ERRATA K1): with Appendix A's half-width limits h -+ dh the normalisation must be
+ * paper (correction C-K1): with Appendix A's half-width limits h -+ dh the normalisation must be
  * 1/(8 pi dh_s dh_t), not 1/(2 pi dh_s dh_t) (4x too large); mfkit uses full widths.  Plain
  * evaluation (the differences of F cancel; use mf_filter_ggx_rect_mean for means). */
 double mf_filter_ggx_rect_antiderivative(double alpha_x, double alpha_y, double s, double t);
 
 /* Mean of the GGX slope density P22 over the axis-aligned rectangle of centre (cx, cy) and
- * full widths (wx, wy) [Kaplanyan 2016, Eq. 16 and Appendix A, ERRATA K1, K2]:
+ * full widths (wx, wy) [Kaplanyan 2016, Eq. 16 and Appendix A, corrections C-K1, C-K2]:
  *   (1 / (wx wy)) integral_{cx-wx/2}^{cx+wx/2} integral_{cy-wy/2}^{cy+wy/2} P22(s, t) dt ds,
  * per unit slope area.  Any position; widths >= 0 (width 0 along an axis: the mean along the
  * other axis; both 0: P22(cx, cy)).  Evaluation (docs/math.md):
@@ -164,7 +165,7 @@ double mf_filter_ggx_rect_mean_bounds(double alpha_x, double alpha_y, double x0,
 
 /* Effective roughness alpha' of an isotropic GGX filtered over the square of full width dh
  * centred on the peak, by the peak condition 1/(pi alpha'^2) = mean of P22 over the square
- * [Kaplanyan 2016, Eq. 18-19].  Exact solution (ERRATA K3; the printed Eq. 20 is garbled):
+ * [Kaplanyan 2016, Eq. 18-19].  Exact solution (correction C-K3; the printed Eq. 20 is garbled):
  *   alpha'^2 = dh sqrt(4 alpha^2 + dh^2) / (4 atan(dh / sqrt(4 alpha^2 + dh^2)))
  * evaluated as the equal but cancellation-free
  *   alpha'^2 = (alpha^2 + dh^2/4) t / atan(t),  t = dh / sqrt(4 alpha^2 + dh^2)
@@ -174,8 +175,8 @@ double mf_filter_ggx_rect_mean_bounds(double alpha_x, double alpha_y, double x0,
 double mf_filter_ggx_proxy_alpha(double alpha, double dh);
 /* The paper's simpler fit alpha' ~ sqrt(alpha^2 + dh^2) [Kaplanyan 2016, Eq. 20, right], for
  * comparison: it always overestimates the exact alpha' (by 0.33 % at dh = 0.1 alpha, 22.7 % at
- * dh = alpha, -> sqrt(pi) - 1 = 77.2 % for dh >> alpha; ERRATA K3, measured in the tests).
- * Note (ERRATA K5) it is not the Beckmann covariance sum either: a box of width dh adds dh^2/6. */
+ * dh = alpha, -> sqrt(pi) - 1 = 77.2 % for dh >> alpha; correction C-K3, measured in the tests).
+ * Note (correction C-K5) it is not the Beckmann covariance sum either: a box of width dh adds dh^2/6. */
 double mf_filter_ggx_proxy_alpha_approx(double alpha, double dh);
 /* Per-axis proxy as in the paper [Kaplanyan 2016, after Eq. 20]: out[0] = alpha'(alpha_x, wx),
  * out[1] = alpha'(alpha_y, wy) with the isotropic formula on each axis.  It satisfies the peak

@@ -3,7 +3,7 @@
  * statistics under environment and directional lighting [Dupuy 2013, Sec. 4.4-5.3].
  *
  * A pixel's microsurface is described by mf_gaussian_slopes (mean slope and covariance, slopes
- * as height gradients, ERRATA L6) in the z-up shading frame g = (0, 0, 1); n_bar is its
+ * as height gradients, docs/math.md, correction C-L6) in the z-up shading frame g = (0, 0, 1); n_bar is its
  * mesonormal [Eq. 11].  wo is the view (unit, pointing away).  The outputs are radiances I
  * (W m^-2 sr^-1) for white microfacets: multiply by the specular colour / diffuse albedo.
  *
@@ -16,21 +16,22 @@
  * Slope integrals  integral h(slope) P22(slope) d^2slope  are estimated on LEADR's grid
  * [Sec. 5.1]: N x N points p_j of a standard normal on [-lambda, lambda], normalised Gaussian
  * weights W_j = exp(-p_j^2/2) / sum_k exp(-p_k^2/2), warped by the Cholesky factor of the slope
- * covariance and shifted by the mean.  Where the spacing of the points is not said (ERRATA L7)
+ * covariance and shifted by the mean.  Where the spacing of the points is not said (correction C-L7)
  * both readings are offered; the normalised grid does not reproduce the unit variance
  * (N = 5, lambda = 1.8: 0.8656 end points, 0.6981 cell centres).  The estimate converges to the
  * integral only if lambda grows with N (for fixed lambda it converges to the Gaussian truncated
  * to [-lambda, lambda]^2 and renormalised); the paper uses N = 5, lambda = 1.8.
  *
- * Below the surface.  Lambda(w) = +inf for w on or below the mesosurface (nu <= 0, ERRATA L3);
+ * Below the surface.  Lambda(w) = +inf for w on or below the mesosurface (nu <= 0, correction C-L3);
  * such incident directions contribute nothing, whether or not they are below the geometric
- * horizon: every integral over wi runs over the whole sphere (ERRATA L5).  A view on or below
+ * horizon: every integral over wi runs over the whole sphere (correction C-L5).  A view on or below
  * the mesosurface (n_bar . wo <= 0; the paper culls such faces) gives I = 0 and MF_OK.
  * Invalid arguments (NULL, invalid statistics, a non-unit wo, an invalid Fresnel descriptor or a
  * non-finite callback value) give MF_ERR_DOMAIN and *out = NaN.
  *
- * References: [Dupuy 2013] LEADR mapping (papers/000), with ERRATA L1, L3, L5, L7, L8;
- * [R&H 2001] (see mf_sh.h).
+ * References: [Dupuy 2013] Dupuy, Heitz, Iehl, Poulin, Neyret, Ostromoukhov. Linear Efficient
+ * Antialiased Displacement and Reflectance Mapping (LEADR). ACM TOG 32(6), 2013, with docs/math.md,
+ * corrections C-L1, C-L3, C-L5, C-L7, C-L8; [R&H 2001] (see mf_sh.h).
  */
 #ifndef MF_LEADR_H
 #define MF_LEADR_H
@@ -59,7 +60,7 @@ double mf_leadr_irradiance_lights(const mf_gaussian_slopes *g, mf_vec3 wo, const
                                   int n_lights, mf_vec3 wn);
 
 /* LEADR's irradiance map as 9 SH radiance coefficients, [Dupuy 2013, Algorithm 2] with
- * ERRATA L1 (L00 += Y00 P, not L00 += L00 + 0.282095 P) and exact constants (ERRATA L9):
+ * correction C-L1 (L00 += Y00 P, not L00 += L00 + 0.282095 P) and exact constants (correction C-L9):
  *   out = sum_k P_k / (1 + Lambda(wo) + Lambda(wi_k)) Y(wi_k)  +  env / (1 + Lambda(wo)).
  * Directional lights get the joint masking-shadowing weight; the environment (env, may be NULL:
  * no environment) gets the masking weight only, as in the paper: its shadowing 1/(1 + Lambda(wo)
@@ -75,7 +76,7 @@ mf_status mf_leadr_irradiance_sh(const mf_gaussian_slopes *g, mf_vec3 wo, const 
 
 #define MF_LEADR_GRID_MAX 512
 
-/* ERRATA L7: how the N points cover [-lambda, lambda] (j = 0 .. N-1). */
+/* correction C-L7: how the N points cover [-lambda, lambda] (j = 0 .. N-1). */
 typedef enum mf_leadr_grid_layout {
     MF_LEADR_GRID_END_POINTS = 0,   /* p_j = -lambda + 2 lambda j/(N - 1), spacing 2 lambda/(N - 1) */
     MF_LEADR_GRID_CELL_CENTRES = 1  /* p_j = -lambda + (2 j + 1) lambda/N,  spacing 2 lambda/N,
@@ -98,7 +99,7 @@ typedef struct mf_leadr_grid {
 mf_status mf_leadr_grid_init(mf_leadr_grid *grid, int n, double lambda, mf_leadr_grid_layout layout) MF_WARN_UNUSED;
 
 /* Variance sum_j W_j p_j^2 of the normalised 1D grid (1 for the standard normal it stands for;
- * ERRATA L7: 0.8656 / 0.6981 for N = 5, lambda = 1.8).  NaN for an uninitialised grid. */
+ * correction C-L7: 0.8656 / 0.6981 for N = 5, lambda = 1.8).  NaN for an uninitialised grid. */
 double mf_leadr_grid_variance(const mf_leadr_grid *grid);
 
 /* Sample (j, k), 0 <= j, k < N, warped to the slope statistics [Dupuy 2013, Sec. 5.1]:
@@ -112,7 +113,7 @@ double mf_leadr_grid_warp(const mf_leadr_grid *grid, const mf_gaussian_slopes *g
 
 /* Slope-space area of one sample [Dupuy 2013, Sec. 5.2]: A = (spacing * max(sigma_x, sigma_y))^2.
  * The printed A = (2 lambda max(sigma)/N)^2 is the cell-centre spacing; for end points mfkit
- * uses their own spacing 2 lambda/(N - 1) (ERRATA L7).  NaN for invalid arguments. */
+ * uses their own spacing 2 lambda/(N - 1) (correction C-L7).  NaN for invalid arguments. */
 double mf_leadr_grid_sample_area(const mf_leadr_grid *grid, const mf_gaussian_slopes *g);
 
 /* ---- shading ---------------------------------------------------------------------------- */
@@ -126,7 +127,7 @@ typedef double (*mf_leadr_env_fn)(mf_vec3 wi, double solid_angle, void *user);
 /* Specular radiance under an environment by the grid [Dupuy 2013, Eq. 19, 22; Algorithm 1]:
  *   I = (n_bar.g)/(n_bar.wo) sum_{j,k} W L(wi) F(wn.wi) <wn, wo>/(wn.g) / (1 + Lambda(wo) + Lambda(wi)),
  * wn the micro-normal of the sample's slope, wi = 2 (wn.wo) wn - wo [Eq. 18], <a, b> = max(0, a.b).
- * ERRATA L8: the summand uses the per-sample normal wn, the prefactor the mesonormal n_bar.
+ * correction C-L8: the summand uses the per-sample normal wn, the prefactor the mesonormal n_bar.
  * The environment is called only for samples that contribute (wn.wo > 0, wi above the
  * mesosurface).  With L = 1 and F = 1 the exact integral is at most 1 (= 1 without the
  * shadowing Lambda(wi), the normalisation identity after Eq. 16 over the whole sphere). */

@@ -10,14 +10,14 @@
  *   D(w) = D_o(M^-1 w / |M^-1 w|) |det M^-1| / |M^-1 w|^3                  [Nahmias Eq. 2.21]
  *
  * with the Jacobian d wo / d w = |det M^-1| / |M^-1 w|^3 [Heitz et al. 2016, appendix], which
- * the thesis does not print (ERRATA T2).  D integrates to 1 over the sphere [Nahmias Eq. 2.22]
+ * the thesis does not print (docs/math.md, correction C-T2).  D integrates to 1 over the sphere [Nahmias Eq. 2.22]
  * and is positive exactly on the hemisphere (M^-1 w).z > 0, which need not be the upper one.
  *
  * Integral over a polygon P (mf_polygon.h) [Nahmias Eq. 2.23, 2.32-2.33]:
  *   integral over P of D(w) dw = integral over P_o = M^-1 P of D_o = E(P_o clipped to z_o >= 0),
- * where E is the integral of the NORMALISED clamped cosine max(0, z)/pi (ERRATA T3: not the
+ * where E is the integral of the NORMALISED clamped cosine max(0, z)/pi (correction C-T3: not the
  * irradiance, which is pi times larger), and the clipping is done AFTER the transform, at the
- * support z_o >= 0 of D_o (ERRATA T4: clipping P at the shading horizon first is wrong: it
+ * support z_o >= 0 of D_o (correction C-T4: clipping P at the shading horizon first is wrong: it
  * misses the lobe below the horizon and keeps parts outside the lobe's support).
  * One-sided: a polygon contributes only when it faces the shading point (mf_polygon.h); the
  * facing is that of P, so the sign of det M (a reflection reverses the winding of P_o) is
@@ -58,7 +58,7 @@ typedef struct mf_ltc {
  * log10(condition number) digits. */
 mf_status mf_ltc_init(mf_ltc *ltc, mf_mat3 m) MF_WARN_UNUSED;
 
-/* D(w), per steradian of w [Nahmias Eq. 2.21 with the Jacobian of ERRATA T2]; 0 where
+/* D(w), per steradian of w [Nahmias Eq. 2.21 with the Jacobian of correction C-T2]; 0 where
  * (M^-1 w).z <= 0.  w is a direction (normalised here, so its length does not matter); a zero or
  * non-finite w gives NaN. */
 double mf_ltc_eval(const mf_ltc *ltc, mf_vec3 w);
@@ -69,7 +69,7 @@ mf_vec3 mf_ltc_sample(const mf_ltc *ltc, const double u[2]);
 double mf_ltc_pdf(const mf_ltc *ltc, mf_vec3 w);
 
 /* Integral over the polygon p of D(w) dw, dimensionless in [0, 1]: the cosine integral of
- * M^-1 p clipped to z_o >= 0 after the transform (ERRATA T3, T4; see above).  ONE_SIDED: 0 when p
+ * M^-1 p clipped to z_o >= 0 after the transform (corrections C-T3, C-T4; see above).  ONE_SIDED: 0 when p
  * faces away from the shading point.  NaN outside the domain of mf_polygon_valid. */
 double mf_ltc_integrate_polygon(const mf_ltc *ltc, const mf_polygon *p, mf_polygon_sided sided);
 

@@ -7,7 +7,7 @@
  *                               clamped to >= cos(1.57) like the reference fitter     (MF_AXIS_ONE_MINUS_SQUARE)
  * Texel (ir, iu) is record ir + n_r iu; texel centres on the grid points (mf_table.h), so a
  * shader samples at uv = (r, u) * (n - 1)/n + 0.5/n.  This is the parameterisation of the public
- * reference tables (Heitz et al. 2016, `ltc_code`; ../shared/reference/README.md).
+ * reference tables (Heitz et al. 2016, `ltc_code`; tests/data/reference/README.md).
  *
  * Fields (the common two-texture layout, "ltc_1" and "ltc_2"):
  *   MF_LTC_F_MINV_00, _20, _02, _22   ltc_1.rgba: the inverse matrix M^-1 of the isotropic LTC in the

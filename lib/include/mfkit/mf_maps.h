@@ -11,7 +11,7 @@
  * Frame.  The tangent frame of every map here is x = +i (columns to the right) and y = up the
  * image (towards row 0), the OpenGL texture convention (v = 1 - row/height).  Slopes are mfkit's
  * height gradients (s_x, s_y) = (dh/dx, dh/dy) = (-n.x/n.z, -n.y/n.z) (docs/conventions.md);
- * LEAN's stored B = n.xy/n.z is -s (ERRATA N4, mf_moments.h).
+ * LEAN's stored B = n.xy/n.z is -s (docs/math.md, correction C-N4, mf_moments.h).
  *
  * MIP chain.  Level 0 is the input; level k + 1 has size (mf_map_mip_dim(w_k), mf_map_mip_dim(h_k))
  * with mf_map_mip_dim(n) = max(1, floor(n/2)), until 1 x 1 (1 + floor(log2(max(w, h))) levels).
@@ -36,8 +36,8 @@
  * Errors: mf_status; MF_ERR_DOMAIN for invalid arguments (NULL, sizes < 1, non-finite values)
  * with the index of the first offending texel where it applies; MF_ERR_ALLOC.
  *
- * References: [Olano 2010] LEAN mapping (papers/001), Eq. 3-6; [Dupuy 2013] LEADR mapping
- * (papers/000), Sec. 4.1-4.2; [Toksvig 2005] (see mf_moments.h).
+ * References: [Olano 2010] Olano, Baker. LEAN Mapping. I3D 2010, Eq. 3-6; [Dupuy 2013] Dupuy et al.
+ * LEADR Mapping. ACM TOG 32(6) 2013, Sec. 4.1-4.2; [Toksvig 2005] (see mf_moments.h).
  */
 #ifndef MF_MAPS_H
 #define MF_MAPS_H

@@ -7,7 +7,7 @@
  * the moments of the filtered region [Olano 2010, Sec. 3.3; Dupuy 2013, Sec. 4.1].  The
  * covariance is reconstructed afterwards: Sigma = M - E E^T [Olano 2010, Eq. 5; Dupuy 2013, Eq. 9].
  *
- * Slopes and signs (ERRATA N4, L6).  mfkit slopes are height gradients, (-n.x/n.z, -n.y/n.z)
+ * Slopes and signs (docs/math.md, corrections C-N4, C-L6).  mfkit slopes are height gradients, (-n.x/n.z, -n.y/n.z)
  * [Dupuy 2013, Sec. 4.1], as everywhere in mfkit (docs/conventions.md).  LEAN stores
  * B = n.xy/n.z (+ sign, Sec. 3.3 and 3.5), so  E[slope] (mfkit, LEADR) = -B (LEAN).  Second
  * moments are products of two slopes and do not change sign.  mf_moments_from_lean converts.
@@ -21,10 +21,11 @@
  * exception: covariances that are negative by rounding only, see mf_moments_to_gaussian).
  *
  * References
- *  [Olano 2010]  Olano, Baker. LEAN Mapping. I3D 2010 (papers/001), Eq. 3-9.
- *  [Dupuy 2013]  Dupuy et al. LEADR Mapping. ACM TOG 32(6) (papers/000), Sec. 4.1-4.2, Eq. 8-12.
- *  [Hery 2014]   Hery, Kass, Ling. Geometry into Shading. Pixar Tech. Memo 14-04 (papers/003),
- *                Eq. 3-12, with ERRATA H1, H2, H5, H6.
+ *  [Olano 2010]  Olano, Baker. LEAN Mapping. I3D 2010, Eq. 3-9.
+ *  [Dupuy 2013]  Dupuy, Heitz, Iehl, Poulin, Neyret, Ostromoukhov. LEADR Mapping. ACM TOG 32(6),
+ *                2013, Sec. 4.1-4.2, Eq. 8-12.
+ *  [Hery 2014]   Hery, Kass, Ling. Geometry into Shading. Pixar Tech. Memo 14-04, 2014,
+ *                Eq. 3-12, with docs/math.md, corrections C-H1, C-H2, C-H5, C-H6.
  *  [Toksvig 2005] Toksvig. Mipmapping Normal Maps. Journal of Graphics Tools 10(3), 65-71.
  */
 #ifndef MF_MOMENTS_H
@@ -72,14 +73,14 @@ typedef struct mf_aniso_roughness {
 /* ---- LEAN / LEADR moments ----------------------------------------------------------------- */
 
 /* Moments of one normal n (any length, n.z > 0): slope s = (-n.x/n.z, -n.y/n.z), mean = s,
- * second moments s s^T [Olano 2010, Eq. 3-4, with the sign of ERRATA N4: mean = -B].
+ * second moments s s^T [Olano 2010, Eq. 3-4, with the sign of correction C-N4: mean = -B].
  * NaN in every field for n.z <= 0 or a non-finite n. */
 mf_slope_moments mf_moments_from_normal(mf_vec3 n);
 /* Moments of one slope (sx, sy) (mfkit sign): mean (sx, sy), second moments s s^T. */
 mf_slope_moments mf_moments_from_slope(double sx, double sy);
 /* From LEAN's stored values: B = (bx, by) in LEAN's +n.xy/n.z sign and M in the order of
- * Eq. 4, (M.x, M.y, M.z) = (E[x^2], E[xy], E[y^2]).  Returns mean = -B (ERRATA N4) and the
- * second moments unchanged.  Note ERRATA N5(a): LEAN's Fig. 15 code stores M as
+ * Eq. 4, (M.x, M.y, M.z) = (E[x^2], E[xy], E[y^2]).  Returns mean = -B (correction C-N4) and the
+ * second moments unchanged.  Note correction C-N5(a): LEAN's Fig. 15 code stores M as
  * (xx, yy, xy), not in the order of Eq. 4; reorder before calling. */
 mf_slope_moments mf_moments_from_lean(double bx, double by, double mxx, double mxy, double myy);
 
@@ -95,7 +96,7 @@ void mf_moments_accumulate(mf_slope_moments *acc, const mf_slope_moments *m, dou
 mf_gaussian_slopes mf_moments_to_gaussian(const mf_slope_moments *m);
 
 /* Base roughness as an added covariance: M += c (E unchanged), so that Sigma += c
- * [Olano 2010, Eq. 6: c = (1/s) I for a Blinn-Phong exponent s].  ERRATA N5(c): if the moments
+ * [Olano 2010, Eq. 6: c = (1/s) I for a Blinn-Phong exponent s].  Correction C-N5(c): if the moments
  * are stored scaled by 1/sc (LEAN Fig. 15), add c / sc^2 before unscaling (or c after): the
  * printed code adds 1/s to the scaled moments and gets sc^2/s back.  NaN for a non-finite c. */
 mf_slope_moments mf_moments_add_covariance(const mf_slope_moments *m, mf_sym2 c);
@@ -138,7 +139,7 @@ mf_slope_moments mf_moments_mix(const mf_slope_moments *f, const mf_slope_moment
 /* ---- symmetric 2x2 eigen-decomposition and roughness ---------------------------------------- */
 
 /* Closed-form eigen-decomposition of [[a, b], [b, c]] that never divides by a small number
- * (ERRATA H6: Hery's SymetricEigenVecVal2D uses v = (1, (l - a)/b), which fails for b = 0):
+ * (correction C-H6: Hery's SymetricEigenVecVal2D uses v = (1, (l - a)/b), which fails for b = 0):
  *   m = (a + c)/2, d = (a - c)/2, r = hypot(d, b), l1 = m + r, l2 = det / l1 (or m - r),
  *   v1 = (r + d, b) / |.| if d >= 0, else (b, r - d) / |.|  (|.| >= r: no cancellation).
  * b = 0 returns the diagonal exactly with axis-aligned vectors (v1 = x if a >= c); r = 0
@@ -160,19 +161,19 @@ mf_aniso_roughness mf_roughness_from_covariance(mf_sym2 cov);
  * tangents).  Returns, in the frame (R_u/|R_u|, R_v/|R_v|):
  *   xx = var(w_u) / |R_u|^2, yy = var(w_v) / |R_v|^2, xy = cov(w_u, w_v) / (|R_u| |R_v|).
  * Differs from the printed paper: Eq. 4-5 print s_u = w_u |R_u|^(1/2); the slope per arc length
- * is w_u / |R_u| (ERRATA H1; Eq. 6 and 8 agree with the corrected form).  This is *not* yet
- * multiplied by Hery's Eq. 10 factor (see mf_hery_bump_roughness, ERRATA H2).  Assumes an
- * orthogonal parameterisation, R_u . R_v = 0 (ERRATA H4); for a sheared one use
+ * is w_u / |R_u| (correction C-H1; Eq. 6 and 8 agree with the corrected form).  This is *not* yet
+ * multiplied by Hery's Eq. 10 factor (see mf_hery_bump_roughness, correction C-H2).  Assumes an
+ * orthogonal parameterisation, R_u . R_v = 0 (correction C-H4); for a sheared one use
  * mf_moments_transform with the inverse metric instead.  NaN outside the domain. */
 mf_sym2 mf_hery_slope_covariance(const mf_slope_moments *dw, double len_ru, double len_rv);
 
 /* Effective anisotropic Beckmann roughness of a base roughness (m_orig_x, m_orig_y) along the
  * frame axes (>= 0) plus displacement slopes of covariance slope_cov [Hery 2014, Eq. 3, 11-12]:
  * the eigen-decomposition of  diag(m_orig_x^2, m_orig_y^2) + 2 slope_cov,  alpha_k = sqrt(l_k).
- * Differs from the printed paper: (ERRATA H2) Eq. 10 scales the variances by 1/2; the roughness
- * matrix needs 2 Sigma (m^2 = 2 sigma^2, consistent with Eq. 3); (ERRATA H5) Eq. 12 adds
+ * Differs from the printed paper: (correction C-H2) Eq. 10 scales the variances by 1/2; the roughness
+ * matrix needs 2 Sigma (m^2 = 2 sigma^2, consistent with Eq. 3); (correction C-H5) Eq. 12 adds
  * m_orig,k^2 to the eigenvalues of the displacement term alone, which is right only if the base
- * is isotropic or aligned with the eigenvectors -- the sum is decomposed here.  (ERRATA H6) the
+ * is isotropic or aligned with the eigenvectors -- the sum is decomposed here.  (correction C-H6) the
  * eigen-solver is mf_sym2_eigen.  NaN outside the domain. */
 mf_aniso_roughness mf_hery_bump_roughness(double m_orig_x, double m_orig_y, mf_sym2 slope_cov);
 

@@ -7,12 +7,12 @@
  * D(wm) = P22(slope(wm)) / wm.z^4  [Dupuy 2013, Eq. 10] (Jacobian 1/wm.z^3 times 1/wm.z).
  *
  * Slopes.  The slope of a micro-normal m is (-m.x/m.z, -m.y/m.z), the height gradient
- * [Dupuy 2013, Sec. 4.1] (ERRATA L6).  LEAN and Kaplanyan use +m.xy/m.z; for centred
+ * [Dupuy 2013, Sec. 4.1] (docs/math.md, correction C-L6).  LEAN and Kaplanyan use +m.xy/m.z; for centred
  * (symmetric) distributions the sign does not matter, for non-centred ones it does.
  *
  * Roughness.  alpha_x, alpha_y are the GGX / Beckmann roughness parameters along x and y of
  * the shading frame.  Beckmann: alpha^2 = 2 sigma^2, sigma^2 the variance of one slope
- * component [Dupuy 2013; Kaplanyan 2016, Eq. 14; ERRATA "items found correct"].
+ * component [Dupuy 2013; Kaplanyan 2016, Eq. 14; docs/math.md, "Checked and found correct"].
  * The documented domain is alpha in [1e-4, 1e3] (finite and > 0; values below 1e-4 still
  * evaluate but are outside what the tests cover).  A non-positive or NaN alpha gives NaN.
  *
@@ -22,8 +22,10 @@
  *  [Heitz 2014]   Heitz. Understanding the Masking-Shadowing Function in Microfacet-Based
  *                 BRDFs. JCGT 3(2) (anisotropic forms by stretching of the
  *                 isotropic ones; slope-space densities).
- *  [Dupuy 2013]   LEADR mapping (papers/000), Eq. 8-11.
- *  [Olano 2010]   LEAN mapping (papers/001), Sec. 3.1 (Blinn-Phong / Beckmann equivalence).
+ *  [Dupuy 2013]   Dupuy, Heitz, Iehl, Poulin, Neyret, Ostromoukhov. LEADR Mapping. ACM TOG
+ *                 32(6), 2013, Eq. 8-11.
+ *  [Olano 2010]   Olano, Baker. LEAN Mapping. I3D 2010, Sec. 3.1 (Blinn-Phong / Beckmann
+ *                 equivalence).
  */
 #ifndef MF_NDF_H
 #define MF_NDF_H

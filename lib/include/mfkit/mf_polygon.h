@@ -33,7 +33,7 @@
  *                  z >= 0 (Sutherland & Hodgman 1974 against the plane z = 0), signed by the
  *                  orientation; one-sided max(0, E), two-sided |E|.  This is the integral of
  *                  the LTC base density D_o = max(0, z)/pi [Nahmias Eq. 2.24, 2.33], i.e.
- *                  the irradiance from unit radiance divided by pi (ERRATA T3).
+ *                  the irradiance from unit radiance divided by pi (docs/math.md, correction C-T3).
  *
  * Numerics (docs/math.md): each edge's angle is atan2(|a x b|, a.b) (no acos of values > 1),
  * and the edge sum is evaluated as sum (v_i - v_0) x (v_i+1 - v_0) + sum (theta_i / sin theta_i

@@ -3,7 +3,7 @@
  *
  * The exact proxy roughness alpha'(alpha, dh) of an isotropic GGX filtered over the square slope
  * footprint of full width dh centred on the peak solves 1/(pi alpha'^2) = mean of P22 over the
- * square [Kaplanyan 2016, Eq. 19; ERRATA K3]; mf_filter_ggx_proxy_alpha evaluates it with an atan.
+ * square [Kaplanyan 2016, Eq. 19; docs/math.md, correction C-K3]; mf_filter_ggx_proxy_alpha evaluates it with an atan.
  * The paper's approximation sqrt(alpha^2 + dh^2) (mf_filter_ggx_proxy_alpha_approx) is off by up
  * to sqrt(pi) - 1 = 77 %.  This module evaluates a fitted form of the same cost class (no
  * transcendental: one division, one square root, ~10 multiply-adds):
@@ -28,7 +28,7 @@
  *
  * References
  *  [Kaplanyan 2016] Kaplanyan, Hill, Patney, Lefohn. Filtering Distributions of Normals for
- *                   Shading Antialiasing. HPG 2016 (papers/002), Eq. 18-20, ERRATA K3.
+ *                   Shading Antialiasing. HPG 2016, Eq. 18-20, with docs/math.md, correction C-K3.
  */
 #ifndef MF_PROXY_H
 #define MF_PROXY_H

@@ -11,7 +11,7 @@
  * flattened i = l (l + 1) + m: i = 0 (0,0); 1 (1,-1); 2 (1,0); 3 (1,1); 4 (2,-2); 5 (2,-1); 6 (2,0);
  * 7 (2,1); 8 (2,2).  The constants are the exact forms above at full double precision, not the
  * 6-digit values printed in R&H Eq. 3 / Eq. 13 and LEADR Algorithm 2 (0.282095, 0.488603, ...;
- * ERRATA L9: relative deviations up to 1.5e-6).
+ * docs/math.md, correction C-L9: relative deviations up to 1.5e-6).
  *
  * Frames.  The coefficients live in whatever frame the directions were given in.  mfkit's
  * shading frame is z-up (docs/conventions.md); mf_sh_rotate / mf_sh_to_frame move coefficients
@@ -36,7 +36,8 @@
  *  [R&H 2001]   Ramamoorthi, Hanrahan. An Efficient Representation for Irradiance Environment
  *               Maps. SIGGRAPH 2001 (Eq. 3 basis, Eq. 7-9 clamped-cosine convolution, Eq. 10
  *               projection, Eq. 13 order-2 irradiance).
- *  [Dupuy 2013] LEADR mapping (papers/000), Algorithm 2 (with ERRATA L1 and L9).
+ *  [Dupuy 2013] Dupuy, Heitz, Iehl, Poulin, Neyret, Ostromoukhov. LEADR Mapping. ACM TOG 32(6),
+ *               2013, Algorithm 2 (with docs/math.md, corrections C-L1 and C-L9).
  *  [Sloan 2008] Sloan. Stupid Spherical Harmonics (SH) Tricks. GDC 2008 (windowing).
  */
 #ifndef MF_SH_H
@@ -51,7 +52,7 @@ extern "C" {
 #define MF_SH_ORDER 2
 #define MF_SH_COEFFS 9 /* (MF_SH_ORDER + 1)^2 */
 
-/* Basis constants, exact forms of [R&H 2001, Eq. 3] (ERRATA L9). */
+/* Basis constants, exact forms of [R&H 2001, Eq. 3] (correction C-L9). */
 #define MF_SH_Y00 0.282094791773878143474039725780386293 /* 1/(2 sqrt(pi))   (printed 0.282095) */
 #define MF_SH_Y1  0.488602511902919921586384622838347005 /* sqrt(3/(4 pi))   (printed 0.488603) */
 #define MF_SH_Y2  1.09254843059207907054338570580268840  /* sqrt(15/(4 pi))  (printed 1.092548) */
@@ -82,13 +83,13 @@ void mf_sh_convolve_cosine(const double radiance[MF_SH_COEFFS], double irradianc
  * sum_i A_l(i) L_i Y_i(n), algebraically R&H's Eq. 13 with c1 = (pi/4) sqrt(15/(16 pi)),
  * c2 = (pi/3) sqrt(3/(4 pi)), c3 = (3 pi/4) sqrt(5/(16 pi)), c4 = sqrt(pi)/2,
  * c5 = (pi/4) sqrt(5/(16 pi)) (printed 0.429043, 0.511664, 0.743125, 0.886227, 0.247708;
- * ERRATA L9.  0.511664 and 0.743125 are not the roundings of these, 0.5116634 and 0.7431239, but
+ * correction C-L9.  0.511664 and 0.743125 are not the roundings of these, 0.5116634 and 0.7431239, but
  * products of the rounded 0.488603 and 0.315392; relative deviation <= 1.53e-6).
  * Not clamped at 0 (see the header comment).  NaN for a non-unit n. */
 double mf_sh_irradiance(const double radiance[MF_SH_COEFFS], mf_vec3 n);
 
 /* Adds a directional light of irradiance `power` (W m^-2 normal to d) arriving from the unit
- * direction d: c_i += power Y_i(d)  [LEADR Algorithm 2, with ERRATA L1: L00 += Y00 P, not the
+ * direction d: c_i += power Y_i(d)  [LEADR Algorithm 2, with correction C-L1: L00 += Y00 P, not the
  * printed L00 += L00 + 0.282095 P, which doubles the running sum for every light after the
  * first].  A non-finite power or a non-unit d turns every coefficient into NaN. */
 void mf_sh_add_directional(double c[MF_SH_COEFFS], mf_vec3 d, double power);
