@@ -43,7 +43,8 @@
 #define _POSIX_C_SOURCE 200809L
 #include <mfkit/mfkit.h>
 #include <mfkit/mf_ltc_reference.h>
-#include <mfkit/mf_table_io.h>
+#include <mfkit/io/mf_table_io.h>
+#include <mfkit/mf_image_oiio.h>
 
 #include "study_header.h"
 
@@ -104,6 +105,7 @@ typedef struct {
 
 int main(int argc, char **argv)
 {
+    mf_image_set_backend(mf_image_oiio_backend()); /* EXR files */
     const char *brdf = NULL, *out_path = "notebooks_data/half_error.csv";
     unsigned long long seed = 1;
     int npoly = 24;

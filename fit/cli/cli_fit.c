@@ -23,7 +23,7 @@
 #include "mfkit/mf_ltc_gate.h"
 #include "mfkit/mf_ltcfit.h"
 #include "mfkit/mf_proxyfit.h"
-#include "mfkit/mf_table_io.h"
+#include "mfkit/io/mf_table_io.h"
 #endif
 
 static void usage(FILE *f)
