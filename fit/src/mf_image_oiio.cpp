@@ -252,6 +252,11 @@ mf_status oiio_write(const char *path, const char *tmp_path, const mf_image *img
         }
         for (int a = 0; a < opt.nattribs; ++a)
             spec.attribute(opt.attrib_names[a], opt.attrib_values[a]);
+        // OpenImageIO stamps new files with the current time (OpenEXR "capDate") unless the spec
+        // has a "DateTime": an empty one is written as nothing, so the output is bitwise the same
+        // between runs (checked by tests/test_image.c).
+        if (spec.find_attribute("DateTime") == nullptr)
+            spec.attribute("DateTime", "");
         if (!out->open(tmp_path, spec)) {
             // The temporary file could be created, so this is (nearly always) the format refusing
             // the image, e.g. more channels than it stores.

@@ -234,9 +234,14 @@ static mf_status read_npy(const char *path, mf_table *t, mf_table_file_info *inf
         goto bad;
     }
     size_t count = texels * nf;
-    if (len - off != count * 4) {
+    if (len - off < count * 4) {
         mf_io_msg(msg, msg_size, path, "%zu data bytes, the shape needs %zu (truncated or corrupt)", len - off,
-                count * 4);
+                  count * 4);
+        goto bad;
+    }
+    if (len - off > count * 4) {
+        mf_io_msg(msg, msg_size, path, "%zu bytes after the %zu data bytes of the shape (trailing data)",
+                  len - off - count * 4, count * 4);
         goto bad;
     }
     cJSON *side;

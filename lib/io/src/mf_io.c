@@ -261,13 +261,15 @@ void mf_io_atomic_abort(mf_io_atomic *a)
     atomic_release(a);
 }
 
-mf_status mf_io_atomic_commit(mf_io_atomic *a, char *msg, size_t msg_size)
+mf_status mf_io_atomic_finish(mf_io_atomic *a, char *msg, size_t msg_size)
 {
     if (!a->tmp_path) {
         mf_io_msg(msg, msg_size, a->path, "internal error: no temporary file");
-        atomic_release(a);
+        mf_io_atomic_abort(a);
         return MF_ERR_INTERNAL;
     }
+    if (a->finished)
+        return MF_OK;
     int ok = 1, err = 0;
     if (a->file) {
         errno = 0;
@@ -305,8 +307,17 @@ mf_status mf_io_atomic_commit(mf_io_atomic *a, char *msg, size_t msg_size)
         mf_io_atomic_abort(a);
         return MF_ERR_IO;
     }
+    a->finished = 1;
+    return MF_OK;
+}
+
+mf_status mf_io_atomic_commit(mf_io_atomic *a, char *msg, size_t msg_size)
+{
+    mf_status st = mf_io_atomic_finish(a, msg, msg_size);
+    if (st != MF_OK)
+        return st;
     if (rename(a->tmp_path, a->path) != 0) {
-        err = errno;
+        int err = errno;
         mf_io_msg(msg, msg_size, a->path, "cannot rename %s to it: %s", a->tmp_path, strerror(err));
         mf_io_atomic_abort(a);
         return MF_ERR_IO;

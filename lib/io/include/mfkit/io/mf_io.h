@@ -94,6 +94,9 @@ mf_status mf_io_write_buf_atomic(const char *path, const mf_buf *b, char *msg, s
  *   mf_io_atomic_commit  flushes, fsyncs and closes a->file (or, if it is NULL, fsyncs the
  *                        temporary by name), checks every step, renames; on failure removes the
  *                        temporary.  Always releases a.
+ *   mf_io_atomic_finish  the flush/fsync/close part of commit alone (the rename left for
+ *                        commit), so that several files can all be written before any replaces
+ *                        its target; on failure removes the temporary and releases a.
  *   mf_io_atomic_abort   closes and removes the temporary; releases a.  Safe on a released or
  *                        zeroed a.
  */
@@ -101,9 +104,11 @@ typedef struct mf_io_atomic {
     FILE *file;
     char *path;     /* copy of the target */
     char *tmp_path; /* the temporary */
+    int finished;   /* mf_io_atomic_finish succeeded */
 } mf_io_atomic;
 
 mf_status mf_io_atomic_begin(mf_io_atomic *a, const char *path, char *msg, size_t msg_size) MF_WARN_UNUSED;
+mf_status mf_io_atomic_finish(mf_io_atomic *a, char *msg, size_t msg_size) MF_WARN_UNUSED;
 mf_status mf_io_atomic_commit(mf_io_atomic *a, char *msg, size_t msg_size) MF_WARN_UNUSED;
 void mf_io_atomic_abort(mf_io_atomic *a);
 
