@@ -287,6 +287,40 @@ static void line_col(const char *s, size_t pos, size_t *line, size_t *col)
     }
 }
 
+/* Non-zero if the text ends inside a string or with an unclosed '[' or '{' (brackets matched by
+ * kind; a mismatch means a syntax error, not a truncation). */
+static int unbalanced_at_end(const char *s, size_t len)
+{
+    char stack[64];
+    size_t depth = 0, deep = 0; /* deep: levels beyond the stack, counted only */
+    int in_str = 0;
+    for (size_t i = 0; i < len; ++i) {
+        char c = s[i];
+        if (in_str) {
+            if (c == '\\')
+                ++i;
+            else if (c == '"')
+                in_str = 0;
+        } else if (c == '"') {
+            in_str = 1;
+        } else if (c == '[' || c == '{') {
+            if (depth < sizeof stack)
+                stack[depth++] = c;
+            else
+                ++deep;
+        } else if (c == ']' || c == '}') {
+            if (deep) {
+                --deep;
+                continue;
+            }
+            if (depth == 0 || stack[depth - 1] != (c == ']' ? '[' : '{'))
+                return 0;
+            --depth;
+        }
+    }
+    return in_str || depth > 0 || deep > 0;
+}
+
 mf_status io_json_parse(const char *s, size_t len, cJSON **root, char *why, size_t why_size)
 {
     *root = NULL;
@@ -305,7 +339,11 @@ mf_status io_json_parse(const char *s, size_t len, cJSON **root, char *why, size
     if (pos > len)
         pos = len;
     const char *what = NULL;
-    if (!r) {
+    if (!r && unbalanced_at_end(s, len)) {
+        /* a truncated document: cJSON's error position lies where it backed off, not at the end */
+        pos = len;
+        what = "unexpected end of input";
+    } else if (!r) {
         /* cJSON stops at the first byte it cannot take: name that byte */
         while (pos < len && (s[pos] == ' ' || s[pos] == '\t' || s[pos] == '\n' || s[pos] == '\r'))
             ++pos;
