@@ -29,7 +29,8 @@
 #include "mfkit/mfkit.h"
 #include "mfkit/mf_ltc_reference.h"
 #include "mfkit/mf_ltcfit.h"
-#include "mfkit/mf_table_io.h"
+#include "mfkit/io/mf_table_io.h"
+#include "mfkit/mf_image_oiio.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -95,6 +96,7 @@ static void usage(FILE *f)
 
 int main(int argc, char **argv)
 {
+    mf_image_set_backend(mf_image_oiio_backend()); /* EXR files */
     int do_fit = 0, threads = 2, size = 64, nviews = 512, npoly = 16, nsamples = 32768;
     uint64_t seed = 1;
     const char *brdf = "ggx", *csv_path = NULL;

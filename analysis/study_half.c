@@ -35,15 +35,17 @@
  * (shade_* nan); kind "shading": one row per texel of an LTC table (field "shading", value the
  * magnitude, half its half; abs_err, rel_err nan).  p0, p1: the axis parameters of the texel (r, u
  * for LTC tables; p1 nan for a 1D table); theta_o_deg: acos(cos theta_o) for LTC tables, else nan.
- * First line: provenance header.  The CSV goes to FILE.tmp<pid>, then is renamed over FILE; it is
+ * First line: provenance header.  The CSV goes to a temporary beside it (mfkit/io/mf_io.h), then is renamed over FILE; it is
  * generated, not committed.
  * Exit status: 0; 1 (an internal inconsistency); 2 (usage: bad option, unknown BRDF, no TABLE);
  * 3 (a table cannot be read, or the CSV cannot be written).
  */
 #define _POSIX_C_SOURCE 200809L
 #include <mfkit/mfkit.h>
+#include <mfkit/io/mf_io.h>
 #include <mfkit/mf_ltc_reference.h>
-#include <mfkit/mf_table_io.h>
+#include <mfkit/io/mf_table_io.h>
+#include <mfkit/mf_image_oiio.h>
 
 #include "study_header.h"
 
@@ -104,6 +106,7 @@ typedef struct {
 
 int main(int argc, char **argv)
 {
+    mf_image_set_backend(mf_image_oiio_backend()); /* EXR files */
     const char *brdf = NULL, *out_path = "notebooks_data/half_error.csv";
     unsigned long long seed = 1;
     int npoly = 24;
@@ -165,18 +168,15 @@ int main(int argc, char **argv)
         return 2;
     }
 
-    char tmp_path[4096];
-    if (snprintf(tmp_path, sizeof tmp_path, "%s.tmp%ld", out_path, (long)getpid()) >= (int)sizeof tmp_path) {
-        fprintf(stderr, "study_half: %s: path too long\n", out_path);
+    /* the one atomic write (mfkit/io/mf_io.h): a temporary beside the file, renamed at the end */
+    mf_io_atomic out;
+    char io_msg[1024];
+    if (mf_io_atomic_begin(&out, out_path, io_msg, sizeof io_msg) != MF_OK) {
+        fprintf(stderr, "study_half: %s\n", io_msg);
         free(paths);
         return 3;
     }
-    FILE *f = fopen(tmp_path, "w");
-    if (!f) {
-        fprintf(stderr, "study_half: %s: cannot create the temporary file %s: %s\n", out_path, tmp_path, strerror(errno));
-        free(paths);
-        return 3;
-    }
+    FILE *f = out.file;
     char seed_text[32];
     snprintf(seed_text, sizeof seed_text, "%llu", seed);
     study_write_header(f, "study_half", argc, argv, seed_text);
@@ -348,18 +348,11 @@ int main(int argc, char **argv)
     }
     free(paths);
     if (status) {
-        fclose(f);
-        remove(tmp_path);
+        mf_io_atomic_abort(&out);
         return status;
     }
-    if (ferror(f) | fclose(f)) {
-        fprintf(stderr, "study_half: %s: write failed\n", tmp_path);
-        remove(tmp_path);
-        return 3;
-    }
-    if (rename(tmp_path, out_path) != 0) {
-        fprintf(stderr, "study_half: %s: %s\n", out_path, strerror(errno));
-        remove(tmp_path);
+    if (mf_io_atomic_commit(&out, io_msg, sizeof io_msg) != MF_OK) {
+        fprintf(stderr, "study_half: %s\n", io_msg);
         return 3;
     }
     printf("wrote %s\n", out_path);

@@ -56,7 +56,8 @@
 #define _POSIX_C_SOURCE 200809L
 #include "mfkit/mfkit.h"
 #include "mfkit/mf_ltc_reference.h"
-#include "mfkit/mf_table_io.h"
+#include "mfkit/io/mf_table_io.h"
+#include "mfkit/mf_image_oiio.h"
 
 #include "study_header.h"
 
@@ -242,6 +243,7 @@ static int tested_indices(int n, int stride, int *idx)
 
 int main(int argc, char **argv)
 {
+    mf_image_set_backend(mf_image_oiio_backend()); /* EXR files */
     int npoly = 32, nsamples = 65536, stride = 1;
     unsigned long long seed = 1;
     const char *brdf = NULL, *out_path = "notebooks_data/ltc_texels.csv";

@@ -59,11 +59,12 @@
  * Columns: env, window, theta_deg, phi_deg, e_exact, e_exact_err, e_sh, abs_err, rel_err,
  * norm_err, light_theta_deg, light_phi_deg (the direction of the sun or of sun_sky's lobe, for the
  * plots; nan for overcast).  First line: provenance header (seed "none": nothing is random).  The CSV is written
- * to FILE.tmp<pid> and renamed over FILE; it is generated, not committed.
+ * to a temporary beside it (mfkit/io/mf_io.h) and renamed over FILE; it is generated, not committed.
  * Exit status: 0, 1 (a quadrature or self-check failed), 2 (usage), 3 (I/O).
  */
 #define _POSIX_C_SOURCE 200809L
 #include <mfkit/mfkit.h>
+#include <mfkit/io/mf_io.h>
 
 #include "study_header.h"
 
@@ -437,16 +438,14 @@ int main(int argc, char **argv)
     }
 
     /* ---- output ---- */
-    char tmp_path[4096];
-    if (snprintf(tmp_path, sizeof tmp_path, "%s.tmp%ld", out_path, (long)getpid()) >= (int)sizeof tmp_path) {
-        fprintf(stderr, "study_sh_irradiance: %s: path too long\n", out_path);
+    /* the one atomic write (mfkit/io/mf_io.h): a temporary beside the file, renamed at the end */
+    mf_io_atomic out;
+    char io_msg[1024];
+    if (mf_io_atomic_begin(&out, out_path, io_msg, sizeof io_msg) != MF_OK) {
+        fprintf(stderr, "study_sh_irradiance: %s\n", io_msg);
         return 3;
     }
-    FILE *f = fopen(tmp_path, "w");
-    if (!f) {
-        fprintf(stderr, "study_sh_irradiance: %s: cannot create the temporary file %s: %s\n", out_path, tmp_path, strerror(errno));
-        return 3;
-    }
+    FILE *f = out.file;
     study_write_header(f, "study_sh_irradiance", argc, argv, "none");
     fprintf(f, "env,window,theta_deg,phi_deg,e_exact,e_exact_err,e_sh,abs_err,rel_err,norm_err,light_theta_deg,"
                "light_phi_deg\n");
@@ -454,8 +453,7 @@ int main(int argc, char **argv)
     int n_normals = n_theta * n_phi;
     double *ex = malloc(sizeof *ex * (size_t)n_normals * 2);
     if (!ex) {
-        fclose(f);
-        remove(tmp_path);
+        mf_io_atomic_abort(&out);
         fprintf(stderr, "study_sh_irradiance: out of memory\n");
         return 1;
     }
@@ -523,18 +521,11 @@ int main(int argc, char **argv)
     }
     free(ex);
     if (status) {
-        fclose(f);
-        remove(tmp_path);
+        mf_io_atomic_abort(&out);
         return status;
     }
-    if (ferror(f) | fclose(f)) {
-        fprintf(stderr, "study_sh_irradiance: %s: write failed\n", tmp_path);
-        remove(tmp_path);
-        return 3;
-    }
-    if (rename(tmp_path, out_path) != 0) {
-        fprintf(stderr, "study_sh_irradiance: %s: %s\n", out_path, strerror(errno));
-        remove(tmp_path);
+    if (mf_io_atomic_commit(&out, io_msg, sizeof io_msg) != MF_OK) {
+        fprintf(stderr, "study_sh_irradiance: %s\n", io_msg);
         return 3;
     }
     printf("norm = |E_SH - E| / integral L dw (<= 3/32 = 0.09375 for any L >= 0); rel = |E_SH - E| / E over the "

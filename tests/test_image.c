@@ -13,7 +13,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <mfkit/mf_image.h>
+#include <mfkit/io/mf_image.h>
+#include <mfkit/mf_image_oiio.h>
 
 #include "mf_test.h"
 
@@ -319,6 +320,7 @@ static void cleanup(void)
 
 int main(void)
 {
+    mf_image_set_backend(mf_image_oiio_backend()); /* EXR files */
     mf_test_seed(0); /* nothing random here */
     if (mkdtemp(dir) == NULL) {
         perror("mkdtemp");

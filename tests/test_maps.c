@@ -39,8 +39,9 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include <mfkit/mf_image.h>
+#include <mfkit/io/mf_image.h>
 #include <mfkit/mfkit.h>
+#include <mfkit/mf_image_oiio.h>
 
 #include "mf_test.h"
 
@@ -579,6 +580,7 @@ static int check_sh(const char *json_path, const char *kind, const char *up, int
 
 int main(int argc, char **argv)
 {
+    mf_image_set_backend(mf_image_oiio_backend()); /* EXR files */
     if (argc >= 3 && !strcmp(argv[1], "--write-height"))
         return write_height(argv[2]);
     if (argc >= 3 && !strcmp(argv[1], "--write-normals"))

@@ -95,6 +95,17 @@ ok '[ $rc -eq 3 ] && [ ! -s "$tmp/out" ] && [ "$(wc -l <"$tmp/err")" -eq 1 ]' "c
 ok '[ "$(ls "$tmp/o")" = "y_m2_mip6.exr" ]' "commit failure leaves nothing: $(ls "$tmp/o")"
 ok '[ -z "$(find "$tmp" -name "*.tmp*")" ]' "no temporary files left: $(find "$tmp" -name "*.tmp*")"
 
+# --- a full disk: exit 3, one message, no output file and no temporary left --------------------
+# (ulimit -f 8: files stop at 4 KiB, the mip-0 maps are larger; SIGXFSZ ignored, so write() fails
+# with EFBIG as it would with ENOSPC.  Before the atomic image writes this exited 0 with
+# zero-byte EXR files.)
+mkdir "$tmp/full"
+(trap '' XFSZ; ulimit -f 8; "$mfkit" maps leadr "$tmp/h.exr" "${hopt[@]}" --out "$tmp/full/f" --base-alpha 0 \
+  >"$tmp/out" 2>"$tmp/err"); rc=$?
+ok '[ $rc -eq 3 ]' "full disk: maps exit $rc (want 3): $(cat "$tmp/err")"
+ok '[ "$(wc -l < "$tmp/err")" -eq 1 ] && grep -q "full/f" "$tmp/err"' "full disk: one message naming the file: $(cat "$tmp/err")"
+ok '[ -z "$(ls -A "$tmp/full")" ]' "full disk: files left: $(ls -A "$tmp/full" | tr '\n' ' ')"
+
 # --- help -----------------------------------------------------------------------------------------
 out=$("$mfkit" maps --help); rc=$?
 ok '[ $rc -eq 0 ] && echo "$out" | grep -q "^usage: mfkit maps lean|leadr|bump-roughness|toksvig INPUT --out PREFIX"' "maps --help"

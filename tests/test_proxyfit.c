@@ -14,7 +14,7 @@
 #include <mfkit/mf_filter.h>
 #include <mfkit/mf_proxy.h>
 #include <mfkit/mf_proxyfit.h>
-#include <mfkit/mf_table_io.h>
+#include <mfkit/io/mf_table_io.h>
 
 #include "mf_test.h"
 

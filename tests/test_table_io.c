@@ -21,10 +21,11 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <mfkit/mf_image.h>
+#include <mfkit/io/mf_image.h>
 #include <mfkit/mf_rng.h>
 #include <mfkit/mf_table.h>
-#include <mfkit/mf_table_io.h>
+#include <mfkit/io/mf_table_io.h>
+#include <mfkit/mf_image_oiio.h>
 
 #include "mf_test.h"
 
@@ -1130,6 +1131,7 @@ static void cleanup(void)
 
 int main(int argc, char **argv)
 {
+    mf_image_set_backend(mf_image_oiio_backend()); /* EXR files */
     if (argc == 3 && strcmp(argv[1], "--write-sample") == 0) {
         mf_table t;
         make_table(&t, 16, 8, 0);

@@ -23,7 +23,7 @@
 #include "mfkit/mf_ltc_gate.h"
 #include "mfkit/mf_ltcfit.h"
 #include "mfkit/mf_proxyfit.h"
-#include "mfkit/mf_table_io.h"
+#include "mfkit/io/mf_table_io.h"
 #endif
 
 /* The registered models (mf_model.h): their names joined by ", " (usage, errors), or one per line

@@ -59,7 +59,7 @@ int cli_maps(int argc, char **argv)
 
 #else
 
-#include "mfkit/mf_image.h"
+#include "mfkit/io/mf_image.h"
 #include "mfkit/mfkit.h"
 
 #include <errno.h>

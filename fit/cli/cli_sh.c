@@ -47,7 +47,7 @@ int cli_sh(int argc, char **argv)
 
 #else
 
-#include "mfkit/mf_image.h"
+#include "mfkit/io/mf_image.h"
 #include "mfkit/mfkit.h"
 
 #include <errno.h>

@@ -21,7 +21,7 @@ int cli_table(int argc, char **argv)
 #else
 
 #include "mfkit/mf_table.h"
-#include "mfkit/mf_table_io.h"
+#include "mfkit/io/mf_table_io.h"
 
 static const char *const k_cmd = "table";
 

@@ -2,6 +2,9 @@
 #define _POSIX_C_SOURCE 200809L
 #include "cli_util.h"
 
+#include "mfkit/io/mf_io.h"
+#include "mfkit/io/mf_json.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
@@ -98,43 +101,8 @@ int cli_buf_write(const cli_buf *b, FILE *f)
 
 int cli_buf_write_file_atomic(const cli_buf *b, const char *path, char *msg, size_t msg_size)
 {
-    if (b->failed) {
-        snprintf(msg, msg_size, "%s: out of memory", path);
-        return -1;
-    }
-    size_t n = strlen(path);
-    char *tmp = malloc(n + 16);
-    if (!tmp) {
-        snprintf(msg, msg_size, "%s: out of memory", path);
-        return -1;
-    }
-    snprintf(tmp, n + 16, "%s.tmpXXXXXX", path);
-    int fd = mkstemp(tmp);
-    if (fd < 0) {
-        snprintf(msg, msg_size, "%s: cannot create a temporary file beside it: %s", path, strerror(errno));
-        free(tmp);
-        return -1;
-    }
-    /* mkstemp creates the file 0600; give it the usual 0666 & ~umask of a new file */
-    mode_t mask = umask(0);
-    umask(mask);
-    (void)fchmod(fd, 0666 & ~mask);
-    FILE *f = fdopen(fd, "wb");
-    int ok = f && cli_buf_write(b, f) == 0;
-    if (f) {
-        ok = ok && fsync(fileno(f)) == 0;
-        ok = (fclose(f) == 0) && ok;
-    } else {
-        close(fd);
-    }
-    if (!ok || rename(tmp, path) != 0) {
-        snprintf(msg, msg_size, "%s: write failed: %s", path, strerror(errno));
-        remove(tmp);
-        free(tmp);
-        return -1;
-    }
-    free(tmp);
-    return 0;
+    mf_buf m = {b->data, b->len, b->cap, b->failed}; /* a view: not freed here */
+    return mf_io_write_buf_atomic(path, &m, msg, msg_size) == MF_OK ? 0 : -1;
 }
 
 void cli_buf_double(cli_buf *b, double v)
@@ -147,26 +115,29 @@ void cli_buf_double(cli_buf *b, double v)
         cli_buf_printf(b, "%.17g", v);
 }
 
+/* The one JSON emitter (mf_json.h), appended through a scratch buffer. */
+static void append_json(cli_buf *b, const mf_buf *m)
+{
+    if (m->failed)
+        b->failed = 1;
+    else
+        cli_buf_printf(b, "%.*s", (int)m->len, m->data ? m->data : "");
+}
+
 void cli_buf_json_string(cli_buf *b, const char *s)
 {
-    cli_buf_printf(b, "\"");
-    for (; *s; ++s) {
-        if (*s == '"' || *s == '\\')
-            cli_buf_printf(b, "\\%c", *s);
-        else if ((unsigned char)*s < 0x20)
-            cli_buf_printf(b, "\\u%04x", (unsigned char)*s);
-        else
-            cli_buf_printf(b, "%c", *s);
-    }
-    cli_buf_printf(b, "\"");
+    mf_buf m = {0};
+    mf_json_string(&m, s);
+    append_json(b, &m);
+    mf_buf_free(&m);
 }
 
 void cli_buf_json_number(cli_buf *b, double v)
 {
-    if (isfinite(v))
-        cli_buf_printf(b, "%.17g", v);
-    else
-        cli_buf_printf(b, "null");
+    mf_buf m = {0};
+    mf_json_number(&m, v);
+    append_json(b, &m);
+    mf_buf_free(&m);
 }
 
 void cli_buf_checks_json(cli_buf *b, const mf_check *c, int n)

@@ -11,7 +11,7 @@
 #include "mfkit/mfkit.h"
 #ifdef MFKIT_HAVE_CXX_DEPS
 #include "mfkit/mf_ltc_reference.h"
-#include "mfkit/mf_table_io.h"
+#include "mfkit/io/mf_table_io.h"
 #endif
 
 #include <stdlib.h>

@@ -4,6 +4,10 @@
 
 #include <string.h>
 
+#ifdef MFKIT_HAVE_CXX_DEPS
+#include "mfkit/mf_image_oiio.h"
+#endif
+
 static void usage(FILE *f)
 {
     fprintf(f,
@@ -32,6 +36,9 @@ int main(int argc, char **argv)
         usage(stderr);
         return 2;
     }
+#ifdef MFKIT_HAVE_CXX_DEPS
+    mf_image_set_backend(mf_image_oiio_backend()); /* EXR tables and images */
+#endif
     const char *c = argv[1];
     if (!strcmp(c, "--help") || !strcmp(c, "-h") || !strcmp(c, "help")) {
         usage(stdout);

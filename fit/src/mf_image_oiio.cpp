@@ -1,8 +1,9 @@
-// mf_image_oiio.cpp -- the C API of mf_image.h over OpenImageIO 2.4.
+// mf_image_oiio.cpp -- the OpenImageIO 2.4 backend of the image API (mfkit/io/mf_image.h).
 //
 // No exception crosses the C boundary; every error becomes a status and a "path: reason" message.
+// The dispatcher checks the arguments and owns the atomic write (temporary file, fsync, rename).
 
-#include "mfkit/mf_image.h"
+#include "mfkit/mf_image_oiio.h"
 
 #include <OpenImageIO/imageio.h>
 
@@ -47,12 +48,6 @@ void set_msg(char *msg, size_t msg_size, const char *path, const std::string &re
     set_msg(msg, msg_size, path, "", reason.c_str());
 }
 
-void clear_msg(char *msg, size_t msg_size)
-{
-    if (msg != nullptr && msg_size > 0)
-        msg[0] = '\0';
-}
-
 // OIIO keeps a per-thread error for failed open/create calls; fetch and clear it.
 std::string global_error()
 {
@@ -93,50 +88,12 @@ bool pixel_count(long long w, long long h, long long c, size_t *n)
     return true;
 }
 
-// Temporary name in the same directory as path, with the same extension:
-// "dir/name.exr" -> "dir/name.tmp<pid>_<n>.exr".
-std::string temp_name(const std::string &path, unsigned long n)
-{
-    const size_t slash = path.find_last_of("/\\");
-    const size_t base = (slash == std::string::npos) ? 0 : slash + 1;
-    size_t dot = path.find_last_of('.');
-    if (dot == std::string::npos || dot <= base) // no extension, or a leading-dot name
-        dot = path.size();
-    unsigned long pid = 0;
-#ifdef MF_HAVE_GETPID
-    pid = static_cast<unsigned long>(getpid());
-#endif
-    return path.substr(0, dot) + ".tmp" + std::to_string(pid) + "_" + std::to_string(n) + path.substr(dot);
-}
-
-std::atomic<unsigned long> temp_counter{0};
-
-// Removes the temporary file unless released (every failure path, including exceptions).
-struct TempFile {
-    std::string name;
-    bool armed = false;
-    ~TempFile()
-    {
-        if (armed)
-            std::remove(name.c_str());
-    }
-};
-
 } // namespace
 
-extern "C" void mf_image_free(mf_image *img)
-{
-    if (img == nullptr)
-        return;
-    std::free(img->pixels);
-    img->pixels = nullptr;
-    img->width = img->height = img->channels = 0;
-}
+namespace {
 
-extern "C" void mf_image_info_free(mf_image_info *info)
+void free_info(mf_image_info *info)
 {
-    if (info == nullptr)
-        return;
     if (info->channel_names != nullptr)
         for (int c = 0; c < info->nchannels; ++c)
             std::free(info->channel_names[c]);
@@ -144,8 +101,6 @@ extern "C" void mf_image_info_free(mf_image_info *info)
     std::free(info->attrib_value);
     std::memset(info, 0, sizeof *info);
 }
-
-namespace {
 
 char *dup_cstr(const std::string &s)
 {
@@ -167,7 +122,7 @@ bool fill_info(const OIIO::ImageSpec &spec, const char *attrib_name, mf_image_in
         const std::string name = (c < static_cast<int>(spec.channelnames.size())) ? spec.channelnames[c] : std::string();
         info->channel_names[c] = dup_cstr(name);
         if (info->channel_names[c] == nullptr) {
-            mf_image_info_free(info);
+            free_info(info);
             return false;
         }
     }
@@ -176,7 +131,7 @@ bool fill_info(const OIIO::ImageSpec &spec, const char *attrib_name, mf_image_in
         if (p != nullptr && p->nvalues() == 1) {
             info->attrib_value = dup_cstr(p->get_ustring_indexed(0).string());
             if (info->attrib_value == nullptr) {
-                mf_image_info_free(info);
+                free_info(info);
                 return false;
             }
         }
@@ -185,27 +140,9 @@ bool fill_info(const OIIO::ImageSpec &spec, const char *attrib_name, mf_image_in
     return true;
 }
 
-} // namespace
-
-extern "C" mf_status mf_image_read(const char *path, mf_image *out, char *msg, size_t msg_size)
+mf_status oiio_read(const char *path, mf_image *out, const char *attrib_name, mf_image_info *info, char *msg,
+                    size_t msg_size)
 {
-    return mf_image_read_ex(path, out, nullptr, nullptr, msg, msg_size);
-}
-
-extern "C" mf_status mf_image_read_ex(const char *path, mf_image *out, const char *attrib_name, mf_image_info *info,
-                                      char *msg, size_t msg_size)
-{
-    clear_msg(msg, msg_size);
-    if (info != nullptr)
-        std::memset(info, 0, sizeof *info);
-    if (out != nullptr) {
-        out->width = out->height = out->channels = 0;
-        out->pixels = nullptr;
-    }
-    if (path == nullptr || out == nullptr) {
-        set_msg(msg, msg_size, path, "", "invalid argument (NULL path or image)");
-        return MF_ERR_DOMAIN;
-    }
     float *pixels = nullptr;
     try {
         // Return alpha as stored: no premultiplication on read (PNG, TIFF, ...).
@@ -269,87 +206,40 @@ extern "C" mf_status mf_image_read_ex(const char *path, mf_image *out, const cha
         return MF_OK;
     } catch (const std::bad_alloc &) {
         std::free(pixels);
-        mf_image_info_free(info);
+        if (info != nullptr)
+            free_info(info);
         set_msg(msg, msg_size, path, "", "out of memory");
         return MF_ERR_ALLOC;
     } catch (const std::exception &ex) {
         std::free(pixels);
-        mf_image_info_free(info);
+        if (info != nullptr)
+            free_info(info);
         set_msg(msg, msg_size, path, "internal error: ", ex.what());
         return MF_ERR_INTERNAL;
     } catch (...) {
         std::free(pixels);
-        mf_image_info_free(info);
+        if (info != nullptr)
+            free_info(info);
         set_msg(msg, msg_size, path, "internal error: ", "unknown exception");
         return MF_ERR_INTERNAL;
     }
 }
 
-extern "C" mf_status mf_image_write(const char *path, const mf_image *img, int half_float, char *msg,
-                                    size_t msg_size)
+mf_status oiio_write(const char *path, const char *tmp_path, const mf_image *img, const mf_image_write_options *options,
+                     char *msg, size_t msg_size)
 {
-    mf_image_write_options opt;
-    std::memset(&opt, 0, sizeof opt);
-    opt.half_float = half_float;
-    return mf_image_write_ex(path, img, &opt, msg, msg_size);
-}
-
-extern "C" mf_status mf_image_write_ex(const char *path, const mf_image *img, const mf_image_write_options *options,
-                                       char *msg, size_t msg_size)
-{
-    clear_msg(msg, msg_size);
     mf_image_write_options opt;
     std::memset(&opt, 0, sizeof opt);
     if (options != nullptr)
         opt = *options;
     const bool use_half_bits = opt.half_float && opt.half_bits != nullptr;
-    size_t n = 0;
-    if (path == nullptr || path[0] == '\0' || img == nullptr || (img->pixels == nullptr && !use_half_bits) ||
-        !pixel_count(img->width, img->height, img->channels, &n)) {
-        set_msg(msg, msg_size, path, "", "invalid argument (NULL or empty path, NULL image or pixels, or size < 1)");
-        return MF_ERR_DOMAIN;
-    }
-    if (opt.channel_names != nullptr)
-        for (int c = 0; c < img->channels; ++c)
-            if (opt.channel_names[c] == nullptr || opt.channel_names[c][0] == '\0') {
-                set_msg(msg, msg_size, path, "", "invalid argument (NULL or empty channel name)");
-                return MF_ERR_DOMAIN;
-            }
-    if (opt.nattribs < 0 || (opt.nattribs > 0 && (opt.attrib_names == nullptr || opt.attrib_values == nullptr))) {
-        set_msg(msg, msg_size, path, "", "invalid argument (attribute arrays)");
-        return MF_ERR_DOMAIN;
-    }
-    for (int a = 0; a < opt.nattribs; ++a)
-        if (opt.attrib_names[a] == nullptr || opt.attrib_names[a][0] == '\0' || opt.attrib_values[a] == nullptr) {
-            set_msg(msg, msg_size, path, "", "invalid argument (NULL or empty attribute name, or NULL value)");
-            return MF_ERR_DOMAIN;
-        }
     try {
-        TempFile tmp; // declared first: destroyed (file removed) after the writer has closed it
-        // The writer is chosen by the extension of path; the temporary name has the same one.
+        // The writer is chosen by the extension of path; the dispatcher's temporary has none.
         auto out = OIIO::ImageOutput::create(path);
         if (!out) {
             set_msg(msg, msg_size, path, global_error());
             return MF_ERR_UNSUPPORTED;
         }
-        // Reserve a fresh temporary name ("x": fail if it exists) so that concurrent writers of the
-        // same path never share a temporary file.  Normal permissions (0666 & ~umask).
-        for (int attempt = 0;; ++attempt) {
-            tmp.name = temp_name(path, temp_counter.fetch_add(1));
-            std::FILE *f = std::fopen(tmp.name.c_str(), "wbx");
-            if (f != nullptr) {
-                std::fclose(f);
-                tmp.armed = true;
-                break;
-            }
-            const int err = errno;
-            if (err != EEXIST || attempt >= 100) {
-                set_msg(msg, msg_size, path,
-                        "cannot create temporary file " + tmp.name + ": " + std::strerror(err));
-                return MF_ERR_IO;
-            }
-        }
-
         OIIO::ImageSpec spec(img->width, img->height, img->channels,
                              opt.half_float ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT);
         // The pixels are written as given (no un-premultiplication by alpha in PNG, TIFF, ...).
@@ -362,7 +252,12 @@ extern "C" mf_status mf_image_write_ex(const char *path, const mf_image *img, co
         }
         for (int a = 0; a < opt.nattribs; ++a)
             spec.attribute(opt.attrib_names[a], opt.attrib_values[a]);
-        if (!out->open(tmp.name, spec)) {
+        // OpenImageIO stamps new files with the current time (OpenEXR "capDate") unless the spec
+        // has a "DateTime": an empty one is written as nothing, so the output is bitwise the same
+        // between runs (checked by tests/test_image.c).
+        if (spec.find_attribute("DateTime") == nullptr)
+            spec.attribute("DateTime", "");
+        if (!out->open(tmp_path, spec)) {
             // The temporary file could be created, so this is (nearly always) the format refusing
             // the image, e.g. more channels than it stores.
             const std::string e = object_error(*out);
@@ -385,12 +280,6 @@ extern "C" mf_status mf_image_write_ex(const char *path, const mf_image *img, co
         }
         (void)out->geterror();
         out.reset();
-        if (std::rename(tmp.name.c_str(), path) != 0) {
-            const int err = errno;
-            set_msg(msg, msg_size, path, "cannot rename " + tmp.name + " to it: " + std::strerror(err));
-            return MF_ERR_IO;
-        }
-        tmp.armed = false;
         return MF_OK;
     } catch (const std::bad_alloc &) {
         set_msg(msg, msg_size, path, "", "out of memory");
@@ -402,4 +291,12 @@ extern "C" mf_status mf_image_write_ex(const char *path, const mf_image *img, co
         set_msg(msg, msg_size, path, "internal error: ", "unknown exception");
         return MF_ERR_INTERNAL;
     }
+}
+
+} // namespace
+
+extern "C" const mf_image_backend *mf_image_oiio_backend(void)
+{
+    static const mf_image_backend backend = {"OpenImageIO " OIIO_VERSION_STRING, oiio_read, oiio_write};
+    return &backend;
 }

@@ -8,6 +8,8 @@
 #include "mfkit/mf_rng.h"
 #include "mfkit/mf_sample.h"
 #include "mfkit/mf_solver.h"
+#include "mfkit/io/mf_io.h"
+#include "mfkit/io/mf_json.h"
 
 #include <pthread.h>
 #include <stdio.h>
@@ -20,7 +22,8 @@
  * (objective, lights, constants), so that --resume refuses a checkpoint of another revision
  * instead of mixing columns of two fitters.  2: control variate, proximal shears, mirror
  * convention, 4x directions at grazing views.  3: proximal scales too. */
-#define CKPT_MAGIC "MFLTCCK3"
+/* Revision 4: the body is followed by its FNV-1a 64 checksum (revision 3 files are refused). */
+#define CKPT_MAGIC "MFLTCCK4"
 #define ENTRY_DOUBLES 19
 #define A_MIN 1e-7
 /* The floor of the residual weights, in units of the texel's albedo: residual_k =
@@ -1009,78 +1012,101 @@ static void ckpt_header_make(const job *j, ckpt_header *h)
     h->range[3] = j->o->u_hi;
 }
 
-/* Writes the checkpoint (called with the lock held). */
+/* FNV-1a 64 (Fowler, Noll, Vo) of the checkpoint body: a flipped or lost byte changes it. */
+static uint64_t ckpt_checksum(const unsigned char *p, size_t n)
+{
+    uint64_t h = 14695981039346656037ull;
+    for (size_t i = 0; i < n; ++i) {
+        h ^= p[i];
+        h *= 1099511628211ull;
+    }
+    return h;
+}
+
+/* The file: the header, one done byte per column, ENTRY_DOUBLES doubles per entry (native byte
+ * order: a checkpoint is resumed on the machine that wrote it), then the 8-byte checksum of all
+ * that.  Written atomically (mf_io.h).  Called with the lock held. */
 static mf_status ckpt_write(job *j)
 {
     const char *path = j->o->checkpoint;
-    size_t len = strlen(path);
-    char *tmp = malloc(len + 32);
-    if (!tmp)
-        return MF_ERR_ALLOC;
-    snprintf(tmp, len + 32, "%s.tmp%ld", path, (long)getpid());
-    FILE *f = fopen(tmp, "wb");
-    int ok = f != NULL;
-    if (ok) {
-        ckpt_header h;
-        ckpt_header_make(j, &h);
-        ok = fwrite(&h, sizeof h, 1, f) == 1 && fwrite(j->done, 1, (size_t)j->o->n_r, f) == (size_t)j->o->n_r;
-        size_t n = (size_t)j->o->n_r * (size_t)j->o->n_u;
-        for (size_t i = 0; ok && i < n; ++i) {
-            double x[ENTRY_DOUBLES];
-            entry_to_doubles(&j->entries[i], x);
-            ok = fwrite(x, sizeof x, 1, f) == 1;
-        }
-        if (fclose(f) != 0)
-            ok = 0;
+    mf_buf b = {0};
+    ckpt_header h;
+    ckpt_header_make(j, &h);
+    mf_buf_put(&b, &h, sizeof h);
+    mf_buf_put(&b, j->done, (size_t)j->o->n_r);
+    size_t n = (size_t)j->o->n_r * (size_t)j->o->n_u;
+    for (size_t i = 0; i < n && !b.failed; ++i) {
+        double x[ENTRY_DOUBLES];
+        entry_to_doubles(&j->entries[i], x);
+        mf_buf_put(&b, x, sizeof x);
     }
-    if (ok && rename(tmp, path) != 0)
-        ok = 0;
-    if (!ok) {
-        remove(tmp);
-        if (j->msg)
-            snprintf(j->msg, j->msg_size, "%s: cannot write the checkpoint", path);
+    if (!b.failed) {
+        uint64_t sum = ckpt_checksum((const unsigned char *)b.data, b.len);
+        mf_buf_put(&b, &sum, sizeof sum);
     }
-    free(tmp);
-    return ok ? MF_OK : MF_ERR_IO;
+    char why[512];
+    mf_status st = mf_io_write_buf_atomic(path, &b, why, sizeof why);
+    mf_buf_free(&b);
+    if (st != MF_OK && j->msg)
+        snprintf(j->msg, j->msg_size, "cannot write the checkpoint: %s", why);
+    return st;
 }
 
 /* Loads a checkpoint: MF_OK (columns marked done), MF_ERR_IO (no file: nothing loaded, not an
- * error for the caller), MF_ERR_FORMAT (a file of other settings or truncated). */
+ * error for the caller), MF_ERR_FORMAT (an older revision, a file of other settings, truncated or
+ * corrupted: refused with one message). */
 static mf_status ckpt_read(job *j, int *loaded)
 {
     *loaded = 0;
-    FILE *f = fopen(j->o->checkpoint, "rb");
-    if (!f)
-        return MF_ERR_IO;
-    ckpt_header h, want;
+    const char *path = j->o->checkpoint;
+    unsigned char *d;
+    size_t len;
+    int missing;
+    char why[512];
+    mf_status st = mf_io_read_file(path, path, &d, &len, &missing, why, sizeof why);
+    if (st != MF_OK) {
+        if (missing)
+            return MF_ERR_IO;
+        if (j->msg)
+            snprintf(j->msg, j->msg_size, "%s", why);
+        return MF_ERR_FORMAT;
+    }
+    ckpt_header want;
     ckpt_header_make(j, &want);
     size_t n = (size_t)j->o->n_r * (size_t)j->o->n_u;
-    unsigned char *done = malloc((size_t)j->o->n_r);
-    mf_ltcfit_entry *e = malloc(sizeof *e * n);
-    int ok = done && e && fread(&h, sizeof h, 1, f) == 1 && !memcmp(&h, &want, sizeof h) &&
-             fread(done, 1, (size_t)j->o->n_r, f) == (size_t)j->o->n_r;
-    for (size_t i = 0; ok && i < n; ++i) {
-        double x[ENTRY_DOUBLES];
-        ok = fread(x, sizeof x, 1, f) == 1;
-        if (ok)
-            entry_from_doubles(x, &e[i]);
+    size_t body = sizeof want + (size_t)j->o->n_r + n * ENTRY_DOUBLES * sizeof(double);
+    const char *bad = NULL;
+    uint64_t sum;
+    if (len < 8 || memcmp(d, CKPT_MAGIC, 7) != 0)
+        bad = "not an mfkit LTC checkpoint";
+    else if (memcmp(d, CKPT_MAGIC, 8) != 0)
+        bad = "a checkpoint of another mfkit revision (delete it and fit again)";
+    else if (len >= sizeof want && memcmp(d, &want, sizeof want) != 0)
+        bad = "not a checkpoint of this fit (other model, size, seed or settings)";
+    else if (len != body + sizeof sum)
+        bad = "truncated or extended checkpoint (wrong size)";
+    else if (memcpy(&sum, d + body, sizeof sum), sum != ckpt_checksum(d, body))
+        bad = "corrupted checkpoint (checksum mismatch)";
+    if (bad) {
+        if (j->msg)
+            snprintf(j->msg, j->msg_size, "%s: %s", path, bad);
+        free(d);
+        return MF_ERR_FORMAT;
     }
-    fclose(f);
-    if (ok) {
-        for (int c = 0; c < j->o->n_r; ++c)
-            if (done[c]) {
-                j->done[c] = 1;
-                ++*loaded;
-                for (int u = 0; u < j->o->n_u; ++u)
-                    j->entries[c + j->o->n_r * u] = e[c + j->o->n_r * u];
+    const unsigned char *done = d + sizeof want, *ent = done + j->o->n_r;
+    for (int c = 0; c < j->o->n_r; ++c)
+        if (done[c]) {
+            j->done[c] = 1;
+            ++*loaded;
+            for (int u = 0; u < j->o->n_u; ++u) {
+                size_t i = (size_t)c + (size_t)j->o->n_r * (size_t)u;
+                double x[ENTRY_DOUBLES];
+                memcpy(x, ent + i * sizeof x, sizeof x);
+                entry_from_doubles(x, &j->entries[i]);
             }
-    } else if (j->msg) {
-        snprintf(j->msg, j->msg_size, "%s: not a checkpoint of this fit (other model, size, seed or settings) or truncated",
-                 j->o->checkpoint);
-    }
-    free(done);
-    free(e);
-    return ok ? MF_OK : MF_ERR_FORMAT;
+        }
+    free(d);
+    return MF_OK;
 }
 
 static int stop_requested(const job *j)
@@ -1322,45 +1348,50 @@ mf_status mf_ltcfit_write_sidecar(const char *path, const mf_brdf_model *model, 
             snprintf(msg, msg_size, "invalid arguments");
         return MF_ERR_DOMAIN;
     }
-    size_t len = strlen(path);
-    char *tmp = malloc(len + 32);
-    if (!tmp)
-        return MF_ERR_ALLOC;
-    snprintf(tmp, len + 32, "%s.tmp%ld", path, (long)getpid());
-    FILE *f = fopen(tmp, "w");
-    int ok = f != NULL;
-    if (ok) {
-        fprintf(f, "{\n  \"format\": \"mfkit-ltcfit\",\n  \"brdf\": \"%s\",\n  \"n_r\": %d,\n  \"n_u\": %d,\n", model->name,
-                r->n_r, r->n_u);
-        fprintf(f, "  \"r_range\": [%.17g, %.17g],\n  \"u_range\": [%.17g, %.17g],\n", o->r_lo, o->r_hi, o->u_lo,
-                o->u_hi);
-        fprintf(f, "  \"seed\": %llu,\n  \"samples\": %d,\n  \"lights\": %d,\n  \"entries\": [\n",
-                (unsigned long long)o->seed, o->samples, mf_ltcfit_light_count());
-        size_t n = (size_t)r->n_r * (size_t)r->n_u;
-        for (size_t i = 0; i < n; ++i) {
-            const mf_ltcfit_entry *e = &r->entries[i];
-            int ir = (int)(i % (size_t)r->n_r), iu = (int)(i / (size_t)r->n_r);
-            fprintf(f,
-                    "    {\"ir\": %d, \"iu\": %d, \"alpha\": %.17g, \"cos_theta\": %.17g, \"a\": %.17g, \"b\": %.17g, "
-                    "\"c\": %.17g, \"d\": %.17g, \"m\": [%.17g, %.17g, %.17g, %.17g, %.17g, %.17g, %.17g, %.17g, %.17g], \"residual\": %.17g, \"iterations\": %d, \"converged\": %s, "
-                    "\"magnitude\": %.17g, \"magnitude_err\": %.17g, \"fresnel\": %.17g}%s\n",
-                    ir, iu, mf_ltc_table_alpha(table, ir), mf_ltc_table_cos_theta(table, iu), e->a, e->b, e->c, e->d,
-                    e->m[0], e->m[1], e->m[2], e->m[3], e->m[4], e->m[5], e->m[6], e->m[7], e->m[8], e->residual, e->iterations, e->converged ? "true" : "false", e->magnitude, e->magnitude_err,
-                    e->fresnel, i + 1 < n ? "," : "");
+    /* every number through the one JSON emitter: a failed fit's NaN is "NaN", not a bare nan */
+    mf_buf b = {0};
+    mf_buf_puts(&b, "{\n  \"format\": \"mfkit-ltcfit\",\n  \"brdf\": ");
+    mf_json_string(&b, model->name);
+    mf_buf_printf(&b, ",\n  \"n_r\": %d,\n  \"n_u\": %d,\n  \"r_range\": [", r->n_r, r->n_u);
+    mf_json_number(&b, o->r_lo);
+    mf_buf_puts(&b, ", ");
+    mf_json_number(&b, o->r_hi);
+    mf_buf_puts(&b, "],\n  \"u_range\": [");
+    mf_json_number(&b, o->u_lo);
+    mf_buf_puts(&b, ", ");
+    mf_json_number(&b, o->u_hi);
+    mf_buf_printf(&b, "],\n  \"seed\": %llu,\n  \"samples\": %d,\n  \"lights\": %d,\n  \"entries\": [\n",
+                  (unsigned long long)o->seed, o->samples, mf_ltcfit_light_count());
+    size_t n = (size_t)r->n_r * (size_t)r->n_u;
+    for (size_t i = 0; i < n && !b.failed; ++i) {
+        const mf_ltcfit_entry *e = &r->entries[i];
+        int ir = (int)(i % (size_t)r->n_r), iu = (int)(i / (size_t)r->n_r);
+        const char *names[] = {"alpha", "cos_theta", "a", "b", "c", "d"};
+        const double vals[] = {mf_ltc_table_alpha(table, ir), mf_ltc_table_cos_theta(table, iu), e->a, e->b, e->c, e->d};
+        mf_buf_printf(&b, "    {\"ir\": %d, \"iu\": %d", ir, iu);
+        for (int k = 0; k < 6; ++k) {
+            mf_buf_printf(&b, ", \"%s\": ", names[k]);
+            mf_json_number(&b, vals[k]);
         }
-        fprintf(f, "  ]\n}\n");
-        if (ferror(f))
-            ok = 0;
-        if (fclose(f) != 0)
-            ok = 0;
+        mf_buf_puts(&b, ", \"m\": [");
+        for (int k = 0; k < 9; ++k) {
+            if (k)
+                mf_buf_puts(&b, ", ");
+            mf_json_number(&b, e->m[k]);
+        }
+        mf_buf_puts(&b, "], \"residual\": ");
+        mf_json_number(&b, e->residual);
+        mf_buf_printf(&b, ", \"iterations\": %d, \"converged\": %s, \"magnitude\": ", e->iterations,
+                      e->converged ? "true" : "false");
+        mf_json_number(&b, e->magnitude);
+        mf_buf_puts(&b, ", \"magnitude_err\": ");
+        mf_json_number(&b, e->magnitude_err);
+        mf_buf_puts(&b, ", \"fresnel\": ");
+        mf_json_number(&b, e->fresnel);
+        mf_buf_printf(&b, "}%s\n", i + 1 < n ? "," : "");
     }
-    if (ok && rename(tmp, path) != 0)
-        ok = 0;
-    if (!ok) {
-        remove(tmp);
-        if (msg)
-            snprintf(msg, msg_size, "%s: cannot write", path);
-    }
-    free(tmp);
-    return ok ? MF_OK : MF_ERR_IO;
+    mf_buf_puts(&b, "  ]\n}\n");
+    mf_status st = mf_io_write_buf_atomic(path, &b, msg, msg_size);
+    mf_buf_free(&b);
+    return st;
 }

@@ -2,7 +2,8 @@
  * mf_table_io.h -- write an mf_table to the files renderers and tools read, and read it back.
  *
  * Formats (docs/tables.md has the byte layouts):
- *   .exr   OpenEXR through OpenImageIO, float32 or half; axis 0 = width (x), axis 1 = height (y,
+ *   .exr   OpenEXR through the image API (mf_image.h: needs the OpenImageIO backend installed,
+ *          else MF_ERR_UNSUPPORTED), float32 or half, bitwise the same between runs; axis 0 = width (x), axis 1 = height (y,
  *          row 0 first), 1D tables have height 1; one channel per field, named after it; the
  *          metadata JSON in the string attribute "mfkit:table".  At most 2 axes.
  *   .dds   DirectDraw Surface with the DX10 header, DXGI_FORMAT_R32G32B32A32_FLOAT (2) or
@@ -17,8 +18,9 @@
  *   .glsl, .hlsl  lookup snippets (no data): physical inputs -> axis parameters -> texture
  *          coordinates with the texel-centre mapping, and a lookup function for 1D/2D tables.
  *   .json  {"header": <metadata>, "data": [[record 0], [record 1], ...]}, records in storage
- *          order, each value "%.9g" of its float32 (exact round trip), NaN as null, infinities
- *          as 1e999 / -1e999 (valid JSON numbers that parsers turn into infinities).
+ *          order, each value "%.9g" of its float32 (exact round trip); NaN and infinities as the
+ *          strings "NaN", "Infinity", "-Infinity" (the rule of mf_json.h); null and +-1e999, the
+ *          older spellings, still read.
  *   .npy   NumPy 1.0 format, dtype '<f4', C order, shape (n_{k-1}, ..., n_1, n_0, nfields), so
  *          a[i1, i0, f] is field f of texel (i0, i1); the metadata JSON in "<file>.npy.json"
  *          (numpy.load refuses extra keys in the .npy header).
@@ -39,14 +41,15 @@
  * a table whose doubles are those float32 (or half) values exactly.
  *
  * Errors.  Every function that touches a file fills msg (may be NULL) with "path: reason" on
- * failure and the empty string on success.  Writes are atomic: each file goes to a temporary
- * file in its directory, then is renamed over the target; on failure the temporary is removed
- * and the target is neither created nor changed.  (A data file and its sidecar are each
- * replaced atomically, the sidecar first; a failure between the two renames, which needs the
- * directory to change under us, leaves a new sidecar beside the old data file.)  Corrupt or
- * truncated inputs give MF_ERR_FORMAT, never a crash.
+ * failure and the empty string on success.  Writes are atomic (mf_io.h): each file goes to a
+ * temporary in its directory, is synced, then renamed over the target; on failure the temporary
+ * is removed and the target is neither created nor changed (a full disk gives MF_ERR_IO).  A
+ * data file and its sidecar are both written and synced before either is renamed, the sidecar
+ * first; only a failing rename between the two (the directory changed under us) leaves a new
+ * sidecar beside the old data file.  Corrupt or truncated inputs, and inputs with bytes after the
+ * data, give MF_ERR_FORMAT, never a crash.
  *
- * Plain C11 (the EXR part goes through the OpenImageIO bridge, mf_image.h).
+ * Plain C11; the formats are in lib/io/src/fmt_*.c behind a table of format operations.
  */
 #ifndef MF_TABLE_IO_H
 #define MF_TABLE_IO_H

@@ -1,5 +1,21 @@
 /*
- * mf_image.h -- read and write float images (a C bridge over OpenImageIO 2.4).
+ * mf_image.h -- read and write float images: a plain C dispatcher over an image backend.
+ *
+ * Backends.  mfkit_io itself reads and writes no image format: a program installs a backend
+ * once, before its first image call, with mf_image_set_backend.  The OpenImageIO backend (target
+ * mfkit_image_oiio, header mfkit/mf_image_oiio.h) is installed by
+ *
+ *     mf_image_set_backend(mf_image_oiio_backend());
+ *
+ * Without a backend every read and write returns MF_ERR_UNSUPPORTED with
+ * "path: reading EXR needs the OpenImageIO build" (or "writing", and the file's extension), so a
+ * pure C build handles every other table format and reports images cleanly.  Installing is not
+ * automatic: a static library's object is linked only when referenced, and a program that does
+ * not need images should not load the image stack.
+ *
+ * Writes are atomic (mf_io.h): the dispatcher creates the temporary "<path>.tmp<pid>_<n>", the
+ * backend writes it by name in the format of path's extension, and the dispatcher fsyncs and
+ * renames it; on any failure the temporary is removed and path is neither created nor changed.
  *
  * An mf_image is a 2D array of float pixels, row-major from the top row, channels interleaved:
  * channel c of pixel (x, y) is pixels[((size_t)y * width + x) * channels + c].  Values are
@@ -29,6 +45,30 @@ typedef struct mf_image {
                                   * the image when filled by mf_image_read (free with mf_image_free) */
 } mf_image;
 
+/* ---- backends ------------------------------------------------------------------------------- */
+
+struct mf_image_write_options;
+struct mf_image_info;
+
+typedef struct mf_image_backend {
+    const char *name; /* e.g. "OpenImageIO 2.4" */
+    /* mf_image_read_ex: arguments checked, *out and *info (if not NULL) zeroed, msg cleared.
+     * Pixels and info strings are allocated with malloc (mf_image_free / mf_image_info_free free
+     * them with free). */
+    mf_status (*read)(const char *path, struct mf_image *out, const char *attrib_name, struct mf_image_info *info,
+                      char *msg, size_t msg_size);
+    /* Writes img to the file tmp_path (which exists, empty), in the format of path's extension,
+     * and closes it, reporting every failure (messages name path).  Arguments checked. */
+    mf_status (*write)(const char *path, const char *tmp_path, const struct mf_image *img,
+                       const struct mf_image_write_options *opt, char *msg, size_t msg_size);
+} mf_image_backend;
+
+/* Installs the backend every later call uses (NULL: none).  The struct must outlive its use.
+ * Thread-safe, but meant to be called once at start-up. */
+void mf_image_set_backend(const mf_image_backend *backend);
+/* The installed backend, or NULL. */
+const mf_image_backend *mf_image_get_backend(void);
+
 /*
  * Read the first subimage (MIP level 0, its data window) of any file OpenImageIO can read, with
  * every channel converted to float (integer formats map to [0, 1] as OpenImageIO does).
@@ -38,7 +78,7 @@ typedef struct mf_image {
  *   msg, msg_size a buffer for "path: reason" on failure.
  * Returns MF_OK; MF_ERR_DOMAIN (path or out NULL); MF_ERR_IO (the file cannot be opened, e.g. it
  * does not exist or is not readable); MF_ERR_FORMAT (OpenImageIO cannot read it: unknown, corrupt
- * or truncated file); MF_ERR_UNSUPPORTED (a deep or volume image); MF_ERR_ALLOC; MF_ERR_INTERNAL
+ * or truncated file); MF_ERR_UNSUPPORTED (no image backend, or a deep or volume image); MF_ERR_ALLOC; MF_ERR_INTERNAL
  * (an unexpected exception).  Corrupt or truncated files give an error, never a crash.
  */
 mf_status mf_image_read(const char *path, mf_image *out, char *msg, size_t msg_size) MF_WARN_UNUSED;
@@ -54,10 +94,8 @@ mf_status mf_image_read(const char *path, mf_image *out, char *msg, size_t msg_s
  *                 get the nearest pixel type they support: TIFF stores floats, PNG and JPEG
  *                 quantise to integers (and JPEG is lossy).
  *   msg, msg_size a buffer for "path: reason" on failure.
- * The write is atomic: the image goes to a temporary file in the same directory
- * ("<stem>.tmp<pid>_<n><ext>", same extension so the format is the same), which is then renamed
- * over path.  On failure the temporary file is removed, and path is neither created nor changed.
- * Returns MF_OK; MF_ERR_DOMAIN (a NULL or invalid argument); MF_ERR_UNSUPPORTED (no writer for
+ * The write is atomic (see the top of this file).
+ * Returns MF_OK; MF_ERR_DOMAIN (a NULL or invalid argument); MF_ERR_UNSUPPORTED (no backend, no writer for
  * the extension, or the format cannot store this image, e.g. 5 channels in PNG); MF_ERR_IO (the
  * temporary file cannot be created, written or renamed, e.g. the directory does not exist);
  * MF_ERR_ALLOC; MF_ERR_INTERNAL (an unexpected exception).
