@@ -446,7 +446,7 @@ static int sample_axis(int n, int k, int *idx)
     return m;
 }
 
-/* ---- the checks (one function each; the table k_gate_checks below lists them) ------------------ */
+/* ---- the checks (one function each; the table mf_ltc_gate_check_table below lists them) ------------------ */
 
 static void check_finite(void *ctx, mf_check *c)
 {
@@ -774,7 +774,7 @@ static void check_polygon_entry(void *ctx, mf_check *c)
 
 /* The gate: name, what it measures, bound, needs a model, function (bounds and reasons in
  * docs/validation.md, "The LTC gate").  The polygon checks take their bounds from the options. */
-static const mf_check_def k_gate_checks[] = {
+const mf_check_def mf_ltc_gate_check_table[MF_LTC_GATE_MAX_CHECKS] = {
     {"ltc_finite", "number of NaN or infinite values in any field (bound 0)", 0.0, 0, check_finite},
     {"ltc_energy", "max(magnitude - 1, fresnel - magnitude, -fresnel, -magnitude) over all texels", GATE_ENERGY_SLACK, 0,
      check_energy},
@@ -794,13 +794,13 @@ static const mf_check_def k_gate_checks[] = {
     {"ltc_polygon_entry", "worst texel's mean of max(0, |LTC - MC| - 5.5 se) / albedo", MF_LTC_GATE_POLYGON_ENTRY, 1,
      check_polygon_entry},
 };
-#define N_GATE_CHECKS ((int)(sizeof k_gate_checks / sizeof k_gate_checks[0]))
+#define N_GATE_CHECKS MF_LTC_GATE_MAX_CHECKS
 
 const mf_check_def *mf_ltc_gate_checks(int *n)
 {
     if (n)
         *n = N_GATE_CHECKS;
-    return k_gate_checks;
+    return mf_ltc_gate_check_table;
 }
 
 /* ---- the driver ------------------------------------------------------------------------------ */
@@ -834,7 +834,7 @@ mf_status mf_ltc_gate_run(const mf_table *t, const mf_brdf_model *model, const m
     g.hu = fabs(t->axes[1].hi - t->axes[1].lo) / (g.nu - 1);
     g.status = MF_OK;
 
-    mf_status st = mf_check_run_defs(k_gate_checks, N_GATE_CHECKS, &g, model != NULL, checks, cap, count);
+    mf_status st = mf_check_run_defs(mf_ltc_gate_check_table, N_GATE_CHECKS, &g, model != NULL, checks, cap, count);
 
     if (model && g.o.stats && g.poly_done && g.ent) {
         mf_ltc_gate_stats *s = g.o.stats;

@@ -96,6 +96,8 @@ mf_status mf_ltc_gate_run(const mf_table *t, const mf_brdf_model *model, const m
  * check records its cases through mf_check.h (a NaN case fails the check, worst = NaN; a texel
  * whose matrix cannot be unpacked or whose model integral fails counts as +infinity). */
 const mf_check_def *mf_ltc_gate_checks(int *n);
+/* The same table as an array (for static initialisers such as the table-kind registry). */
+extern const mf_check_def mf_ltc_gate_check_table[MF_LTC_GATE_MAX_CHECKS];
 
 /* 1 if t has the layout the gate needs (see mf_ltc_gate_run); 0 with a one-line reason in why
  * (may be NULL) otherwise. */

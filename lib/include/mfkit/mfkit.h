@@ -25,5 +25,6 @@
 #include "mfkit/mf_ltc_table.h"
 #include "mfkit/mf_model.h"
 #include "mfkit/mf_ltc_gate.h"
+#include "mfkit/mf_table_kind.h"
 
 #endif /* MFKIT_H */
