@@ -209,6 +209,57 @@ int main(int argc, char **argv)
         expect("a NaN", &bad, NULL, seed, 1, f, 2);
         mf_table_free(&bad);
     }
+    /* The NaN rule of mf_check.h in the gate: a NaN magnitude is a NaN case of ltc_energy, which
+     * fails with worst = NaN and "NaN at <texel>" (the first NaN, even though the texels after it
+     * are fine); a NaN in a matrix field cannot be unpacked, which ltc_normalisation counts as
+     * +infinity with the reason. */
+    {
+        mf_table bad;
+        CHECK(mf_table_copy(&bad, &good) == MF_OK);
+        int idx[2] = {5, 7};
+        mf_table_record(&bad, idx)[MF_LTC_F_MAGNITUDE] = NAN;
+        int idx2[2] = {2, 9};
+        mf_table_record(&bad, idx2)[MF_LTC_F_MINV_20] = NAN;
+        mf_check c[MF_LTC_GATE_MAX_CHECKS];
+        int n = 0;
+        CHECK(mf_ltc_gate_run(&bad, NULL, NULL, c, MF_LTC_GATE_MAX_CHECKS, &n) == MF_ERR_CHECK_FAILED);
+        print_checks("NaN rule", c, n);
+        const mf_check *en = find(c, n, "ltc_energy"), *no = find(c, n, "ltc_normalisation");
+        CHECK(en && !en->passed && isnan(en->worst));
+        CHECK(en && strstr(en->worst_at, "NaN at ") == en->worst_at && strstr(en->worst_at, "ir 5, iu 7"));
+        CHECK(en && en->cases == (long)mf_table_texels(&bad));
+        CHECK(no && !no->passed && isinf(no->worst) && strstr(no->worst_at, "singular or non-finite matrix (ir 2, iu 9"));
+        mf_table_free(&bad);
+    }
+    /* The table of checks: the run writes them in its order, model checks only with a model. */
+    {
+        int nd = 0;
+        const mf_check_def *d = mf_ltc_gate_checks(&nd);
+        CHECK(nd == MF_LTC_GATE_MAX_CHECKS);
+        CHECK(mf_check_defs_count(d, nd, 0) == 5 && mf_check_defs_count(d, nd, 1) == 9);
+        mf_check c[MF_LTC_GATE_MAX_CHECKS];
+        int n = 0;
+        CHECK(mf_ltc_gate_run(&good, NULL, NULL, c, MF_LTC_GATE_MAX_CHECKS, &n) == MF_OK);
+        for (int i = 0, k = 0; i < nd; ++i) {
+            if (d[i].needs_model)
+                continue;
+            CHECK(k < n && !strcmp(c[k].name, d[i].name) && c[k].bound == d[i].bound);
+            ++k;
+        }
+        /* energy values are <= 0 on the exact table (magnitude 1, fresnel 0: max(0, -1, -1, -0)), and
+         * the check reports worst = 0 (mf_check.h: worst is the maximum of the values and 0) */
+        const mf_check *en = find(c, n, "ltc_energy");
+        CHECK(en && en->worst == 0.0 && en->passed);
+        char why[160];
+        CHECK(mf_ltc_gate_layout_ok(&good, why, sizeof why) == 1);
+        mf_table bad;
+        CHECK(mf_table_copy(&bad, &good) == MF_OK);
+        snprintf(bad.fields[MF_LTC_F_MINV_02], sizeof bad.fields[0], "other");
+        CHECK(mf_ltc_gate_layout_ok(&bad, why, sizeof why) == 0);
+        printf("layout reason: %s\n", why);
+        CHECK(strstr(why, "minv_02") != NULL);
+        mf_table_free(&bad);
+    }
     /* A singular matrix. */
     {
         mf_table bad;

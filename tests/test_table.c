@@ -4,6 +4,7 @@
 #include "mfkit/mf_rng.h"
 
 #include <float.h>
+#include <stdlib.h>
 #include <string.h>
 
 static mf_table_axis axis(const char *name, const char *phys, int size, double lo, double hi, mf_axis_mapping m,
@@ -21,8 +22,189 @@ static mf_table_axis axis(const char *name, const char *phys, int size, double l
     return a;
 }
 
+/* A table of naxes axes (sizes[k], ranges [lo_k, hi_k] with a reversed axis among them) whose
+ * 2 fields hold a multilinear function of the parameters (field 0) and random values in [-1, 1]
+ * (field 1). */
+static const double k_mcoef[MF_TABLE_MAX_AXES] = {0.7, -1.3, 0.4, 2.1, -0.6, 1.1};
+
+static double multilinear(const double *p, int naxes)
+{
+    double v = 0.25, prod = 1.0;
+    for (int k = 0; k < naxes; ++k) {
+        v += k_mcoef[k] * p[k];
+        prod *= p[k];
+    }
+    return v + 0.5 * prod; /* the product term: linear in each p_k separately */
+}
+
+static int nd_table(mf_table *t, int naxes, const int *sizes, mf_pcg32 *rng)
+{
+    mf_table_axis ax[MF_TABLE_MAX_AXES];
+    static const char *const names[MF_TABLE_MAX_AXES] = {"a0", "a1", "a2", "a3", "a4", "a5"};
+    for (int k = 0; k < naxes; ++k)
+        ax[k] = axis(names[k], names[k], sizes[k], k == 3 ? 1.0 : -0.5 + 0.1 * k, k == 3 ? -2.0 : 1.5 + 0.2 * k,
+                     MF_AXIS_IDENTITY, -INFINITY);
+    const char *fields[2] = {"lin", "rnd"};
+    if (mf_table_create(t, naxes, ax, 2, fields) != MF_OK)
+        return 0;
+    int idx[MF_TABLE_MAX_AXES];
+    for (size_t i = 0; i < mf_table_texels(t); ++i) {
+        size_t r = i;
+        double p[MF_TABLE_MAX_AXES];
+        for (int k = 0; k < naxes; ++k) {
+            idx[k] = (int)(r % (size_t)sizes[k]);
+            r /= (size_t)sizes[k];
+            p[k] = mf_table_axis_param(&t->axes[k], idx[k]);
+        }
+        double *rec = mf_table_record(t, idx);
+        if (rec != t->data + i * 2) /* the record layout: first axis fastest */
+            return 0;
+        rec[0] = multilinear(p, naxes);
+        rec[1] = 2.0 * mf_pcg32_next_double(rng) - 1.0;
+    }
+    return 1;
+}
+
+/* A random point of the table's parameter box, 10 % beyond each end (the clamp). */
+static void random_point(const mf_table *t, mf_pcg32 *rng, double *p)
+{
+    for (int k = 0; k < t->naxes; ++k) {
+        double lo = t->axes[k].lo, hi = t->axes[k].hi;
+        p[k] = lo + (hi - lo) * (1.2 * mf_pcg32_next_double(rng) - 0.1);
+    }
+}
+
+static double clamp_to_axis(const mf_table_axis *a, double p)
+{
+    double lo = fmin(a->lo, a->hi), hi = fmax(a->lo, a->hi);
+    return p < lo ? lo : (p > hi ? hi : p);
+}
+
+/* 4 to 6 axes: create, record, and lookup, which reproduces a multilinear function.
+ * Tolerance 1e-13 absolute (values up to ~10): a convex combination of 2^naxes records, each
+ * exact to an ulp, with weights from a few roundings of the coordinates: ~ 2^6 ulp of 10. */
+static void test_nd(void)
+{
+    mf_pcg32 rng;
+    mf_pcg32_seed(&rng, mf_test_seed(77), 1);
+    const int sizes[MF_TABLE_MAX_AXES] = {5, 4, 3, 3, 2, 2};
+    for (int naxes = 4; naxes <= MF_TABLE_MAX_AXES; ++naxes) {
+        mf_table t;
+        CHECK(nd_table(&t, naxes, sizes, &rng));
+        if (!t.data)
+            continue;
+        /* texel centres: the stored record exactly */
+        int idx[MF_TABLE_MAX_AXES] = {4, 1, 2, 0, 1, 1};
+        double p[MF_TABLE_MAX_AXES], out[2];
+        for (int k = 0; k < naxes; ++k)
+            p[k] = mf_table_axis_param(&t.axes[k], idx[k]);
+        CHECK(mf_table_lookup(&t, p, out) == MF_OK);
+        CHECK(out[0] == mf_table_record(&t, idx)[0] && out[1] == mf_table_record(&t, idx)[1]);
+        int bad[MF_TABLE_MAX_AXES] = {0, 0, 0, 0, 0, 0};
+        bad[naxes - 1] = sizes[naxes - 1];
+        CHECK(mf_table_record(&t, bad) == NULL);
+        double worst = 0.0;
+        for (int i = 0; i < 2000; ++i) {
+            random_point(&t, &rng, p);
+            CHECK(mf_table_lookup(&t, p, out) == MF_OK);
+            double pc[MF_TABLE_MAX_AXES];
+            for (int k = 0; k < naxes; ++k)
+                pc[k] = clamp_to_axis(&t.axes[k], p[k]);
+            worst = fmax(worst, fabs(out[0] - multilinear(pc, naxes)));
+        }
+        printf("%d axes: multilinear lookup worst |error| %.3g\n", naxes, worst);
+        CHECK_ABS(worst, 0.0, 1e-13);
+        mf_table_free(&t);
+    }
+    /* more axes than the maximum: refused */
+    mf_table_axis ax[MF_TABLE_MAX_AXES + 1];
+    for (int k = 0; k <= MF_TABLE_MAX_AXES; ++k) {
+        char nm[8];
+        snprintf(nm, sizeof nm, "x%d", k);
+        ax[k] = axis(nm, nm, 2, 0.0, 1.0, MF_AXIS_IDENTITY, -INFINITY);
+    }
+    const char *one[1] = {"v"};
+    mf_table t;
+    CHECK(mf_table_create(&t, MF_TABLE_MAX_AXES + 1, ax, 1, one) == MF_ERR_DOMAIN);
+}
+
+/* The 2D atlas and its shader-style lookup against mf_table_lookup, 3 to 5 axes (and 6), random
+ * values, 3000 random points each (10 % beyond the ends: the clamp).  Tolerance 1e-12 absolute
+ * (values in [-1, 1]): both are convex combinations of the same records; they differ by the
+ * rounding of the texel coordinate (through u = (col + uv) w / W and back, a few ulp of the atlas
+ * width ~ 1e-14) times a neighbour difference <= 2, plus the summation order (2^naxes terms). */
+static void test_atlas(void)
+{
+    mf_pcg32 rng;
+    mf_pcg32_seed(&rng, mf_test_seed(78), 2);
+    const int sizes[MF_TABLE_MAX_AXES] = {7, 5, 4, 3, 3, 2};
+    for (int naxes = 3; naxes <= MF_TABLE_MAX_AXES; ++naxes) {
+        mf_table t;
+        CHECK(nd_table(&t, naxes, sizes, &rng));
+        if (!t.data)
+            continue;
+        for (int variant = 0; variant < 2; ++variant) {
+            mf_table_atlas a;
+            int tiles_x = variant == 0 ? 0 : 5; /* default (axis 2 along x), and 5 columns (unused tiles) */
+            CHECK(mf_table_atlas_layout(&t, tiles_x, &a) == MF_OK);
+            long tiles = 1;
+            for (int k = 2; k < naxes; ++k)
+                tiles *= sizes[k];
+            CHECK(a.tile_w == 7 && a.tile_h == 5 && a.tiles == tiles && a.tiles_x * a.tiles_y >= tiles);
+            CHECK(a.tiles_x == (variant == 0 ? 4 : (tiles < 5 ? (int)tiles : 5)));
+            CHECK(a.width == 7 * a.tiles_x && a.height == 5 * a.tiles_y);
+            double *img = malloc(sizeof *img * (size_t)a.width * (size_t)a.height * 2);
+            CHECK(img != NULL);
+            if (!img)
+                continue;
+            mf_table_atlas_fill(&t, &a, img);
+            /* one texel by the documented formula: (i0, i1) = (3, 2) of the last tile; and an unused
+             * tile's texel is 0 */
+            {
+                int tt = a.tiles - 1;
+                int x = (tt % a.tiles_x) * 7 + 3, y = (tt / a.tiles_x) * 5 + 2;
+                CHECK(img[((size_t)y * a.width + x) * 2 + 1] == t.data[((size_t)3 + 7 * 2 + 35 * (size_t)tt) * 2 + 1]);
+                if (a.tiles_x * a.tiles_y > a.tiles)
+                    CHECK(img[((size_t)a.height * a.width - 1) * 2 + 1] == 0.0);
+            }
+            /* metadata round trip */
+            mf_table_atlas b;
+            CHECK(variant == 1 || mf_table_atlas_from_meta(&t, &b) == MF_ERR_DOMAIN); /* none yet */
+            CHECK(mf_table_atlas_record(&t, &a) == MF_OK);
+            CHECK(mf_table_atlas_from_meta(&t, &b) == MF_OK && !memcmp(&a, &b, sizeof a));
+            double worst = 0.0;
+            for (int i = 0; i < 3000; ++i) {
+                double p[MF_TABLE_MAX_AXES], x[2], y[2];
+                random_point(&t, &rng, p);
+                if (i < 64) /* exact texel centres too */
+                    for (int k = 0; k < naxes; ++k)
+                        p[k] = mf_table_axis_param(&t.axes[k], (int)(mf_pcg32_next_double(&rng) * sizes[k]));
+                CHECK(mf_table_lookup(&t, p, x) == MF_OK);
+                CHECK(mf_table_atlas_lookup(&t, &a, img, p, y) == MF_OK);
+                worst = fmax(worst, fmax(fabs(x[0] - y[0]), fabs(x[1] - y[1])));
+            }
+            printf("%d axes, %d x %d tiles (%d x %d texels): atlas vs lookup worst |difference| %.3g\n", naxes,
+                   a.tiles_x, a.tiles_y, a.width, a.height, worst);
+            CHECK_ABS(worst, 0.0, 1e-12);
+            double pn[MF_TABLE_MAX_AXES] = {0, 0, NAN, 0, 0, 0}, o[2];
+            CHECK(mf_table_atlas_lookup(&t, &a, img, pn, o) == MF_ERR_DOMAIN);
+            free(img);
+        }
+        mf_table_free(&t);
+    }
+    /* a layout that does not fit the table is refused */
+    mf_table t;
+    CHECK(nd_table(&t, 3, sizes, &rng));
+    CHECK(mf_table_set_meta(&t, "atlas", "tiles_x=2 tiles_y=1 tile_w=7 tile_h=5 order=axis2_fastest") == MF_OK);
+    mf_table_atlas b;
+    CHECK(mf_table_atlas_from_meta(&t, &b) == MF_ERR_DOMAIN); /* 4 tiles do not fit 2 x 1 */
+    mf_table_free(&t);
+}
+
 int main(void)
 {
+    test_nd();
+    test_atlas();
     /* The LTC layout: axis 0 roughness r (alpha = max(r^2, 1e-4)), axis 1 u = sqrt(1 - cos theta). */
     mf_table_axis axes[2] = {axis("r", "alpha", 64, 0.0, 1.0, MF_AXIS_SQUARE, 1e-4),
                              axis("u", "cos_theta_o", 32, 0.0, 1.0, MF_AXIS_ONE_MINUS_SQUARE, -INFINITY)};

@@ -207,7 +207,7 @@ mf_status mf_ltc_gate_polygon_mc(const mf_brdf_model *model, double alpha, mf_ve
     return st;
 }
 
-/* ---- the gate ---------------------------------------------------------------------------------- */
+/* ---- the gate: layout, context, helpers --------------------------------------------------------- */
 
 typedef struct gate_layout {
     int f[MF_LTC_NFIELDS]; /* field index of each LTC field, -1 if absent */
@@ -229,6 +229,62 @@ static int layout_of(const mf_table *t, gate_layout *L)
     return 1;
 }
 
+int mf_ltc_gate_layout_ok(const mf_table *t, char *why, size_t why_size)
+{
+    gate_layout L;
+    if (layout_of(t, &L))
+        return 1;
+    if (why && why_size) {
+        if (!t || !t->data)
+            snprintf(why, why_size, "no table data");
+        else if (t->naxes != 2)
+            snprintf(why, why_size, "%d axes, an isotropic LTC table has 2 (r, u)", t->naxes);
+        else if (t->axes[0].mapping != MF_AXIS_SQUARE || t->axes[1].mapping != MF_AXIS_ONE_MINUS_SQUARE)
+            snprintf(why, why_size, "axis mappings %s, %s; an isotropic LTC table has square, one_minus_square",
+                     mf_axis_mapping_name(t->axes[0].mapping), mf_axis_mapping_name(t->axes[1].mapping));
+        else if (t->axes[0].size < 2 || t->axes[1].size < 2)
+            snprintf(why, why_size, "an axis of fewer than 2 texels");
+        else {
+            int k = 0;
+            while (k < MF_LTC_F_MAGNITUDE && mf_table_field(t, mf_ltc_table_fields[k]) >= 0)
+                ++k;
+            snprintf(why, why_size, "no field '%s'", mf_ltc_table_fields[k]);
+        }
+    }
+    return 0;
+}
+
+/* Everything the checks share: the table, the options, and the caches of the expensive model
+ * integrals (computed on first use, so the checks can run in any subset and order with the same
+ * results: every integral is a deterministic function of its texel and the seed). */
+typedef struct gate_entry {
+    int ir, iu, ok;
+    double alpha, ct, mag;
+    mf_result alb;   /* Monte Carlo albedo */
+    double excess;   /* sum over the polygons of max(0, |LTC - MC| - z se) / albedo */
+} gate_entry;
+
+typedef struct gate_ctx {
+    const mf_table *t;
+    const mf_brdf_model *model;
+    mf_ltc_gate_options o;
+    gate_layout L;
+    int nr, nu;
+    double hr, hu;
+    double budget_mean, budget_entry;
+    int nsamples, npoly;
+    mf_status status;    /* MF_ERR_ALLOC if a check ran out of memory */
+    double *qalb;        /* 2 per texel: quadrature albedo and its error estimate; NaN: not computed */
+    double worst_alb;    /* worst |magnitude - quadrature| / max(albedo, 0.01) */
+    /* the polygon pass (run once, by the first check that needs it) */
+    int poly_done;
+    gate_entry *ent;
+    long nent;
+    double *eabs, *erel;
+    long np;
+    double sum_excess, sum_abs, sum_rel, sum_se, worst_abs, worst_rel;
+} gate_ctx;
+
 static const double *rec(const mf_table *t, int ir, int iu)
 {
     return t->data + ((size_t)ir + (size_t)t->axes[0].size * (size_t)iu) * (size_t)t->nfields;
@@ -244,31 +300,45 @@ static int unpack_at(const mf_table *t, const gate_layout *L, int ir, int iu, mf
     return mf_ltc_table_unpack(m4, ltc) == MF_OK;
 }
 
-static void check_init(mf_check *c, const char *name, const char *what, double bound)
+/* Records value v of texel (ir, iu), described by `what` and the texel's indices and parameters. */
+static void record_texel(mf_check *c, double v, const char *what, int ir, int iu, double alpha, double cos_theta)
 {
-    memset(c, 0, sizeof *c);
-    snprintf(c->name, sizeof c->name, "%s", name);
-    snprintf(c->what, sizeof c->what, "%s", what);
-    c->bound = bound;
-    c->worst = 0.0;
-    c->passed = 1;
+    mf_check_recordf(c, v, "%s (ir %d, iu %d: alpha %.4g, theta %.2f deg)", what, ir, iu, alpha,
+                     acos(cos_theta) * 180.0 / MF_PI);
 }
 
-/* Records value v at a case; a NaN v counts as infinitely bad. */
-static void check_case(mf_check *c, double v, const char *where_fmt, int ir, int iu, double alpha, double cos_theta)
+static void out_of_memory(gate_ctx *g, mf_check *c)
 {
-    c->cases++;
-    if (isnan(v))
-        v = INFINITY;
-    if (v > c->worst || !c->worst_at[0]) {
-        if (v > c->worst)
-            c->worst = v;
-        snprintf(c->worst_at, sizeof c->worst_at, "%s (ir %d, iu %d: alpha %.4g, theta %.2f deg)", where_fmt, ir, iu,
-                 alpha, acos(cos_theta) * 180.0 / MF_PI);
+    g->status = MF_ERR_ALLOC;
+    mf_check_fail(c, "out of memory");
+}
+
+/* The model's albedo at texel (ir, iu) by the 64 x 64 quadrature, cached; 0 if it failed. */
+static int quad_albedo(gate_ctx *g, int ir, int iu, mf_result *q)
+{
+    size_t texel = (size_t)ir + (size_t)g->nr * (size_t)iu;
+    if (!g->qalb) {
+        size_t n = (size_t)g->nr * (size_t)g->nu * 2;
+        g->qalb = malloc(sizeof *g->qalb * n);
+        if (!g->qalb)
+            return 0;
+        for (size_t i = 0; i < n; ++i)
+            g->qalb[i] = NAN;
     }
+    if (isnan(g->qalb[2 * texel])) {
+        const mf_table *t = g->t;
+        const mf_brdf_model *model = g->model;
+        mf_result r;
+        if (gate_albedo(model, mf_ltc_table_alpha(t, ir), mf_ltc_gate_view(mf_ltc_table_cos_theta(t, iu)), &r) !=
+            MF_OK)
+            return 0;
+        g->qalb[2 * texel] = r.val;
+        g->qalb[2 * texel + 1] = r.err;
+    }
+    q->val = g->qalb[2 * texel];
+    q->err = g->qalb[2 * texel + 1];
+    return 1;
 }
-
-static void check_finish(mf_check *c) { c->passed = c->passed && c->worst <= c->bound; }
 
 /* A uniformly random rotation (unit quaternion from 4 normals). */
 static mf_mat3 random_rotation(mf_pcg32 *rng)
@@ -337,159 +407,145 @@ static int sample_axis(int n, int k, int *idx)
     return m;
 }
 
-mf_status mf_ltc_gate_run(const mf_table *t, const mf_brdf_model *model, const mf_ltc_gate_options *o_in,
-                          mf_check *checks, int cap, int *count)
+/* ---- the checks (one function each; the table mf_ltc_gate_check_table below lists them) ------------------ */
+
+static void check_finite(void *ctx, mf_check *c)
 {
-    if (count)
-        *count = 0;
-    if (!checks || !count || cap < MF_LTC_GATE_MAX_CHECKS)
-        return MF_ERR_DOMAIN;
-    mf_ltc_gate_options o;
-    if (o_in)
-        o = *o_in;
-    else
-        mf_ltc_gate_options_default(&o);
-    gate_layout L;
-    if (!layout_of(t, &L))
-        return MF_ERR_DOMAIN;
-    double budget_mean = o.polygon_budget_mean > 0.0 ? o.polygon_budget_mean : MF_LTC_GATE_POLYGON_MEAN;
-    double budget_entry = o.polygon_budget_entry > 0.0 ? o.polygon_budget_entry : MF_LTC_GATE_POLYGON_ENTRY;
-    int nsamples = o.mc_samples > 0 ? o.mc_samples : (o.quick ? 32768 : 65536);
-    int npoly = o.polygons_per_entry > 0 ? o.polygons_per_entry : 24;
-    if (npoly > 256)
-        npoly = 256;
-    const int nr = L.nr, nu = L.nu;
-    const double hr = fabs(t->axes[0].hi - t->axes[0].lo) / (nr - 1);
-    const double hu = fabs(t->axes[1].hi - t->axes[1].lo) / (nu - 1);
-    int n = 0;
-    mf_status st = MF_OK;
-
-    /* 1. finite */
-    mf_check *c_fin = &checks[n++];
-    check_init(c_fin, "ltc_finite", "number of NaN or infinite values in any field (bound 0)", 0.0);
-    {
-        size_t bad = 0, first = (size_t)-1;
-        size_t nv = mf_table_texels(t) * (size_t)t->nfields;
-        for (size_t i = 0; i < nv; ++i)
-            if (!isfinite(t->data[i])) {
-                if (first == (size_t)-1)
-                    first = i;
-                ++bad;
-            }
-        c_fin->cases = (long)nv;
-        c_fin->worst = (double)bad;
-        if (bad) {
-            size_t tex = first / (size_t)t->nfields;
-            snprintf(c_fin->worst_at, sizeof c_fin->worst_at, "first: field %s of texel (ir %d, iu %d)",
-                     t->fields[first % (size_t)t->nfields], (int)(tex % (size_t)nr), (int)(tex / (size_t)nr));
+    const gate_ctx *g = ctx;
+    const mf_table *t = g->t;
+    size_t bad = 0, first = (size_t)-1;
+    size_t nv = mf_table_texels(t) * (size_t)t->nfields;
+    for (size_t i = 0; i < nv; ++i)
+        if (!isfinite(t->data[i])) {
+            if (first == (size_t)-1)
+                first = i;
+            ++bad;
         }
-        check_finish(c_fin);
+    /* a count, not a value per case: worst = the number of non-finite values, where = the first */
+    c->cases = (long)nv;
+    c->worst = (double)bad;
+    if (bad) {
+        size_t tex = first / (size_t)t->nfields;
+        snprintf(c->worst_at, sizeof c->worst_at, "first: field %s of texel (ir %d, iu %d)",
+                 t->fields[first % (size_t)t->nfields], (int)(tex % (size_t)g->nr), (int)(tex / (size_t)g->nr));
     }
+}
 
-    /* 2. energy (model-free) */
-    mf_check *c_en = &checks[n++];
-    check_init(c_en, "ltc_energy", "max(magnitude - 1, fresnel - magnitude, -fresnel, -magnitude) over all texels",
-               GATE_ENERGY_SLACK);
-    for (int iu = 0; iu < nu; ++iu)
-        for (int ir = 0; ir < nr; ++ir) {
+static void check_energy(void *ctx, mf_check *c)
+{
+    const gate_ctx *g = ctx;
+    const mf_table *t = g->t;
+    const gate_layout *L = &g->L;
+    for (int iu = 0; iu < g->nu; ++iu)
+        for (int ir = 0; ir < g->nr; ++ir) {
             const double *r = rec(t, ir, iu);
-            double mag = r[L.f[MF_LTC_F_MAGNITUDE]];
+            double mag = r[L->f[MF_LTC_F_MAGNITUDE]];
             double v = mag - 1.0, v2 = -mag;
             const char *w = "magnitude > 1";
             if (v2 > v)
                 v = v2, w = "magnitude < 0";
-            if (L.f[MF_LTC_F_FRESNEL] >= 0) {
-                double fr = r[L.f[MF_LTC_F_FRESNEL]];
+            if (L->f[MF_LTC_F_FRESNEL] >= 0) {
+                double fr = r[L->f[MF_LTC_F_FRESNEL]];
                 if (fr - mag > v)
                     v = fr - mag, w = "fresnel > magnitude";
                 if (-fr > v)
                     v = -fr, w = "fresnel < 0";
             }
-            check_case(c_en, v, w, ir, iu, mf_ltc_table_alpha(t, ir), mf_ltc_table_cos_theta(t, iu));
+            record_texel(c, v, w, ir, iu, mf_ltc_table_alpha(t, ir), mf_ltc_table_cos_theta(t, iu));
         }
-    check_finish(c_en);
+}
 
-    /* 3. normalisation (model-free, every texel) */
-    mf_check *c_norm = &checks[n++];
-    check_init(c_norm, "ltc_normalisation",
-               "|integral over the sphere - 1|: exact integrals over 8 rotated octant triangles, every texel",
-               GATE_NORM_BOUND);
-    for (int iu = 0; iu < nu; ++iu)
-        for (int ir = 0; ir < nr; ++ir) {
+static void check_normalisation(void *ctx, mf_check *c)
+{
+    const gate_ctx *g = ctx;
+    const mf_table *t = g->t;
+    for (int iu = 0; iu < g->nu; ++iu)
+        for (int ir = 0; ir < g->nr; ++ir) {
             mf_ltc ltc;
             double v = INFINITY;
             const char *w = "singular or non-finite matrix";
-            if (unpack_at(t, &L, ir, iu, &ltc)) {
+            if (unpack_at(t, &g->L, ir, iu, &ltc)) {
                 mf_pcg32 rng;
-                mf_pcg32_seed(&rng, o.seed, stream_id(STREAM_NORM, (size_t)ir + (size_t)nr * (size_t)iu));
+                mf_pcg32_seed(&rng, g->o.seed, stream_id(STREAM_NORM, (size_t)ir + (size_t)g->nr * (size_t)iu));
                 v = fabs(octant_sum(&ltc, random_rotation(&rng)) - 1.0);
                 w = "octant sum";
             }
-            check_case(c_norm, v, w, ir, iu, mf_ltc_table_alpha(t, ir), mf_ltc_table_cos_theta(t, iu));
+            record_texel(c, v, w, ir, iu, mf_ltc_table_alpha(t, ir), mf_ltc_table_cos_theta(t, iu));
         }
-    check_finish(c_norm);
+}
 
-    /* 4-5. smoothness (model-free) */
-    mf_check *c_jump = &checks[n++];
-    mf_check *c_spike = &checks[n++];
-    check_init(c_jump, "ltc_smooth_jump", "max |neighbour difference| / (16 h) of every field (h: axis spacing)", 1.0);
-    check_init(c_spike, "ltc_smooth_spike",
-               model ? "max excess of a texel outside its 2 neighbours' range / (80 h^2), every field (magnitude: "
-                       "its error against the model's albedo), both axes"
-                     : "max excess of a texel outside its 2 neighbours' range / (80 h^2), every field, both axes",
-               1.0);
-    /* With a model, a spike of the magnitude is measured on its error magnitude - Q (Q the model's
-     * albedo by quadrature, computed for the texels involved only): the true albedo itself has
-     * spikes at the grazing rows of low roughness that no 64-row table resolves
-     * (docs/validation.md: GGX alpha 0.016, 86.4 / 88.2 / 89.95 deg: 0.962, 0.912, 0.990, a dip
-     * of 2.5 x 80 h^2), and a wrong magnitude is a spike of the error as much as of the value. */
-    double *qsm = NULL;
-    if (model) {
-        qsm = malloc(sizeof *qsm * (size_t)nr * (size_t)nu);
-        if (!qsm)
-            return MF_ERR_ALLOC;
-        for (size_t i = 0; i < (size_t)nr * (size_t)nu; ++i)
-            qsm[i] = NAN;
-    }
+/* Neighbour pairs and triples: every field but "zero", along r then u, in texel order. */
+static void check_smooth_jump(void *ctx, mf_check *c)
+{
+    const gate_ctx *g = ctx;
+    const mf_table *t = g->t;
     for (int f = 0; f < t->nfields; ++f) {
         if (!strcmp(t->fields[f], "zero"))
             continue;
         for (int axis = 0; axis < 2; ++axis) {
             int dr = axis == 0, du = axis == 1;
-            double h = axis == 0 ? hr : hu;
-            for (int iu = 0; iu < nu; ++iu)
-                for (int ir = 0; ir < nr; ++ir) {
-                    if (ir + dr >= nr || iu + du >= nu)
+            double h = axis == 0 ? g->hr : g->hu;
+            for (int iu = 0; iu < g->nu; ++iu)
+                for (int ir = 0; ir < g->nr; ++ir) {
+                    if (ir + dr >= g->nr || iu + du >= g->nu)
                         continue;
                     double a = rec(t, ir, iu)[f], b = rec(t, ir + dr, iu + du)[f];
                     if (!isfinite(a) || !isfinite(b))
                         continue;
                     char w[64];
                     snprintf(w, sizeof w, "%s along %s", t->fields[f], axis == 0 ? "r" : "u");
-                    check_case(c_jump, fabs(b - a) / (GATE_JUMP_PER_H * h), w, ir, iu, mf_ltc_table_alpha(t, ir),
-                               mf_ltc_table_cos_theta(t, iu));
-                    if (ir - dr < 0 || iu - du < 0)
+                    record_texel(c, fabs(b - a) / (GATE_JUMP_PER_H * h), w, ir, iu, mf_ltc_table_alpha(t, ir),
+                                 mf_ltc_table_cos_theta(t, iu));
+                }
+        }
+    }
+}
+
+/* With a model, a spike of the magnitude is measured on its error magnitude - Q (Q the model's
+ * albedo by quadrature, computed for the texels involved only): the true albedo itself has
+ * spikes at the grazing rows of low roughness that no 64-row table resolves
+ * (docs/validation.md: GGX alpha 0.016, 86.4 / 88.2 / 89.95 deg: 0.962, 0.912, 0.990, a dip
+ * of 2.5 x 80 h^2), and a wrong magnitude is a spike of the error as much as of the value. */
+static void check_smooth_spike(void *ctx, mf_check *c)
+{
+    gate_ctx *g = ctx;
+    const mf_table *t = g->t;
+    const int mag_field = g->L.f[MF_LTC_F_MAGNITUDE];
+    if (g->model)
+        snprintf(c->what, sizeof c->what, "%s",
+                 "max excess of a texel outside its 2 neighbours' range / (80 h^2), every field (magnitude: "
+                 "its error against the model's albedo), both axes");
+    for (int f = 0; f < t->nfields; ++f) {
+        if (!strcmp(t->fields[f], "zero"))
+            continue;
+        for (int axis = 0; axis < 2; ++axis) {
+            int dr = axis == 0, du = axis == 1;
+            double h = axis == 0 ? g->hr : g->hu;
+            for (int iu = 0; iu < g->nu; ++iu)
+                for (int ir = 0; ir < g->nr; ++ir) {
+                    if (ir + dr >= g->nr || iu + du >= g->nu || ir - dr < 0 || iu - du < 0)
                         continue;
+                    double a = rec(t, ir, iu)[f], b = rec(t, ir + dr, iu + du)[f];
                     double l = rec(t, ir - dr, iu - du)[f];
-                    if (!isfinite(l))
+                    if (!isfinite(a) || !isfinite(b) || !isfinite(l))
                         continue;
+                    char w[64];
+                    snprintf(w, sizeof w, "%s along %s", t->fields[f], axis == 0 ? "r" : "u");
                     double lo = l < b ? l : b, hi = l < b ? b : l;
                     double ex = a > hi ? a - hi : (a < lo ? lo - a : 0.0);
-                    if (qsm && f == L.f[MF_LTC_F_MAGNITUDE] && ex > GATE_SPIKE_PER_H2 * h * h) {
+                    if (g->model && f == mag_field && ex > GATE_SPIKE_PER_H2 * h * h) {
                         const int tr[3] = {ir - dr, ir, ir + dr}, tu[3] = {iu - du, iu, iu + du};
                         double e[3];
                         int ok = 1;
                         for (int k = 0; k < 3 && ok; ++k) {
-                            size_t ti = (size_t)tr[k] + (size_t)nr * (size_t)tu[k];
-                            if (isnan(qsm[ti])) {
-                                mf_result q;
-                                if (gate_albedo(model, mf_ltc_table_alpha(t, tr[k]),
-                                                mf_ltc_gate_view(mf_ltc_table_cos_theta(t, tu[k])), &q) == MF_OK)
-                                    qsm[ti] = q.val;
-                                else
-                                    ok = 0;
-                            }
-                            e[k] = rec(t, tr[k], tu[k])[f] - qsm[ti];
+                            mf_result q;
+                            ok = quad_albedo(g, tr[k], tu[k], &q);
+                            if (ok)
+                                e[k] = rec(t, tr[k], tu[k])[f] - q.val;
+                        }
+                        if (!g->qalb) {
+                            out_of_memory(g, c);
+                            return;
                         }
                         if (ok) {
                             lo = e[0] < e[2] ? e[0] : e[2];
@@ -498,176 +554,271 @@ mf_status mf_ltc_gate_run(const mf_table *t, const mf_brdf_model *model, const m
                             snprintf(w, sizeof w, "%s - albedo along %s", t->fields[f], axis == 0 ? "r" : "u");
                         }
                     }
-                    check_case(c_spike, ex / (GATE_SPIKE_PER_H2 * h * h), w, ir, iu, mf_ltc_table_alpha(t, ir),
-                               mf_ltc_table_cos_theta(t, iu));
+                    record_texel(c, ex / (GATE_SPIKE_PER_H2 * h * h), w, ir, iu, mf_ltc_table_alpha(t, ir),
+                                 mf_ltc_table_cos_theta(t, iu));
                 }
         }
     }
-    free(qsm);
-    check_finish(c_jump);
-    check_finish(c_spike);
+}
 
-    if (model) {
-        mf_check *c_aq = &checks[n++];
-        mf_check *c_amc = &checks[n++];
-        mf_check *c_pm = &checks[n++];
-        mf_check *c_pe = &checks[n++];
-        check_init(c_aq, "ltc_albedo_quad",
-                   "max (|magnitude - albedo| - 4 err) / max(albedo, 0.01), albedo by 64x64 Gauss-Legendre quadrature",
-                   GATE_ALBEDO_REL);
-        check_init(c_amc, "ltc_albedo_mc", "max |magnitude - MC albedo| / (5.5 se + 1e-3 magnitude), independent MC",
-                   1.0);
-        char what[160];
-        snprintf(what, sizeof what, "mean over polygons of max(0, |LTC - MC| - 5.5 se) / albedo (budget %g)", budget_mean);
-        check_init(c_pm, "ltc_polygon_mean", what, budget_mean);
-        snprintf(what, sizeof what, "worst texel's mean of max(0, |LTC - MC| - 5.5 se) / albedo (budget %g)",
-                 budget_entry);
-        check_init(c_pe, "ltc_polygon_entry", what, budget_entry);
-
-        int ir_idx[1024], iu_idx[1024];
-        int kq = o.quick ? 8 : 16;
-        int mr = sample_axis(nr, o.quick ? 8 : 1024, ir_idx); /* every texel in full mode (up to 1024 per axis) */
-        int mu = sample_axis(nu, o.quick ? 8 : 1024, iu_idx);
-        /* Polygon texels: the quick 8 x 8 grid, or a 32 x 32 grid in full mode. */
-        int pr_idx[1024], pu_idx[1024];
-        int pmr = sample_axis(nr, kq, pr_idx), pmu = sample_axis(nu, kq, pu_idx);
-        long maxpoly = (long)pmr * pmu * npoly;
-        double *eabs = malloc(sizeof *eabs * (size_t)(maxpoly > 0 ? maxpoly : 1));
-        double *erel = malloc(sizeof *erel * (size_t)(maxpoly > 0 ? maxpoly : 1));
-        mf_polygon *polys = malloc(sizeof *polys * (size_t)npoly);
-        double *mc = malloc(sizeof *mc * (size_t)npoly * 2);
-        if (!eabs || !erel || !polys || !mc) {
-            free(eabs);
-            free(erel);
-            free(polys);
-            free(mc);
-            return MF_ERR_ALLOC;
-        }
-        double *se = mc + npoly;
-        long np = 0, nent = 0;
-        double sum_excess = 0.0, sum_abs = 0.0, sum_rel = 0.0, sum_se = 0.0, worst_abs = 0.0, worst_rel = 0.0;
-        double worst_alb = 0.0;
-        /* The quadrature albedo of each texel, computed once (NaN: not computed). */
-        double *qalb = malloc(sizeof *qalb * (size_t)nr * (size_t)nu * 2);
-        if (!qalb) {
-            free(eabs);
-            free(erel);
-            free(polys);
-            free(mc);
-            return MF_ERR_ALLOC;
-        }
-        for (size_t i = 0; i < (size_t)nr * (size_t)nu * 2; ++i)
-            qalb[i] = NAN;
-
-        /* Albedo by quadrature at the albedo texels. */
-        for (int b = 0; b < mu; ++b)
-            for (int a = 0; a < mr; ++a) {
-                int ir = ir_idx[a], iu = iu_idx[b];
-                double alpha = mf_ltc_table_alpha(t, ir), ct = mf_ltc_table_cos_theta(t, iu);
-                double mag = rec(t, ir, iu)[L.f[MF_LTC_F_MAGNITUDE]];
-                mf_result q;
-                double v = INFINITY;
-                const char *w = "quadrature failed (model NaN)";
-                if (gate_albedo(model, alpha, mf_ltc_gate_view(ct), &q) == MF_OK) {
-                    size_t texel = (size_t)ir + (size_t)nr * (size_t)iu;
-                    qalb[2 * texel] = q.val;
-                    qalb[2 * texel + 1] = q.err;
-                    double den = q.val > GATE_ALBEDO_FLOOR ? q.val : GATE_ALBEDO_FLOOR;
-                    double ex = fabs(mag - q.val) - GATE_ALBEDO_ERR_FACTOR * q.err;
-                    v = (ex > 0.0 ? ex : 0.0) / den;
-                    if (fabs(mag - q.val) / den > worst_alb)
-                        worst_alb = fabs(mag - q.val) / den;
-                    w = mag > q.val ? "magnitude above the albedo" : "magnitude below the albedo";
-                }
-                check_case(c_aq, v, w, ir, iu, alpha, ct);
+static void check_albedo_quad(void *ctx, mf_check *c)
+{
+    gate_ctx *g = ctx;
+    const mf_table *t = g->t;
+    int ir_idx[1024], iu_idx[1024];
+    int mr = sample_axis(g->nr, g->o.quick ? 8 : 1024, ir_idx); /* every texel in full mode (up to 1024 per axis) */
+    int mu = sample_axis(g->nu, g->o.quick ? 8 : 1024, iu_idx);
+    for (int b = 0; b < mu; ++b)
+        for (int a = 0; a < mr; ++a) {
+            int ir = ir_idx[a], iu = iu_idx[b];
+            double alpha = mf_ltc_table_alpha(t, ir), ct = mf_ltc_table_cos_theta(t, iu);
+            double mag = rec(t, ir, iu)[g->L.f[MF_LTC_F_MAGNITUDE]];
+            mf_result q;
+            double v = INFINITY;
+            const char *w = "quadrature failed (model NaN)";
+            if (quad_albedo(g, ir, iu, &q)) {
+                double den = q.val > GATE_ALBEDO_FLOOR ? q.val : GATE_ALBEDO_FLOOR;
+                double ex = fabs(mag - q.val) - GATE_ALBEDO_ERR_FACTOR * q.err;
+                v = (ex > 0.0 ? ex : 0.0) / den;
+                if (fabs(mag - q.val) / den > g->worst_alb)
+                    g->worst_alb = fabs(mag - q.val) / den;
+                w = mag > q.val ? "magnitude above the albedo" : "magnitude below the albedo";
+            } else if (!g->qalb) {
+                out_of_memory(g, c);
+                return;
             }
-
-        /* Polygons and the Monte Carlo albedo at the polygon texels. */
-        for (int b = 0; b < pmu; ++b)
-            for (int a = 0; a < pmr; ++a) {
-                int ir = pr_idx[a], iu = pu_idx[b];
-                size_t texel = (size_t)ir + (size_t)nr * (size_t)iu;
-                double alpha = mf_ltc_table_alpha(t, ir), ct = mf_ltc_table_cos_theta(t, iu);
-                mf_vec3 wo = mf_ltc_gate_view(ct);
-                double mag = rec(t, ir, iu)[L.f[MF_LTC_F_MAGNITUDE]];
-                mf_ltc ltc;
-                int ok = unpack_at(t, &L, ir, iu, &ltc) && isfinite(mag);
-                mf_ltc_gate_random_polygons(model, alpha, wo, o.seed, stream_id(STREAM_POLY, texel), npoly, polys);
-                mf_result alb, q = {qalb[2 * texel], qalb[2 * texel + 1]};
-                if (mf_ltc_gate_polygon_mc(model, alpha, wo, polys, npoly, nsamples, o.seed, stream_id(STREAM_MC, texel), mc,
-                                           se, &alb) != MF_OK)
-                    ok = 0;
-                if (isnan(q.val) && gate_albedo(model, alpha, wo, &q) != MF_OK)
-                    ok = 0;
-                ++nent;
-                if (!ok) {
-                    check_case(c_amc, INFINITY, "unusable entry or model", ir, iu, alpha, ct);
-                    check_case(c_pe, INFINITY, "unusable entry or model", ir, iu, alpha, ct);
-                    sum_excess += INFINITY;
-                    continue;
-                }
-                check_case(c_amc, fabs(mag - alb.val) / (GATE_Z * alb.err + 1e-3 * fabs(mag)),
-                           mag > alb.val ? "magnitude above MC" : "magnitude below MC", ir, iu, alpha, ct);
-                double albedo = q.val > 1e-300 ? q.val : 1e-300;
-                double ent = 0.0;
-                for (int i = 0; i < npoly; ++i) {
-                    double ltcv = mag * mf_ltc_integrate_polygon(&ltc, &polys[i], MF_POLYGON_ONE_SIDED);
-                    double d = fabs(ltcv - mc[i]);
-                    if (!isfinite(d))
-                        d = INFINITY;
-                    double ex = d - GATE_Z * se[i];
-                    ex = (ex > 0.0 ? ex : 0.0) / albedo;
-                    ent += ex;
-                    double rden = mc[i] > GATE_REL_FLOOR * albedo ? mc[i] : GATE_REL_FLOOR * albedo;
-                    eabs[np] = d;
-                    erel[np] = d / rden;
-                    sum_abs += d;
-                    sum_rel += erel[np];
-                    sum_se += se[i];
-                    if (d > worst_abs)
-                        worst_abs = d;
-                    if (erel[np] > worst_rel)
-                        worst_rel = erel[np];
-                    ++np;
-                }
-                sum_excess += ent;
-                check_case(c_pe, ent / npoly, "mean polygon excess", ir, iu, alpha, ct);
-            }
-        c_pm->cases = np;
-        c_pm->worst = np > 0 ? sum_excess / (double)np : INFINITY;
-        if (!isfinite(c_pm->worst))
-            c_pm->worst = INFINITY;
-        snprintf(c_pm->worst_at, sizeof c_pm->worst_at,
-                 "%ld texels x %d polygons, %d samples; |LTC-MC| mean %.3g worst %.3g, rel mean %.3g worst %.3g", nent,
-                 npoly, nsamples, np ? sum_abs / np : NAN, worst_abs, np ? sum_rel / np : NAN, worst_rel);
-        check_finish(c_aq);
-        check_finish(c_amc);
-        check_finish(c_pm);
-        check_finish(c_pe);
-        if (o.stats) {
-            mf_ltc_gate_stats *s = o.stats;
-            memset(s, 0, sizeof *s);
-            s->polygons = np;
-            s->entries = nent;
-            s->mean_abs = np ? sum_abs / np : NAN;
-            s->mean_rel = np ? sum_rel / np : NAN;
-            s->mean_se = np ? sum_se / np : NAN;
-            s->worst_abs = worst_abs;
-            s->worst_rel = worst_rel;
-            s->p95_abs = percentile95(eabs, np);
-            s->p95_rel = percentile95(erel, np);
-            s->worst_albedo_rel = worst_alb;
+            record_texel(c, v, w, ir, iu, alpha, ct);
         }
-        free(eabs);
-        free(erel);
+}
+
+/* The polygon pass: random polygons and the Monte Carlo albedo at the polygon texels (the quick
+ * 8 x 8 grid, or 16 x 16 in full mode), once for the three checks that read it.  0 when out of
+ * memory. */
+static int polygon_pass(gate_ctx *g)
+{
+    if (g->poly_done)
+        return g->ent != NULL;
+    g->poly_done = 1;
+    const mf_table *t = g->t;
+    const mf_brdf_model *model = g->model;
+    const int npoly = g->npoly, nsamples = g->nsamples, nr = g->nr;
+    int kq = g->o.quick ? 8 : 16;
+    int pr_idx[1024], pu_idx[1024];
+    int pmr = sample_axis(nr, kq, pr_idx), pmu = sample_axis(g->nu, kq, pu_idx);
+    long maxpoly = (long)pmr * pmu * npoly;
+    g->ent = malloc(sizeof *g->ent * (size_t)pmr * (size_t)pmu);
+    g->eabs = malloc(sizeof *g->eabs * (size_t)(maxpoly > 0 ? maxpoly : 1));
+    g->erel = malloc(sizeof *g->erel * (size_t)(maxpoly > 0 ? maxpoly : 1));
+    mf_polygon *polys = malloc(sizeof *polys * (size_t)npoly);
+    double *mc = malloc(sizeof *mc * (size_t)npoly * 2);
+    if (!g->ent || !g->eabs || !g->erel || !polys || !mc) {
         free(polys);
         free(mc);
-        free(qalb);
+        free(g->ent);
+        g->ent = NULL;
+        return 0;
     }
+    double *se = mc + npoly;
+    for (int b = 0; b < pmu; ++b)
+        for (int a = 0; a < pmr; ++a) {
+            int ir = pr_idx[a], iu = pu_idx[b];
+            size_t texel = (size_t)ir + (size_t)nr * (size_t)iu;
+            gate_entry *e = &g->ent[g->nent++];
+            e->ir = ir;
+            e->iu = iu;
+            double alpha = e->alpha = mf_ltc_table_alpha(t, ir), ct = e->ct = mf_ltc_table_cos_theta(t, iu);
+            mf_vec3 wo = mf_ltc_gate_view(ct);
+            double mag = e->mag = rec(t, ir, iu)[g->L.f[MF_LTC_F_MAGNITUDE]];
+            mf_ltc ltc;
+            int ok = unpack_at(t, &g->L, ir, iu, &ltc) && isfinite(mag);
+            mf_ltc_gate_random_polygons(model, alpha, wo, g->o.seed, stream_id(STREAM_POLY, texel), npoly, polys);
+            mf_result alb, q;
+            if (mf_ltc_gate_polygon_mc(model, alpha, wo, polys, npoly, nsamples, g->o.seed, stream_id(STREAM_MC, texel), mc,
+                                       se, &alb) != MF_OK)
+                ok = 0;
+            if (!quad_albedo(g, ir, iu, &q))
+                ok = 0;
+            e->ok = ok;
+            e->alb = alb;
+            e->excess = INFINITY;
+            if (!ok) {
+                g->sum_excess += INFINITY;
+                continue;
+            }
+            double albedo = q.val > 1e-300 ? q.val : 1e-300;
+            double ent = 0.0;
+            for (int i = 0; i < npoly; ++i) {
+                double ltcv = mag * mf_ltc_integrate_polygon(&ltc, &polys[i], MF_POLYGON_ONE_SIDED);
+                double d = fabs(ltcv - mc[i]);
+                if (isnan(d))
+                    ent = NAN; /* a NaN case (mf_check.h); the aggregates count it as infinite */
+                if (!isfinite(d))
+                    d = INFINITY;
+                double ex = d - GATE_Z * se[i];
+                ex = (ex > 0.0 ? ex : 0.0) / albedo;
+                ent += ex;
+                double rden = mc[i] > GATE_REL_FLOOR * albedo ? mc[i] : GATE_REL_FLOOR * albedo;
+                g->eabs[g->np] = d;
+                g->erel[g->np] = d / rden;
+                g->sum_abs += d;
+                g->sum_rel += g->erel[g->np];
+                g->sum_se += se[i];
+                if (d > g->worst_abs)
+                    g->worst_abs = d;
+                if (g->erel[g->np] > g->worst_rel)
+                    g->worst_rel = g->erel[g->np];
+                ++g->np;
+            }
+            g->sum_excess += ent;
+            e->excess = ent;
+        }
+    free(polys);
+    free(mc);
+    return 1;
+}
 
-    *count = n;
-    for (int i = 0; i < n; ++i)
-        if (!checks[i].passed)
-            st = MF_ERR_CHECK_FAILED;
+static void check_albedo_mc(void *ctx, mf_check *c)
+{
+    gate_ctx *g = ctx;
+    if (!polygon_pass(g)) {
+        out_of_memory(g, c);
+        return;
+    }
+    for (long k = 0; k < g->nent; ++k) {
+        const gate_entry *e = &g->ent[k];
+        if (!e->ok)
+            record_texel(c, INFINITY, "unusable entry or model", e->ir, e->iu, e->alpha, e->ct);
+        else
+            record_texel(c, fabs(e->mag - e->alb.val) / (GATE_Z * e->alb.err + 1e-3 * fabs(e->mag)),
+                         e->mag > e->alb.val ? "magnitude above MC" : "magnitude below MC", e->ir, e->iu, e->alpha,
+                         e->ct);
+    }
+}
+
+static void check_polygon_mean(void *ctx, mf_check *c)
+{
+    gate_ctx *g = ctx;
+    snprintf(c->what, sizeof c->what, "mean over polygons of max(0, |LTC - MC| - 5.5 se) / albedo (budget %g)",
+             g->budget_mean);
+    c->bound = g->budget_mean;
+    if (!polygon_pass(g)) {
+        out_of_memory(g, c);
+        return;
+    }
+    /* one aggregate value: the mean excess over all polygons (+inf for an unusable texel) */
+    long np = g->np;
+    mf_check_recordf(c, np > 0 ? g->sum_excess / (double)np : INFINITY,
+                     "%ld texels x %d polygons, %d samples; |LTC-MC| mean %.3g worst %.3g, rel mean %.3g worst %.3g",
+                     g->nent, g->npoly, g->nsamples, np ? g->sum_abs / np : NAN, g->worst_abs,
+                     np ? g->sum_rel / np : NAN, g->worst_rel);
+    c->cases = np;
+}
+
+static void check_polygon_entry(void *ctx, mf_check *c)
+{
+    gate_ctx *g = ctx;
+    snprintf(c->what, sizeof c->what, "worst texel's mean of max(0, |LTC - MC| - 5.5 se) / albedo (budget %g)",
+             g->budget_entry);
+    c->bound = g->budget_entry;
+    if (!polygon_pass(g)) {
+        out_of_memory(g, c);
+        return;
+    }
+    for (long k = 0; k < g->nent; ++k) {
+        const gate_entry *e = &g->ent[k];
+        if (!e->ok)
+            record_texel(c, INFINITY, "unusable entry or model", e->ir, e->iu, e->alpha, e->ct);
+        else
+            record_texel(c, e->excess / g->npoly, "mean polygon excess", e->ir, e->iu, e->alpha, e->ct);
+    }
+}
+
+/* The gate: name, what it measures, bound, needs a model, function (bounds and reasons in
+ * docs/validation.md, "The LTC gate").  The polygon checks take their bounds from the options. */
+const mf_check_def mf_ltc_gate_check_table[MF_LTC_GATE_MAX_CHECKS] = {
+    {"ltc_finite", "number of NaN or infinite values in any field (bound 0)", 0.0, 0, check_finite},
+    {"ltc_energy", "max(magnitude - 1, fresnel - magnitude, -fresnel, -magnitude) over all texels", GATE_ENERGY_SLACK, 0,
+     check_energy},
+    {"ltc_normalisation", "|integral over the sphere - 1|: exact integrals over 8 rotated octant triangles, every texel",
+     GATE_NORM_BOUND, 0, check_normalisation},
+    {"ltc_smooth_jump", "max |neighbour difference| / (16 h) of every field (h: axis spacing)", 1.0, 0,
+     check_smooth_jump},
+    {"ltc_smooth_spike", "max excess of a texel outside its 2 neighbours' range / (80 h^2), every field, both axes", 1.0,
+     0, check_smooth_spike},
+    {"ltc_albedo_quad",
+     "max (|magnitude - albedo| - 4 err) / max(albedo, 0.01), albedo by 64x64 Gauss-Legendre quadrature",
+     GATE_ALBEDO_REL, 1, check_albedo_quad},
+    {"ltc_albedo_mc", "max |magnitude - MC albedo| / (5.5 se + 1e-3 magnitude), independent MC", 1.0, 1,
+     check_albedo_mc},
+    {"ltc_polygon_mean", "mean over polygons of max(0, |LTC - MC| - 5.5 se) / albedo", MF_LTC_GATE_POLYGON_MEAN, 1,
+     check_polygon_mean},
+    {"ltc_polygon_entry", "worst texel's mean of max(0, |LTC - MC| - 5.5 se) / albedo", MF_LTC_GATE_POLYGON_ENTRY, 1,
+     check_polygon_entry},
+};
+#define N_GATE_CHECKS MF_LTC_GATE_MAX_CHECKS
+
+const mf_check_def *mf_ltc_gate_checks(int *n)
+{
+    if (n)
+        *n = N_GATE_CHECKS;
+    return mf_ltc_gate_check_table;
+}
+
+/* ---- the driver ------------------------------------------------------------------------------ */
+
+mf_status mf_ltc_gate_run(const mf_table *t, const mf_brdf_model *model, const mf_ltc_gate_options *o_in,
+                          mf_check *checks, int cap, int *count)
+{
+    if (count)
+        *count = 0;
+    if (!checks || !count || cap < MF_LTC_GATE_MAX_CHECKS)
+        return MF_ERR_DOMAIN;
+    gate_ctx g;
+    memset(&g, 0, sizeof g);
+    if (o_in)
+        g.o = *o_in;
+    else
+        mf_ltc_gate_options_default(&g.o);
+    if (!layout_of(t, &g.L))
+        return MF_ERR_DOMAIN;
+    g.t = t;
+    g.model = model;
+    g.budget_mean = g.o.polygon_budget_mean > 0.0 ? g.o.polygon_budget_mean : MF_LTC_GATE_POLYGON_MEAN;
+    g.budget_entry = g.o.polygon_budget_entry > 0.0 ? g.o.polygon_budget_entry : MF_LTC_GATE_POLYGON_ENTRY;
+    g.nsamples = g.o.mc_samples > 0 ? g.o.mc_samples : (g.o.quick ? 32768 : 65536);
+    g.npoly = g.o.polygons_per_entry > 0 ? g.o.polygons_per_entry : 24;
+    if (g.npoly > 256)
+        g.npoly = 256;
+    g.nr = g.L.nr;
+    g.nu = g.L.nu;
+    g.hr = fabs(t->axes[0].hi - t->axes[0].lo) / (g.nr - 1);
+    g.hu = fabs(t->axes[1].hi - t->axes[1].lo) / (g.nu - 1);
+    g.status = MF_OK;
+
+    mf_status st = mf_check_run_defs(mf_ltc_gate_check_table, N_GATE_CHECKS, &g, model != NULL, checks, cap, count);
+
+    if (model && g.o.stats && g.poly_done && g.ent) {
+        mf_ltc_gate_stats *s = g.o.stats;
+        long np = g.np;
+        memset(s, 0, sizeof *s);
+        s->polygons = np;
+        s->entries = g.nent;
+        s->mean_abs = np ? g.sum_abs / np : NAN;
+        s->mean_rel = np ? g.sum_rel / np : NAN;
+        s->mean_se = np ? g.sum_se / np : NAN;
+        s->worst_abs = g.worst_abs;
+        s->worst_rel = g.worst_rel;
+        s->p95_abs = percentile95(g.eabs, np);
+        s->p95_rel = percentile95(g.erel, np);
+        s->worst_albedo_rel = g.worst_alb;
+    }
+    free(g.qalb);
+    free(g.ent);
+    free(g.eabs);
+    free(g.erel);
+    if (g.status != MF_OK) {
+        *count = 0;
+        return g.status;
+    }
     return st;
 }

@@ -1,7 +1,9 @@
 /* mf_maps.c -- see mf_maps.h. */
 #include "mfkit/mf_maps.h"
+#include "mfkit/mf_table_kind.h"
 
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -242,4 +244,83 @@ mf_slope_moments mf_map_moments_at(const mf_map *moments, int i, int j)
     r.m_xy = m[MF_MAP_M_XY];
     r.m_yy = m[MF_MAP_M_YY];
     return r;
+}
+
+/* ---- moment maps as tables (mf_maps.h, mf_table_kind.h) --------------------------------------- */
+
+static mf_table_axis moment_axis(const char *name, const char *physical, int n, int reversed)
+{
+    mf_table_axis a;
+    memset(&a, 0, sizeof a);
+    snprintf(a.name, sizeof a.name, "%s", name);
+    snprintf(a.physical, sizeof a.physical, "%s", physical);
+    a.size = n;
+    a.lo = 0.5 / n;
+    a.hi = 1.0 - 0.5 / n;
+    if (reversed) {
+        a.lo = 1.0 - 0.5 / n;
+        a.hi = 0.5 / n;
+    }
+    a.mapping = MF_AXIS_IDENTITY;
+    a.physical_min = -INFINITY;
+    return a;
+}
+
+mf_status mf_map_moments_to_table(const mf_map *m, int level, mf_table *out)
+{
+    if (out)
+        memset(out, 0, sizeof *out);
+    if (!m || !out || !m->data || m->channels != MF_MAP_MOMENTS || m->width < 1 || m->height < 1 || level < 0)
+        return MF_ERR_DOMAIN;
+    const mf_table_kind *k = mf_table_kind_find("moment_map");
+    mf_table_axis axes[2] = {moment_axis(k->axes[0].name, k->axes[0].physical, m->width, 0),
+                             moment_axis(k->axes[1].name, k->axes[1].physical, m->height, 1)};
+    mf_status st = mf_table_create(out, 2, axes, MF_MOMENT_TABLE_NFIELDS, mf_moment_table_fields);
+    if (st != MF_OK)
+        return st;
+    memcpy(out->data, m->data, sizeof(double) * (size_t)m->width * (size_t)m->height * MF_MAP_MOMENTS);
+    char lv[32];
+    snprintf(lv, sizeof lv, "%d", level);
+    if (mf_table_kind_tag(out, k) != MF_OK || mf_table_set_meta(out, "level", lv) != MF_OK ||
+        mf_table_set_meta(out, "slopes",
+                          "mfkit slopes (dh/dx, dh/dy) = (-n.x/n.z, -n.y/n.z), y up; LEAN's B = -s") != MF_OK) {
+        mf_table_free(out);
+        return MF_ERR_INTERNAL;
+    }
+    return MF_OK;
+}
+
+mf_status mf_map_chain_to_tables(const mf_map *levels, int nlevels, mf_table *out)
+{
+    if (!levels || !out || nlevels < 1)
+        return MF_ERR_DOMAIN;
+    for (int l = 0; l < nlevels; ++l) {
+        mf_status st = mf_map_moments_to_table(&levels[l], l, &out[l]);
+        if (st != MF_OK) {
+            for (int k = 0; k < l; ++k)
+                mf_table_free(&out[k]);
+            return st;
+        }
+    }
+    return MF_OK;
+}
+
+mf_status mf_map_moments_from_table(const mf_table *t, mf_map *out)
+{
+    if (out)
+        memset(out, 0, sizeof *out);
+    const mf_table_kind *k = mf_table_kind_find("moment_map");
+    if (!t || !out || !k->layout_ok(t, NULL, 0))
+        return MF_ERR_DOMAIN;
+    mf_status st = mf_map_alloc(out, t->axes[0].size, t->axes[1].size, MF_MAP_MOMENTS);
+    if (st != MF_OK)
+        return st;
+    int f[MF_MOMENT_TABLE_NFIELDS];
+    for (int c = 0; c < MF_MOMENT_TABLE_NFIELDS; ++c)
+        f[c] = mf_table_field(t, mf_moment_table_fields[c]);
+    size_t n = (size_t)out->width * (size_t)out->height;
+    for (size_t i = 0; i < n; ++i)
+        for (int c = 0; c < MF_MOMENT_TABLE_NFIELDS; ++c)
+            out->data[i * MF_MAP_MOMENTS + (size_t)c] = t->data[i * (size_t)t->nfields + (size_t)f[c]];
+    return MF_OK;
 }

@@ -268,3 +268,163 @@ void mf_table_field_range(const mf_table *t, int field, double *min, double *max
     if (nan_count)
         *nan_count = nans;
 }
+
+/* ---- the 2D atlas (mf_table.h) --------------------------------------------------------------- */
+
+#define ATLAS_MAX_SIDE 65536
+
+mf_status mf_table_atlas_layout(const mf_table *t, int tiles_x, mf_table_atlas *a)
+{
+    memset(a, 0, sizeof *a);
+    if (!t || t->naxes < 1 || t->naxes > MF_TABLE_MAX_AXES || tiles_x < 0)
+        return MF_ERR_DOMAIN;
+    long tiles = 1;
+    for (int k = 2; k < t->naxes; ++k) {
+        tiles *= t->axes[k].size;
+        if (tiles > (long)ATLAS_MAX_SIDE * ATLAS_MAX_SIDE)
+            return MF_ERR_DOMAIN;
+    }
+    if (tiles_x == 0)
+        tiles_x = t->naxes > 2 ? t->axes[2].size : 1;
+    if (tiles_x > tiles)
+        tiles_x = (int)tiles;
+    long tiles_y = (tiles + tiles_x - 1) / tiles_x;
+    long tw = t->axes[0].size, th = t->naxes > 1 ? t->axes[1].size : 1;
+    if (tw * tiles_x > ATLAS_MAX_SIDE || th * tiles_y > ATLAS_MAX_SIDE)
+        return MF_ERR_DOMAIN;
+    a->tile_w = (int)tw;
+    a->tile_h = (int)th;
+    a->tiles = (int)tiles;
+    a->tiles_x = tiles_x;
+    a->tiles_y = (int)tiles_y;
+    a->width = (int)(tw * tiles_x);
+    a->height = (int)(th * tiles_y);
+    return MF_OK;
+}
+
+/* The record index of texel (i0, i1) of tile `tile` (first axis fastest, mf_table.h). */
+static size_t atlas_texel_index(const mf_table *t, int i0, int i1, long tile)
+{
+    size_t n01 = (size_t)t->axes[0].size * (size_t)(t->naxes > 1 ? t->axes[1].size : 1);
+    return (size_t)i0 + (size_t)t->axes[0].size * (size_t)i1 + n01 * (size_t)tile;
+}
+
+void mf_table_atlas_fill(const mf_table *t, const mf_table_atlas *a, double *out)
+{
+    const size_t nf = (size_t)t->nfields;
+    for (int y = 0; y < a->height; ++y)
+        for (int x = 0; x < a->width; ++x) {
+            double *o = out + ((size_t)y * (size_t)a->width + (size_t)x) * nf;
+            long tile = (long)(x / a->tile_w) + (long)a->tiles_x * (long)(y / a->tile_h);
+            if (tile >= a->tiles) {
+                for (size_t f = 0; f < nf; ++f)
+                    o[f] = 0.0;
+                continue;
+            }
+            const double *r = t->data + atlas_texel_index(t, x % a->tile_w, y % a->tile_h, tile) * nf;
+            memcpy(o, r, nf * sizeof *o);
+        }
+}
+
+mf_status mf_table_atlas_record(mf_table *t, const mf_table_atlas *a)
+{
+    char v[MF_TABLE_TEXT_LEN];
+    snprintf(v, sizeof v, "tiles_x=%d tiles_y=%d tile_w=%d tile_h=%d order=axis2_fastest", a->tiles_x, a->tiles_y,
+             a->tile_w, a->tile_h);
+    return mf_table_set_meta(t, "atlas", v);
+}
+
+mf_status mf_table_atlas_from_meta(const mf_table *t, mf_table_atlas *a)
+{
+    const char *v = mf_table_get_meta(t, "atlas");
+    int tx, ty, tw, th, used = 0;
+    if (!v || sscanf(v, "tiles_x=%d tiles_y=%d tile_w=%d tile_h=%d order=axis2_fastest%n", &tx, &ty, &tw, &th, &used) != 4
+        || used == 0 || v[used] != '\0' || tx < 1)
+        return MF_ERR_DOMAIN;
+    if (mf_table_atlas_layout(t, tx, a) != MF_OK)
+        return MF_ERR_DOMAIN;
+    if (a->tiles_x != tx || a->tiles_y != ty || a->tile_w != tw || a->tile_h != th) {
+        memset(a, 0, sizeof *a);
+        return MF_ERR_DOMAIN;
+    }
+    return MF_OK;
+}
+
+/* The in-tile texture coordinate of parameter p on axis ax (clamped to [lo, hi] first). */
+static double atlas_uv(const mf_table_axis *ax, double p)
+{
+    double lo = ax->lo < ax->hi ? ax->lo : ax->hi, hi = ax->lo < ax->hi ? ax->hi : ax->lo;
+    if (p < lo)
+        p = lo;
+    if (p > hi)
+        p = hi;
+    return mf_table_uv_from_param(ax, p);
+}
+
+/* The hardware's bilinear filter of the atlas image at (u, v) in [0, 1]^2 (texel centres at
+ * (i + 0.5)/width, clamp to edge), accumulating weight * sample into out. */
+static void atlas_bilinear(const mf_table_atlas *a, const double *image, int nf, double u, double v, double weight,
+                           double *out)
+{
+    double xf = u * a->width - 0.5, yf = v * a->height - 0.5;
+    double x0 = floor(xf), y0 = floor(yf);
+    double fx = xf - x0, fy = yf - y0;
+    for (int c = 0; c < 4; ++c) {
+        int dx = c & 1, dy = c >> 1;
+        double w = weight * (dx ? fx : 1.0 - fx) * (dy ? fy : 1.0 - fy);
+        if (w == 0.0)
+            continue;
+        long x = (long)x0 + dx, y = (long)y0 + dy;
+        x = x < 0 ? 0 : (x >= a->width ? a->width - 1 : x);
+        y = y < 0 ? 0 : (y >= a->height ? a->height - 1 : y);
+        const double *r = image + ((size_t)y * (size_t)a->width + (size_t)x) * (size_t)nf;
+        for (int f = 0; f < nf; ++f)
+            out[f] += w * r[f];
+    }
+}
+
+mf_status mf_table_atlas_lookup(const mf_table *t, const mf_table_atlas *a, const double *image, const double *p,
+                                double *out)
+{
+    for (int k = 0; k < t->naxes; ++k)
+        if (isnan(p[k]))
+            return MF_ERR_DOMAIN;
+    double uv0 = atlas_uv(&t->axes[0], p[0]), uv1 = t->naxes > 1 ? atlas_uv(&t->axes[1], p[1]) : 0.5;
+    /* the further axes: a manual lerp, as a shader does it */
+    int i0[MF_TABLE_MAX_AXES] = {0};
+    double w[MF_TABLE_MAX_AXES] = {0.0};
+    for (int k = 2; k < t->naxes; ++k) {
+        const mf_table_axis *ax = &t->axes[k];
+        if (ax->size == 1)
+            continue;
+        double x = (p[k] - ax->lo) / (ax->hi - ax->lo) * (double)(ax->size - 1);
+        if (!(x > 0.0))
+            x = 0.0;
+        if (x > ax->size - 1)
+            x = ax->size - 1;
+        int i = (int)floor(x);
+        if (i >= ax->size - 1)
+            i = ax->size - 2;
+        i0[k] = i;
+        w[k] = x - i;
+    }
+    for (int f = 0; f < t->nfields; ++f)
+        out[f] = -0.0;
+    int further = t->naxes > 2 ? t->naxes - 2 : 0;
+    for (int corner = 0; corner < (1 << further); ++corner) {
+        double weight = 1.0;
+        long tile = 0, stride = 1;
+        for (int k = 2; k < t->naxes; ++k) {
+            int up = (corner >> (k - 2)) & 1;
+            weight *= up ? w[k] : 1.0 - w[k];
+            tile += stride * (long)(i0[k] + (t->axes[k].size > 1 ? up : 0));
+            stride *= t->axes[k].size;
+        }
+        if (weight == 0.0)
+            continue;
+        long col = tile % a->tiles_x, row = tile / a->tiles_x;
+        double u = ((double)col + uv0) * a->tile_w / a->width, v = ((double)row + uv1) * a->tile_h / a->height;
+        atlas_bilinear(a, image, t->nfields, u, v, weight, out);
+    }
+    return MF_OK;
+}

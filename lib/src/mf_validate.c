@@ -60,33 +60,6 @@ static mf_gaussian_slopes grid_gaussian(int im, int ic)
     return g;
 }
 
-static void check_init(mf_check *c, const char *name, const char *what, double bound)
-{
-    memset(c, 0, sizeof *c);
-    snprintf(c->name, sizeof c->name, "%s", name);
-    snprintf(c->what, sizeof c->what, "%s", what);
-    c->bound = bound;
-    c->worst = 0.0;
-    c->passed = 1;
-}
-
-/* Records value v (NaN counts as a failure and as the worst case). */
-static void check_record(mf_check *c, double v, const char *at)
-{
-    c->cases++;
-    if (isnan(c->worst))
-        return; /* a NaN already decided this check */
-    if (isnan(v) || c->cases == 1 || v > c->worst) {
-        c->worst = v;
-        snprintf(c->worst_at, sizeof c->worst_at, "%s", at);
-    }
-}
-
-static void check_finish(mf_check *c)
-{
-    c->passed = c->passed && !isnan(c->worst) && c->worst <= c->bound;
-}
-
 /* ---- nested adaptive integration over the slope plane ------------------------------------- */
 /* Integrals over micro-normals are taken over their slopes s, with dm = m.z^3 d^2s (the Jacobian
  * of [Dupuy 2013, Eq. 10]), in polar coordinates of the affine map s = mean + L (r cos p, r sin p)
@@ -206,7 +179,7 @@ static double ndf_cos_integrand(double sx, double sy, void *user)
 
 static void check_ndf_normalisation(mf_check *c)
 {
-    check_init(c, "ndf_normalisation", "|integral of D(wm) wm.z dwm - 1|, GGX and Beckmann, every alpha and ratio", 1e-8);
+    mf_check_begin(c, "ndf_normalisation", "|integral of D(wm) wm.z dwm - 1|, GGX and Beckmann, every alpha and ratio", 1e-8);
     for (int t = 0; t < 2; ++t)
         for (int ia = 0; ia < N_ALPHAS; ++ia)
             for (int ir = 0; ir < N_RATIOS; ++ir) {
@@ -218,9 +191,9 @@ static void check_ndf_normalisation(mf_check *c)
                 char at[200];
                 snprintf(at, sizeof at, "%s alpha=(%g,%g): integral=%.17g", mf_ndf_type_name(ndf.type), ndf.alpha_x,
                          ndf.alpha_y, v);
-                check_record(c, fabs(v - 1.0), at);
+                mf_check_record(c, fabs(v - 1.0), at);
             }
-    check_finish(c);
+    mf_check_finish(c);
 }
 
 /* ---- check 2: projected area, centred NDFs -------------------------------------------------- */
@@ -240,7 +213,7 @@ static double proj_integrand(double sx, double sy, void *user)
 
 static void check_projected_area(mf_check *c)
 {
-    check_init(c, "projected_area",
+    mf_check_begin(c, "projected_area",
                "|integral of G1(wo) max(0,wo.wm) D(wm) dwm / wo.z - 1| (Smith), GGX and Beckmann", 1e-8);
     static const double thetas[] = {0.0, 30.0, 60.0, 85.0, 89.99};
     static const double phis[] = {0.0, 1.1};
@@ -263,10 +236,10 @@ static void check_projected_area(mf_check *c)
                         snprintf(at, sizeof at, "%s alpha=(%g,%g) theta_o=%g deg phi_o=%g: ratio=%.17g",
                                  mf_ndf_type_name(p.ndf.type), p.ndf.alpha_x, p.ndf.alpha_y, thetas[it], phis[ip],
                                  v / p.wo.z);
-                        check_record(c, fabs(v / p.wo.z - 1.0), at);
+                        mf_check_record(c, fabs(v / p.wo.z - 1.0), at);
                     }
             }
-    check_finish(c);
+    mf_check_finish(c);
 }
 
 /* ---- check 3: LEADR normalisation identity (after Eq. 16), non-centred Gaussian ------------ */
@@ -292,7 +265,7 @@ static double leadr_integrand(double sx, double sy, void *user)
 
 static void check_leadr_identity(mf_check *c)
 {
-    check_init(c, "leadr_normalisation",
+    mf_check_begin(c, "leadr_normalisation",
                "|(n.g)/(n.wo) integral over the sphere of D(wh)/(4(1+L(wo))) dwi - 1| [Dupuy 2013, after Eq. 16]",
                1e-8);
     static const double thetas[] = {0.0, 45.0, 80.0, 89.99};
@@ -319,9 +292,9 @@ static void check_leadr_identity(mf_check *c)
                     char at[200];
                     snprintf(at, sizeof at, "mean=(%g,%g) cov=(%g,%g,%g) theta_o=%g deg phi_o=%g: %.17g", p.g.mean_x,
                              p.g.mean_y, p.g.var_x, p.g.var_y, p.g.cov_xy, thetas[it], phis[ip], ratio);
-                    check_record(c, fabs(ratio - 1.0), at);
+                    mf_check_record(c, fabs(ratio - 1.0), at);
                 }
-    check_finish(c);
+    mf_check_finish(c);
 }
 
 /* ---- check 4: closed-form Lambda against Smith's integral ---------------------------------- */
@@ -369,7 +342,7 @@ static double smith_lambda_integral(int family, double a, int *failed)
 
 static void check_lambda(mf_check *c)
 {
-    check_init(c, "lambda_closed_form",
+    mf_check_begin(c, "lambda_closed_form",
                "max relative |Lambda closed form - Smith integral|: GGX, Beckmann, non-centred Gaussian", 1e-9);
     char at[200];
     for (int t = 0; t < 2; ++t)
@@ -392,7 +365,7 @@ static void check_lambda(mf_check *c)
                         double rel = failed ? NAN : fabs(got - ref) / ref;
                         snprintf(at, sizeof at, "%s alpha=(%g,%g) theta=%g deg phi=%g: closed=%.17g integral=%.17g",
                                  mf_ndf_type_name(ndf.type), ndf.alpha_x, ndf.alpha_y, k_thetas_deg[it], ph, got, ref);
-                        check_record(c, rel, at);
+                        mf_check_record(c, rel, at);
                     }
             }
     /* non-centred Gaussian, including directions below the geometric horizon but above the
@@ -421,15 +394,15 @@ static void check_lambda(mf_check *c)
                     double rel = failed ? NAN : fabs(got - ref) / ref;
                     snprintf(at, sizeof at, "gaussian mean=(%g,%g) cov=(%g,%g,%g) theta=%g deg phi=%g: %.17g vs %.17g",
                              g.mean_x, g.mean_y, g.var_x, g.var_y, g.cov_xy, thetas_g[it], ph, got, ref);
-                    check_record(c, rel, at);
+                    mf_check_record(c, rel, at);
                 }
-    check_finish(c);
+    mf_check_finish(c);
 }
 
 /* ---- check 5: Walter's approximation ------------------------------------------------------- */
 static void check_walter(mf_check *c)
 {
-    check_init(c, "walter_g1_error",
+    mf_check_begin(c, "walter_g1_error",
                "max relative |G1 Walter - G1 exact| over nu in (0, 10], Beckmann/Gaussian (docs/math.md, correction C-L4: 0.31 %)",
                3.2e-3);
     char at[200];
@@ -441,9 +414,9 @@ static void check_walter(mf_check *c)
         if (l_w < 0.0)
             rel = NAN; /* the clamp must keep G1 <= 1 */
         snprintf(at, sizeof at, "nu=%g: G1 exact=%.10g walter=%.10g", nu, g_exact, 1.0 / (1.0 + l_w));
-        check_record(c, rel, at);
+        mf_check_record(c, rel, at);
     }
-    check_finish(c);
+    mf_check_finish(c);
 }
 
 /* ---- check 6: reciprocity ------------------------------------------------------------------ */
@@ -451,17 +424,17 @@ static void record_pair(mf_check *c, double a, double b, const char *what)
 {
     double m = fmax(fabs(a), fabs(b));
     if (isnan(a) || isnan(b)) {
-        check_record(c, NAN, what);
+        mf_check_record(c, NAN, what);
         return;
     }
     if (m < 1e-300)
         return;
-    check_record(c, fabs(a - b) / m, what);
+    mf_check_record(c, fabs(a - b) / m, what);
 }
 
 static void check_reciprocity(mf_check *c)
 {
-    check_init(c, "reciprocity",
+    mf_check_begin(c, "reciprocity",
                "max relative |f(wo,wi) - f(wi,wo)|: microfacet (2 NDFs x 2 G2 x 4 Fresnel), Lambert, LEADR", 64 * DBL_EPSILON);
     static const double thetas[] = {0.0, 20.0, 45.0, 70.0, 85.0, 89.99};
     static const double phis[] = {0.0, 1.0, 2.5, 4.0};
@@ -507,13 +480,13 @@ static void check_reciprocity(mf_check *c)
                     record_pair(c, a, b, at);
                 }
         }
-    check_finish(c);
+    mf_check_finish(c);
 }
 
 /* ---- check 7: albedo <= 1 ------------------------------------------------------------------ */
 static void check_albedo(mf_check *c)
 {
-    check_init(c, "albedo_at_most_one",
+    mf_check_begin(c, "albedo_at_most_one",
                "max (albedo - quadrature error): microfacet without/with Fresnel, joint/separable G2; LEADR specular",
                1.0 + 1e-12); /* 1e-12: rounding of the n x n weight sum (the integrand is <= 1 pointwise) */
     char at[200];
@@ -535,7 +508,7 @@ static void check_albedo(mf_check *c)
                         snprintf(at, sizeof at, "%s alpha=(%g,%g) g2=%d theta_o=%g deg: albedo=%.10g +- %.2g",
                                  mf_ndf_type_name(m.ndf.type), m.ndf.alpha_x, m.ndf.alpha_y, form, k_thetas_deg[it],
                                  r.val, r.err);
-                        check_record(c, v, at);
+                        mf_check_record(c, v, at);
                     }
     /* LEADR specular (non-centred slopes), views above the mesosurface */
     mf_fresnel schlick04 = {MF_FRESNEL_SCHLICK, 0.04, 0, 0};
@@ -551,9 +524,9 @@ static void check_albedo(mf_check *c)
                 mf_status st = mf_leadr_specular_albedo(&g, schlick04, wo, 64, &r);
                 snprintf(at, sizeof at, "leadr mean=(%g,%g) cov=(%g,%g,%g) theta_o=%g deg: albedo=%.10g +- %.2g",
                          g.mean_x, g.mean_y, g.var_x, g.var_y, g.cov_xy, thetas_l[it], r.val, r.err);
-                check_record(c, st == MF_OK ? r.val - r.err : NAN, at);
+                mf_check_record(c, st == MF_OK ? r.val - r.err : NAN, at);
             }
-    check_finish(c);
+    mf_check_finish(c);
 }
 
 /* ---- check 8: no NaN or Inf where the math has a finite value ------------------------------ */
@@ -569,7 +542,7 @@ static void count_bad(mf_check *c, double v, int inf_ok, const char *at, int *ba
 
 static void check_finite(mf_check *c)
 {
-    check_init(c, "finite_everywhere",
+    mf_check_begin(c, "finite_everywhere",
                "count of NaN/Inf outputs on the grid incl. alpha 1e-4, 89.99 deg, below-horizon directions", 0.0);
     mf_vec3 dirs[64];
     int nd = 0;
@@ -614,7 +587,7 @@ static void check_finite(mf_check *c)
     c->worst = bad;
     if (bad == 0)
         snprintf(c->worst_at, sizeof c->worst_at, "none");
-    check_finish(c);
+    mf_check_finish(c);
 }
 
 /* ---- checks 9-11: spherical polygons and LTCs (mf_polygon.h, mf_ltc.h) ---------------------- */
@@ -789,7 +762,7 @@ static double one_dir(mf_vec3 w, const void *user)
 
 static void check_polygon_cosine(mf_check *c)
 {
-    check_init(c, "polygon_cosine",
+    mf_check_begin(c, "polygon_cosine",
                "max relative |Lambert's clipped edge sum - quadrature| of integral max(0,z)/pi dw, and of the solid "
                "angle, signed, 8 polygons",
                1e-9);
@@ -799,14 +772,14 @@ static void check_polygon_cosine(mf_check *c)
         double q = integrate_planar_polygon(&p, cosine_dir, NULL, mf_vec3_make(0, 0, 1), NULL);
         double e = mf_polygon_integrate_cosine_signed(&p);
         snprintf(at, sizeof at, "%s: edge sum %.17g, quadrature %.17g", name, e, q);
-        check_record(c, rel_err(e, q, 1e-15), at);
+        mf_check_record(c, rel_err(e, q, 1e-15), at);
         /* the solid angle: the same quadrature of f = 1 (no kink) */
         double qo = integrate_planar_polygon(&p, one_dir, NULL, mf_vec3_make(0, 0, 0), NULL);
         double o = mf_polygon_solid_angle_signed(&p);
         snprintf(at, sizeof at, "%s: solid angle %.17g, quadrature %.17g", name, o, qo);
-        check_record(c, rel_err(o, qo, 1e-15), at);
+        mf_check_record(c, rel_err(o, qo, 1e-15), at);
     }
-    check_finish(c);
+    mf_check_finish(c);
 }
 
 /* The validation matrices: well- and ill-conditioned, det < 0, strong shear, a lobe reaching
@@ -866,14 +839,14 @@ static double sph_outer(double phi, void *vctx)
 
 static void check_ltc_normalisation(mf_check *c)
 {
-    check_init(c, "ltc_normalisation",
+    mf_check_begin(c, "ltc_normalisation",
                "|integral of D(w) dw over the sphere - 1| (docs/math.md, correction C-T2 Jacobian), 8 matrices incl. det<0, shear, 1:1e3",
                1e-9);
     char at[200], name[64];
     for (int i = 0; i < N_VMATS; ++i) {
         mf_ltc l;
         if (mf_ltc_init(&l, validate_matrix(i, name, sizeof name)) != MF_OK) {
-            check_record(c, NAN, name);
+            mf_check_record(c, NAN, name);
             continue;
         }
         sph_ctx q;
@@ -889,21 +862,21 @@ static void check_ltc_normalisation(mf_check *c)
             pts[k] = MF_PI * (k + 1) / 4;
         double v = integrate_pieces(sph_outer, &q, 0.0, 2.0 * MF_PI, pts, 7, 1e-11, 1e-15, &q.failed);
         snprintf(at, sizeof at, "%s: integral=%.17g", name, v);
-        check_record(c, q.failed ? NAN : fabs(v - 1.0), at);
+        mf_check_record(c, q.failed ? NAN : fabs(v - 1.0), at);
     }
-    check_finish(c);
+    mf_check_finish(c);
 }
 
 static void check_ltc_polygon(mf_check *c)
 {
-    check_init(c, "ltc_polygon",
+    mf_check_begin(c, "ltc_polygon",
                "max relative |integral of D over P (clip after M^-1) - quadrature|, one- and two-sided, 8 x 8 cases",
                1e-9);
     char at[200], pname[64], mname[64];
     for (int i = 0; i < N_VMATS; ++i) {
         mf_ltc l;
         if (mf_ltc_init(&l, validate_matrix(i, mname, sizeof mname)) != MF_OK) {
-            check_record(c, NAN, mname);
+            mf_check_record(c, NAN, mname);
             continue;
         }
         mf_vec3 r2 = mf_vec3_make(l.inv.m[2][0], l.inv.m[2][1], l.inv.m[2][2]);
@@ -918,10 +891,10 @@ static void check_ltc_polygon(mf_check *c)
              * absolute floor and the edge sum's cancellation (a sliver of M^-1 P near z_o = 0)
              * leave few relative digits, and nothing depends on them */
             double err = fmax(rel_err(two, fabs(q), 1e-6), rel_err(one, fmax(0.0, q), 1e-6));
-            check_record(c, isnan(q) ? NAN : err, at);
+            mf_check_record(c, isnan(q) ? NAN : err, at);
         }
     }
-    check_finish(c);
+    mf_check_finish(c);
 }
 
 /* ---- filtering identities [Kaplanyan 2016] (issue 4) ------------------------------------- */
@@ -965,7 +938,7 @@ static double rect_outer(double s, void *vctx)
  * against nested adaptive Gauss-Kronrod of P22 itself (independent of the antiderivative). */
 static void check_ggx_rect(mf_check *c)
 {
-    check_init(c, "ggx_rect_vs_quadrature",
+    mf_check_begin(c, "ggx_rect_vs_quadrature",
                "GGX slope-density mean over rectangles (Eq. 16, App. A, docs/math.md, correction C-K1) vs nested adaptive quadrature",
                1e-10);
     static const double k_rect_alphas[][2] = {{1e-3, 1e-3}, {0.1, 0.01}, {1.0, 0.5}};
@@ -987,10 +960,10 @@ static void check_ggx_rect(mf_check *c)
             double v = mf_filter_ggx_rect_mean(ax, ay, cx, cy, wx, wy);
             char at[200];
             snprintf(at, sizeof at, "alpha (%g, %g), centre (%g, %g), widths (%g, %g)", ax, ay, cx, cy, wx, wy);
-            check_record(c, q.failed ? NAN : fabs(v - ref) / ref, at);
+            mf_check_record(c, q.failed ? NAN : fabs(v - ref) / ref, at);
         }
     }
-    check_finish(c);
+    mf_check_finish(c);
 }
 
 typedef struct {
@@ -1010,7 +983,7 @@ static double conv_integrand(double yx, double yy, void *user)
  * B' = diag(alpha^2/2) + P against the numerical convolution integral P22_B(s - y) N_P(y) d^2y. */
 static void check_beckmann_convolution(mf_check *c)
 {
-    check_init(c, "beckmann_filter_convolution",
+    mf_check_begin(c, "beckmann_filter_convolution",
                "Beckmann (x) Gaussian filter: covariance sum B' = B + P (Eq. 14-15) vs numerical 2D convolution", 1e-8);
     static const double k_conv_alphas[][2] = {{0.05, 0.05}, {0.5, 0.1}};
     static const double k_conv_p[][3] = {{0.01, 0.0, 0.01}, {0.02, 0.01, 0.015}, {1e-6, 0.0, 4e-6}, {2.0, -0.5, 1.0}};
@@ -1047,11 +1020,11 @@ static void check_beckmann_convolution(mf_check *c)
                 char at[200];
                 snprintf(at, sizeof at, "alpha (%g, %g), P (%g, %g, %g), s (%g, %g)", ax, ay, p.xx, p.xy, p.yy, q.s[0],
                          q.s[1]);
-                check_record(c, fabs(conv - ref) / ref, at);
+                mf_check_record(c, fabs(conv - ref) / ref, at);
             }
         }
     }
-    check_finish(c);
+    mf_check_finish(c);
 }
 
 /* The exact proxy alpha' satisfies the peak equation 1/(pi alpha'^2) = mean of P22 over the
@@ -1059,7 +1032,7 @@ static void check_beckmann_convolution(mf_check *c)
  * 1/(pi a'_x a'_y) = mean over the rectangle; mfkit's fitted form stays within its bound. */
 static void check_ggx_proxy_peak(mf_check *c)
 {
-    check_init(c, "ggx_proxy_peak",
+    mf_check_begin(c, "ggx_proxy_peak",
                "exact GGX proxy alpha' (docs/math.md, correction C-K3; joint anisotropic solve) satisfies 1/(pi a'^2) = rect mean (Eq. 19)",
                64 * DBL_EPSILON);
     static const double k_px_alpha[] = {1e-4, 1e-3, 1e-2, 0.1, 0.5, 1.0};
@@ -1071,24 +1044,24 @@ static void check_ggx_proxy_peak(mf_check *c)
             double ap = mf_filter_ggx_proxy_alpha(a, dh);
             double mean = mf_filter_ggx_rect_mean(a, a, 0.0, 0.0, dh, dh);
             snprintf(at, sizeof at, "isotropic alpha %g, dh %g", a, dh);
-            check_record(c, fabs(MF_PI * ap * ap * mean - 1.0), at);
+            mf_check_record(c, fabs(MF_PI * ap * ap * mean - 1.0), at);
             /* joint solve, anisotropic: alpha_y = alpha/10 (>= 1e-4), widths dh and dh/3 */
             double ay = fmax(1e-4, 0.1 * a), out[2];
             double wy = dh / 3.0;
             mf_status st = mf_filter_ggx_proxy_alpha_joint(a, ay, dh, wy, out);
             double cm = mf_filter_ggx_rect_mean(a, ay, 0.0, 0.0, dh, wy);
             snprintf(at, sizeof at, "joint alpha (%g, %g), widths (%g, %g)", a, ay, dh, wy);
-            check_record(c, st == MF_OK ? fabs(MF_PI * out[0] * out[1] * cm - 1.0) : NAN, at);
+            mf_check_record(c, st == MF_OK ? fabs(MF_PI * out[0] * out[1] * cm - 1.0) : NAN, at);
         }
     }
-    check_finish(c);
+    mf_check_finish(c);
 }
 
 /* mfkit's fitted proxy (mf_proxy.h) against the exact alpha'. */
 static void check_ggx_proxy_fit(mf_check *c)
 {
     char at[200];
-    check_init(c, "ggx_proxy_fit_error",
+    mf_check_begin(c, "ggx_proxy_fit_error",
                "max relative error of the fitted proxy mf_proxy_alpha_fit vs the exact alpha', all dh/alpha",
                MF_PROXY_FIT_MAX_REL_ERROR);
     /* alpha'/alpha depends on x = dh^2/(alpha^2 + dh^2) only: sweep x over [0, 1) */
@@ -1097,9 +1070,9 @@ static void check_ggx_proxy_fit(mf_check *c)
         double a = 1.0, dh = sqrt(x / (1.0 - x));
         double e = fabs(mf_proxy_alpha_fit(a, dh) / mf_filter_ggx_proxy_alpha(a, dh) - 1.0);
         snprintf(at, sizeof at, "alpha 1, dh %.6g (x = %.6g)", dh, x);
-        check_record(c, e, at);
+        mf_check_record(c, e, at);
     }
-    check_finish(c);
+    mf_check_finish(c);
 }
 
 /* ---- driver -------------------------------------------------------------------------------- */

@@ -35,10 +35,12 @@
 #ifndef MF_LTC_GATE_H
 #define MF_LTC_GATE_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "mfkit/mf_ltc_table.h"
 #include "mfkit/mf_model.h"
+#include "mfkit/mf_check.h"
 #include "mfkit/mf_validate.h"
 
 #ifdef __cplusplus
@@ -87,6 +89,19 @@ void mf_ltc_gate_options_default(mf_ltc_gate_options *o);
  * the fields minv_00, minv_20, minv_02, minv_22, magnitude), MF_ERR_ALLOC. */
 mf_status mf_ltc_gate_run(const mf_table *t, const mf_brdf_model *model, const mf_ltc_gate_options *o,
                           mf_check *checks, int cap, int *count) MF_WARN_UNUSED;
+
+/* The gate's table of checks, in the order mf_ltc_gate_run writes them (*n gets the count): name,
+ * what, bound (the polygon checks take theirs from the options), whether it needs the model.  The
+ * check functions run on the gate's private context: run them through mf_ltc_gate_run.  Each
+ * check records its cases through mf_check.h (a NaN case fails the check, worst = NaN; a texel
+ * whose matrix cannot be unpacked or whose model integral fails counts as +infinity). */
+const mf_check_def *mf_ltc_gate_checks(int *n);
+/* The same table as an array (for static initialisers such as the table-kind registry). */
+extern const mf_check_def mf_ltc_gate_check_table[MF_LTC_GATE_MAX_CHECKS];
+
+/* 1 if t has the layout the gate needs (see mf_ltc_gate_run); 0 with a one-line reason in why
+ * (may be NULL) otherwise. */
+int mf_ltc_gate_layout_ok(const mf_table *t, char *why, size_t why_size);
 
 /* ---- building blocks, also used by analysis/bench_ltc ---------------------------------------- */
 

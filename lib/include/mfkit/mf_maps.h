@@ -45,6 +45,7 @@
 #include <stddef.h>
 
 #include "mfkit/mf_moments.h"
+#include "mfkit/mf_table.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -99,6 +100,24 @@ mf_status mf_map_moments_from_slopes(const mf_map *slopes, mf_map *out) MF_WARN_
 
 /* The moments of texel (i, j) of a moments map as a struct (for mf_moments_to_gaussian etc.). */
 mf_slope_moments mf_map_moments_at(const mf_map *moments, int i, int j);
+
+/* ---- moment maps as tables (the "moment_map" kind of mf_table_kind.h) ---------------------------
+ * A level of a moments map becomes an mf_table, so every table exporter writes it: axes
+ * "u" = tex_u = (i + 0.5)/w and "v" = tex_v = 1 - (j + 0.5)/h (identity mappings; v runs from the
+ * top row down, so record (i, j) of the table is texel (i, j) of the map, the same order), fields
+ * mean_x, mean_y, m_xx, m_xy, m_yy (the MF_MAP_* channels), metadata kind = "moment_map",
+ * level = the MIP level, slopes = the sign and frame convention.  The values are copied bit
+ * for bit. */
+
+/* The table of one level (a moments map of MF_MAP_MOMENTS channels; level >= 0 is recorded in
+ * the metadata).  MF_ERR_DOMAIN for another channel count, MF_ERR_ALLOC. */
+mf_status mf_map_moments_to_table(const mf_map *moments, int level, mf_table *out) MF_WARN_UNUSED;
+/* The tables of a whole MIP chain levels[0 .. nlevels - 1] into out[0 .. nlevels - 1] (one table
+ * per level: the levels differ in size).  On failure every table is freed and zeroed. */
+mf_status mf_map_chain_to_tables(const mf_map *levels, int nlevels, mf_table *out) MF_WARN_UNUSED;
+/* The moments map of a "moment_map" table (the inverse of mf_map_moments_to_table, bit for
+ * bit).  MF_ERR_DOMAIN if the table does not have that layout, MF_ERR_ALLOC. */
+mf_status mf_map_moments_from_table(const mf_table *t, mf_map *out) MF_WARN_UNUSED;
 
 #ifdef __cplusplus
 }

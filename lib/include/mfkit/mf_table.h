@@ -29,7 +29,9 @@
 extern "C" {
 #endif
 
-#define MF_TABLE_MAX_AXES 4
+/* Up to 6 axes: the anisotropic LTC table needs 4 (roughness x, roughness y, view theta, view
+ * phi), per-level normal-map tables 5; every function here takes any count up to this. */
+#define MF_TABLE_MAX_AXES 6
 #define MF_TABLE_MAX_FIELDS 32
 #define MF_TABLE_NAME_LEN 32
 #define MF_TABLE_TEXT_LEN 160
@@ -109,6 +111,55 @@ mf_status mf_table_lookup(const mf_table *t, const double *p, double *out) MF_WA
 
 /* Extremes of a field over the table (NaN-aware: NaNs are counted in *nan_count, may be NULL). */
 void mf_table_field_range(const mf_table *t, int field, double *min, double *max, size_t *nan_count);
+
+/* ---- a 2D atlas of a table with more than two axes ------------------------------------------
+ *
+ * A renderer that cannot sample a texture of 3 or more dimensions stores the table as one 2D
+ * texture of tiles.  Axis 0 runs along x within a tile and axis 1 along y (tile_w = size of
+ * axis 0, tile_h = size of axis 1; a table of one axis has tile_h = 1); every combination of
+ * the further axes (i2, ..., i_{n-1}) is one tile, numbered with axis 2 fastest:
+ *     tile = i2 + n2 (i3 + n3 (i4 + ...)),
+ * placed at tile column tile % tiles_x, tile row tile / tiles_x.  Atlas texel (x, y), row y
+ * from the top (y = 0 first), holds the record of
+ *     i0 = x % tile_w, i1 = y % tile_h, tile = (x / tile_w) + tiles_x (y / tile_h);
+ * texels of unused tiles (when tiles_x does not divide the tile count) are 0.
+ *
+ * A shader looks it up (mf_table_atlas_lookup is its C twin, tested against mf_table_lookup):
+ * per further axis k, x_k = (p_k - lo_k)/(hi_k - lo_k) (n_k - 1) clamped to [0, n_k - 1],
+ * i_k = min(floor(x_k), n_k - 2), w_k = x_k - i_k; over the 2^(naxes - 2) corners it samples the
+ * tile of (i_k or i_k + 1) with the hardware's bilinear filter at
+ *     atlas uv = ((col + uv0) tile_w / width, (row + uv1) tile_h / height),
+ * uv0, uv1 the in-tile coordinates of mf_table_uv_from_param (the parameter clamped to [lo, hi]
+ * first, so the filter never reaches a neighbouring tile), and blends the samples with the
+ * weights prod_k (w_k or 1 - w_k).  The layout is recorded in the metadata key "atlas"
+ * (mf_table_atlas_record) so a reader of an exported file finds it. */
+typedef struct mf_table_atlas {
+    int tile_w, tile_h;   /* texels of a tile: the sizes of axes 0 and 1 */
+    int tiles;            /* number of tiles: the product of the sizes of axes 2.. (1 for <= 2 axes) */
+    int tiles_x, tiles_y; /* tile columns and rows: tiles_x * tiles_y >= tiles */
+    int width, height;    /* atlas texels: tile_w tiles_x, tile_h tiles_y */
+} mf_table_atlas;
+
+/* The atlas of t with tiles_x tile columns (0: the size of axis 2, i.e. one tile row per
+ * combination of axes 3..; 1 for a table of <= 2 axes).  MF_ERR_DOMAIN for tiles_x < 0 or an
+ * atlas wider or higher than 65536 texels. */
+mf_status mf_table_atlas_layout(const mf_table *t, int tiles_x, mf_table_atlas *a) MF_WARN_UNUSED;
+/* Writes the atlas texels of t into out[(y * width + x) * nfields + f] (width * height * nfields
+ * doubles). */
+void mf_table_atlas_fill(const mf_table *t, const mf_table_atlas *a, double *out);
+/* Records the layout in t's metadata: key "atlas", value
+ * "tiles_x=X tiles_y=Y tile_w=W tile_h=H order=axis2_fastest".  MF_ERR_DOMAIN if the metadata
+ * is full. */
+mf_status mf_table_atlas_record(mf_table *t, const mf_table_atlas *a) MF_WARN_UNUSED;
+/* The layout recorded in t's metadata, checked against t's axes.  MF_ERR_DOMAIN if there is none
+ * or it does not fit t. */
+mf_status mf_table_atlas_from_meta(const mf_table *t, mf_table_atlas *a) MF_WARN_UNUSED;
+/* The shader's lookup of the atlas image (as mf_table_atlas_fill writes it) of a table with
+ * t's axes and fields at parameters p[0..naxes-1]: bilinear within a tile, linear across the
+ * further axes (see above).  Equals mf_table_lookup up to rounding.  MF_ERR_DOMAIN for NaN
+ * coordinates. */
+mf_status mf_table_atlas_lookup(const mf_table *t, const mf_table_atlas *a, const double *image, const double *p,
+                                double *out) MF_WARN_UNUSED;
 
 #ifdef __cplusplus
 }

@@ -5,26 +5,18 @@
  * (alpha from 1e-4 to 1, view angles up to 89.99 degrees, anisotropy ratios up to 1:100,
  * non-centred mean slopes up to 2) and reports its worst value against a stated bound.  The
  * checks, their grids and the reasons for their bounds are listed in docs/validation.md.
- * `mfkit validate` prints them; tests/ run them too.
+ * `mfkit validate` prints them; tests/ run them too.  Each check records its cases through
+ * mf_check.h (one rule for NaN: a NaN case fails the check and is reported as worst = NaN,
+ * "NaN at <where>").
  */
 #ifndef MF_VALIDATE_H
 #define MF_VALIDATE_H
 
-#include "mfkit/mf_core.h"
+#include "mfkit/mf_check.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-typedef struct mf_check {
-    char name[48];       /* stable identifier, e.g. "ndf_normalisation" */
-    char what[160];      /* one line: what is measured */
-    double worst;        /* the worst value found (same unit as bound) */
-    double bound;        /* passes when worst <= bound */
-    int passed;          /* worst <= bound and no evaluation failed */
-    long cases;          /* number of grid points checked */
-    char worst_at[200];  /* the parameters of the worst case */
-} mf_check;
 
 /* Called after each check with its index and the total, for progress display; may be NULL. */
 typedef void (*mf_validate_progress_fn)(void *user, int done, int total, const mf_check *last);

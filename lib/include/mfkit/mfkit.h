@@ -12,6 +12,7 @@
 #include "mfkit/mf_sample.h"
 #include "mfkit/mf_polygon.h"
 #include "mfkit/mf_ltc.h"
+#include "mfkit/mf_check.h"
 #include "mfkit/mf_validate.h"
 #include "mfkit/mf_table.h"
 #include "mfkit/mf_sh.h"
@@ -24,5 +25,6 @@
 #include "mfkit/mf_ltc_table.h"
 #include "mfkit/mf_model.h"
 #include "mfkit/mf_ltc_gate.h"
+#include "mfkit/mf_table_kind.h"
 
 #endif /* MFKIT_H */
