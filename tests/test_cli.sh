@@ -101,6 +101,43 @@ expect_error "unknown command" "" "unknown command 'fitt'" fitt
 expect_error "validate bad option" "" "unknown option '--fast'" validate --fast
 expect_error "validate missing value" "" "--json-file needs a value" validate --json-file
 
+# --- faults of issue 11: extreme arguments give values, input errors name their cause -----------
+# ggx-proxy: a subnormal dh against alpha >= 1 is alpha (t/atan t = 1); dh >= 1e155 follows
+# alpha' -> dh/sqrt(pi) (1/sqrt(pi) = 0.56418958354775628...) instead of overflowing to inf
+out=$(run "ggx-proxy" "alpha,dh" "1,5e-324")
+ok '[ "$(echo "$out" | tail -1)" = "1,5e-324,1,1,1" ]' "ggx-proxy subnormal dh, alpha 1: $out"
+out=$(run "ggx-proxy" "alpha,dh" "2,1e-310")
+ok '[ "$(echo "$out" | tail -1)" = "2,1e-310,2,2,2" ]' "ggx-proxy subnormal dh, alpha 2: $out"
+out=$(run "ggx-proxy" "alpha,dh" "0.5,1e155")
+ok 'echo "$out" | tail -1 | grep -q "^0.5,1e155,5.64189583547756[0-9]*e+154,"' "ggx-proxy dh 1e155: $out"
+out=$(run "ggx-proxy" "alpha,dh" "1,1e308")
+ok 'echo "$out" | tail -1 | grep -q "^1,1e308,5.641895835477562[0-9]*e+307,"' "ggx-proxy dh 1e308: $out"
+# ggx-rect with bounds +-1e300: the mean is the mass over the area. [-1e300,1e300] x [-1,1] at
+# alpha 0.3 holds the y-marginal mass 1/sqrt(1 + 0.09) = 0.9578262852211514 over the area 4e300,
+# 2.3945657130528785e-301; [-1e300,1e300]^2 (area 4e600) underflows to 0.
+out=$(printf 'alpha_x,alpha_y,x0,x1,y0,y1
+0.3,0.3,-1e300,1e300,-1,1
+0.3,0.3,-1e300,1e300,-1e300,1e300
+' | "$mfkit" eval ggx-rect)
+ok 'echo "$out" | sed -n 2p | grep -q ",2.39456571305287[0-9]*e-301$"' "ggx-rect +-1e300 x +-1: $out"
+ok '[ "$(echo "$out" | sed -n 3p)" = "0.3,0.3,-1e300,1e300,-1e300,1e300,0" ]' "ggx-rect +-1e300 square: $out"
+expect_error "1e400 out of range" "alpha,dh
+1e400,1
+" "'1e400' is out of the range of a double" eval ggx-proxy
+expect_error "UTF-8 BOM" "$(printf '\xef\xbb\xbfalpha,dh\n1,1\n')" "byte-order mark" eval ggx-proxy
+printf 'alpha,dh\n1\0,1\n' >"$tmp/nul.csv"
+"$mfkit" eval ggx-proxy <"$tmp/nul.csv" >"$tmp/out" 2>"$tmp/err"; rc=$?
+ok '[ $rc -eq 2 ] && [ ! -s "$tmp/out" ] && grep -q "line 2: binary input" "$tmp/err"' "NUL byte named binary: $(cat "$tmp/err")"
+head -c 300 /bin/sh >"$tmp/bin.csv"
+"$mfkit" eval ggx-proxy <"$tmp/bin.csv" >"$tmp/out" 2>"$tmp/err"; rc=$?
+ok '[ $rc -eq 2 ] && [ ! -s "$tmp/out" ] && grep -q "binary input" "$tmp/err"' "an executable named binary: $(cat "$tmp/err")"
+# 100k header columns: linear header parsing (was quadratic: 30 s); the row echoes every column
+awk 'BEGIN{for(i=0;i<100000;i++) printf "c%d,", i; print "alpha,dh"; for(i=0;i<100000;i++) printf "0,"; print "0.5,0"}' >"$tmp/wide.csv"
+ok '[ "$("$mfkit" eval ggx-proxy <"$tmp/wide.csv" | tail -1 | tr , "\n" | tail -3 | tr "\n" " ")" = "0.5 0.5 0.5 " ]' "100k columns"
+awk 'BEGIN{for(i=0;i<100000;i++) printf "c%d,", i; print "c77777"}' >"$tmp/dup.csv"
+"$mfkit" eval ggx-proxy <"$tmp/dup.csv" >"$tmp/out" 2>"$tmp/err"
+ok 'grep -q "names column .c77777. twice" "$tmp/err"' "duplicate among 100k columns: $(cat "$tmp/err")"
+
 # --- help everywhere ---------------------------------------------------------------------------
 for args in "--help" "eval --help" "eval ndf --help" "validate --help"; do
   ok '"$mfkit" $args >"$tmp/help" 2>&1 && grep -q usage "$tmp/help"' "--help for '$args'"

@@ -470,9 +470,10 @@ int cli_eval(int argc, char **argv)
                 in[k] = NAN; /* an empty vertex field: unused */
                 continue;
             }
-            if (cli_parse_double(s, &in[k]) != 0) {
-                status = cli_error(cmd, "%s: stdin: data row %d, column '%s': '%s' is not a number", e->name, r + 1,
-                                   inputs[k], s);
+            int pc = cli_parse_double(s, &in[k]);
+            if (pc != 0) {
+                status = cli_error(cmd, "%s: stdin: data row %d, column '%s': '%s' %s", e->name, r + 1, inputs[k], s,
+                                   cli_num_error(pc));
                 break;
             }
         }

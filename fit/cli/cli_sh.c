@@ -158,9 +158,10 @@ static int read_lights(const char *path, sh_light **out, int *count)
         double v[6];
         for (int c = 0; c < 6; ++c) {
             const char *s = fields[idx[c]];
-            if (cli_parse_double(s, &v[c]) != 0 || !isfinite(v[c])) {
-                rc = cli_error(k_cmd, "%s:%ld: column %d (%s): '%s' is not a finite number", path, lineno, idx[c] + 1,
-                               cols[c], s);
+            int pc = cli_parse_double(s, &v[c]);
+            if (pc != 0 || !isfinite(v[c])) {
+                rc = cli_error(k_cmd, "%s:%ld: column %d (%s): '%s' %s", path, lineno, idx[c] + 1, cols[c], s,
+                               pc == CLI_NUM_RANGE ? cli_num_error(pc) : "is not a finite number");
                 goto out;
             }
             if (c >= 3 && v[c] < 0.0) {

@@ -15,8 +15,12 @@ int cli_error(const char *cmd, const char *fmt, ...)
     ;
 
 /* Strict number parsing: the whole string must be a finite or NaN/Inf number ("nan", "inf").
- * Returns 0 on success. */
+ * Returns 0 on success, CLI_NUM_INVALID for text that is not a number, CLI_NUM_RANGE for a
+ * number too large for a double (1e400; an underflow such as 1e-400 gives 0 or a subnormal). */
+enum { CLI_NUM_INVALID = -1, CLI_NUM_RANGE = -2 };
 int cli_parse_double(const char *s, double *out);
+/* The reason for a non-zero cli_parse_double code: "is not a number", "is out of the range ...". */
+const char *cli_num_error(int code);
 /* Strict integer parsing in [lo, hi]. Returns 0 on success. */
 int cli_parse_int(const char *s, long lo, long hi, long *out);
 
@@ -44,10 +48,12 @@ typedef struct {
     int ncols, nrows;
     char **header;   /* ncols names */
     char ***cells;   /* nrows x ncols strings */
+    int *sorted;     /* the column indices sorted by name (cli_csv_column) */
 } cli_csv;
 
 /* Reads a CSV (comma-separated, no quoting; surrounding spaces and CR are trimmed; blank lines
- * skipped).  On error fills msg ("line N: ...") and returns non-zero. */
+ * skipped).  A UTF-8 byte-order mark and control bytes (binary input) are errors that say so.
+ * On error fills msg ("line N: ...") and returns non-zero. */
 int cli_csv_read(FILE *f, cli_csv *csv, char *msg, size_t msg_size);
 void cli_csv_free(cli_csv *csv);
 /* Index of the column named `name`, or -1. */
