@@ -52,8 +52,8 @@ ok 'echo "$out" | tail -1 | grep -q ",3.536776513153"' "ggx-rect of a tiny squar
 out=$(printf 'mean_x,mean_y,var_x,var_y,cov_xy,wo_x,wo_y,wo_z,wi_x,wi_y,wi_z\n0,0,0.02,0.02,0,0,0,1,0.6,0,0.8\n' | "$mfkit" eval leadr --grid 8 --lambda 3 --grid-layout cell-centres)
 ok 'echo "$out" | head -1 | grep -q ",specular,diffuse$"' "leadr header: $out"
 expect_error "grid on ndf" "" "does not take --grid" eval ndf --ndf ggx --grid 3
-expect_error "bad grid" "" "--grid: '0'" eval leadr --grid 0
-expect_error "bad lambda" "" "--lambda: '-1'" eval leadr --lambda -1
+expect_error "bad grid" "" "--grid: expected an integer in \[1, 512\], got '0'" eval leadr --grid 0
+expect_error "bad lambda" "" "--lambda: expected a finite number > 0, got '-1'" eval leadr --lambda -1
 # out-of-domain rows give nan, the other rows are unaffected; extra columns are echoed
 out=$(printf 'id,alpha_x,alpha_y,m_x,m_y,m_z\na,-1,0.5,0,0,1\nb,0.5,0.5,0,0,1\nc,nan,0.5,0,0,1\n' | "$mfkit" eval ndf --ndf ggx)
 ok '[ "$(echo "$out" | sed -n 2p)" = "a,-1,0.5,0,0,1,nan" ]' "negative alpha -> nan: $out"
@@ -83,12 +83,14 @@ expect_error "unknown function" "" "unknown function 'nope'" eval nope
 expect_error "missing function" "" "missing FUNCTION" eval
 expect_error "unknown option" "" "unknown option '--bogus'" eval ndf --ndf ggx --bogus
 expect_error "missing value" "" "option --ndf needs a value" eval ndf --ndf
-expect_error "bad ndf" "" "unknown NDF 'phong'" eval ndf --ndf phong
+expect_error "bad ndf" "" "mfkit eval: --ndf: expected ggx or beckmann, got 'phong'" eval ndf --ndf phong
+expect_error "repeated option" "" "--ndf given twice" eval ndf --ndf ggx --ndf beckmann
+expect_error "1e400 option" "" "--lambda: '1e400' is out of the range" eval leadr --lambda 1e400
 expect_error "ndf required" "" "--ndf ggx|beckmann is required" eval lambda
 expect_error "ndf not taken" "" "does not take --ndf" eval lambda-gaussian --ndf ggx
 expect_error "fresnel on ndf" "" "does not take --fresnel" eval ndf --ndf ggx --fresnel schlick
-expect_error "bad points" "" "--points: 'nan'" eval albedo --ndf ggx --points nan
-expect_error "points not multiple" "" "--points: '100'" eval albedo --ndf ggx --points 100
+expect_error "bad points" "" "--points: expected a multiple of 8 in \[16, 2048\], got 'nan'" eval albedo --ndf ggx --points nan
+expect_error "points not multiple" "" "--points: expected a multiple of 8 in \[16, 2048\], got '100'" eval albedo --ndf ggx --points 100
 expect_error "f0 missing" "alpha_x,alpha_y,wo_x,wo_y,wo_z,wi_x,wi_y,wi_z
 1,1,0,0,1,0,0,1
 " "missing required column 'f0'" eval brdf --ndf ggx --fresnel schlick

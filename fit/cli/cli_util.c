@@ -21,6 +21,25 @@ int cli_error(const char *cmd, const char *fmt, ...)
     return 2;
 }
 
+int cli_exit_code(mf_status st)
+{
+    switch (st) {
+    case MF_OK:
+        return CLI_EXIT_OK;
+    case MF_ERR_CHECK_FAILED:
+        return CLI_EXIT_CHECK_FAILED;
+    case MF_ERR_DOMAIN:
+    case MF_ERR_UNSUPPORTED:
+        return CLI_EXIT_USAGE;
+    case MF_ERR_IO:
+    case MF_ERR_FORMAT:
+    case MF_ERR_ALLOC:
+        return CLI_EXIT_IO;
+    default:
+        return CLI_EXIT_FIT;
+    }
+}
+
 int cli_parse_double(const char *s, double *out)
 {
     if (!s || !*s)

@@ -7,6 +7,20 @@
 
 #include "mfkit/mf_validate.h"
 
+/* The exit status of every mfkit command (docs/cli.md, "Exit status"). */
+enum {
+    CLI_EXIT_OK = 0,
+    CLI_EXIT_CHECK_FAILED = 1, /* a validation check (core properties, the LTC gate) failed */
+    CLI_EXIT_USAGE = 2,        /* usage or input error: bad option, bad CSV field, out-of-domain request */
+    CLI_EXIT_IO = 3,           /* I/O error: a file missing, unreadable, corrupt or unwritable; out of memory */
+    CLI_EXIT_FIT = 4,          /* a fit failed (no convergence) */
+    CLI_EXIT_INTERRUPTED = 130 /* SIGINT / SIGTERM (128 + 2, the shell's convention) */
+};
+/* The one mapping from a library status to an exit status: MF_OK 0, MF_ERR_CHECK_FAILED 1,
+ * MF_ERR_DOMAIN and MF_ERR_UNSUPPORTED 2, MF_ERR_IO, MF_ERR_FORMAT and MF_ERR_ALLOC 3,
+ * MF_ERR_NO_CONVERGENCE (and any other) 4. */
+int cli_exit_code(mf_status st);
+
 /* Prints "mfkit <cmd>: <message>" on one line of stderr. Always returns 2 (usage/input error). */
 int cli_error(const char *cmd, const char *fmt, ...)
 #if defined(__GNUC__)
