@@ -315,7 +315,7 @@ static const cli_opt k_eval_opts[E_NOPTS] = {
 static const cli_command k_eval_cmd = {
     .name = "eval",
     .synopsis = "FUNCTION",
-    .min_pos = 1,
+    .min_pos = 0, /* "missing FUNCTION" below */
     .max_pos = 1,
     .description = "Reads CSV with a header from stdin and writes CSV to stdout (< in.csv > out.csv): every input\n"
                    "column echoed, then the outputs (%.17g). Rows outside the domain give nan. Directions are unit\n"

@@ -67,6 +67,8 @@ static void expect_text(const cli_opt *o, char *buf, size_t n)
     }
 }
 
+static void metavar_text(const cli_opt *o, char *buf, size_t n);
+
 static int bad_value(const cli_command *cmd, const cli_opt *o, const char *arg)
 {
     char want[256];
@@ -198,6 +200,12 @@ int cli_opt_parse(const cli_command *cmd, int argc, char **argv, unsigned allowe
             return cli_error(cmd->name, "unexpected argument '%s' (usage: mfkit %s %s)", a, cmd->name, cmd->synopsis);
         pos[(*npos)++] = a;
     }
+    for (int k = 0; k < cmd->nopts; ++k)
+        if (cmd->opts[k].required && !vals[k].set) {
+            char mv[220];
+            metavar_text(&cmd->opts[k], mv, sizeof mv);
+            return cli_error(cmd->name, "needs %s%s", cmd->opts[k].name, mv);
+        }
     if (*npos < cmd->min_pos)
         return cli_error(cmd->name, "missing argument%s: usage: mfkit %s %s (see 'mfkit %s --help')",
                          cmd->min_pos - *npos > 1 ? "s" : "", cmd->name, cmd->synopsis, cmd->name);
@@ -263,7 +271,8 @@ void cli_opt_usage(const cli_command *cmd, FILE *f)
     for (int k = 0; k < cmd->nopts; ++k) {
         char mv[220], item[300];
         metavar_text(&cmd->opts[k], mv, sizeof mv);
-        int len = snprintf(item, sizeof item, "[%s%s]", cmd->opts[k].name, mv);
+        int req = cmd->opts[k].required;
+        int len = snprintf(item, sizeof item, "%s%s%s%s", req ? "" : "[", cmd->opts[k].name, mv, req ? "" : "]");
         if (col + 1 + len > USAGE_WIDTH) {
             fprintf(f, "\n%*s", indent, "");
             col = indent;

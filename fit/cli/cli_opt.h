@@ -49,6 +49,7 @@ typedef struct cli_opt {
     const char *help;    /* one paragraph, wrapped by cli_opt_usage; '\n' forces a line break */
     unsigned mask;       /* command-specific applicability (see cli_opt_parse's allowed) */
     int allow_empty;     /* STRING: "" accepted */
+    int required;        /* must be given ("needs --out PREFIX"); shown without brackets */
 } cli_opt;
 
 /* A command: "mfkit <name> <synopsis> [options]" with its options. */
