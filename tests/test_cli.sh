@@ -52,8 +52,8 @@ ok 'echo "$out" | tail -1 | grep -q ",3.536776513153"' "ggx-rect of a tiny squar
 out=$(printf 'mean_x,mean_y,var_x,var_y,cov_xy,wo_x,wo_y,wo_z,wi_x,wi_y,wi_z\n0,0,0.02,0.02,0,0,0,1,0.6,0,0.8\n' | "$mfkit" eval leadr --grid 8 --lambda 3 --grid-layout cell-centres)
 ok 'echo "$out" | head -1 | grep -q ",specular,diffuse$"' "leadr header: $out"
 expect_error "grid on ndf" "" "does not take --grid" eval ndf --ndf ggx --grid 3
-expect_error "bad grid" "" "--grid: '0'" eval leadr --grid 0
-expect_error "bad lambda" "" "--lambda: '-1'" eval leadr --lambda -1
+expect_error "bad grid" "" "--grid: expected an integer in \[1, 512\], got '0'" eval leadr --grid 0
+expect_error "bad lambda" "" "--lambda: expected a finite number > 0, got '-1'" eval leadr --lambda -1
 # out-of-domain rows give nan, the other rows are unaffected; extra columns are echoed
 out=$(printf 'id,alpha_x,alpha_y,m_x,m_y,m_z\na,-1,0.5,0,0,1\nb,0.5,0.5,0,0,1\nc,nan,0.5,0,0,1\n' | "$mfkit" eval ndf --ndf ggx)
 ok '[ "$(echo "$out" | sed -n 2p)" = "a,-1,0.5,0,0,1,nan" ]' "negative alpha -> nan: $out"
@@ -83,12 +83,14 @@ expect_error "unknown function" "" "unknown function 'nope'" eval nope
 expect_error "missing function" "" "missing FUNCTION" eval
 expect_error "unknown option" "" "unknown option '--bogus'" eval ndf --ndf ggx --bogus
 expect_error "missing value" "" "option --ndf needs a value" eval ndf --ndf
-expect_error "bad ndf" "" "unknown NDF 'phong'" eval ndf --ndf phong
+expect_error "bad ndf" "" "mfkit eval: --ndf: expected ggx or beckmann, got 'phong'" eval ndf --ndf phong
+expect_error "repeated option" "" "--ndf given twice" eval ndf --ndf ggx --ndf beckmann
+expect_error "1e400 option" "" "--lambda: '1e400' is out of the range" eval leadr --lambda 1e400
 expect_error "ndf required" "" "--ndf ggx|beckmann is required" eval lambda
 expect_error "ndf not taken" "" "does not take --ndf" eval lambda-gaussian --ndf ggx
 expect_error "fresnel on ndf" "" "does not take --fresnel" eval ndf --ndf ggx --fresnel schlick
-expect_error "bad points" "" "--points: 'nan'" eval albedo --ndf ggx --points nan
-expect_error "points not multiple" "" "--points: '100'" eval albedo --ndf ggx --points 100
+expect_error "bad points" "" "--points: expected a multiple of 8 in \[16, 2048\], got 'nan'" eval albedo --ndf ggx --points nan
+expect_error "points not multiple" "" "--points: expected a multiple of 8 in \[16, 2048\], got '100'" eval albedo --ndf ggx --points 100
 expect_error "f0 missing" "alpha_x,alpha_y,wo_x,wo_y,wo_z,wi_x,wi_y,wi_z
 1,1,0,0,1,0,0,1
 " "missing required column 'f0'" eval brdf --ndf ggx --fresnel schlick
@@ -100,6 +102,43 @@ expect_error "output name clash" "$H,D
 expect_error "unknown command" "" "unknown command 'fitt'" fitt
 expect_error "validate bad option" "" "unknown option '--fast'" validate --fast
 expect_error "validate missing value" "" "--json-file needs a value" validate --json-file
+
+# --- faults of issue 11: extreme arguments give values, input errors name their cause -----------
+# ggx-proxy: a subnormal dh against alpha >= 1 is alpha (t/atan t = 1); dh >= 1e155 follows
+# alpha' -> dh/sqrt(pi) (1/sqrt(pi) = 0.56418958354775628...) instead of overflowing to inf
+out=$(run "ggx-proxy" "alpha,dh" "1,5e-324")
+ok '[ "$(echo "$out" | tail -1)" = "1,5e-324,1,1,1" ]' "ggx-proxy subnormal dh, alpha 1: $out"
+out=$(run "ggx-proxy" "alpha,dh" "2,1e-310")
+ok '[ "$(echo "$out" | tail -1)" = "2,1e-310,2,2,2" ]' "ggx-proxy subnormal dh, alpha 2: $out"
+out=$(run "ggx-proxy" "alpha,dh" "0.5,1e155")
+ok 'echo "$out" | tail -1 | grep -q "^0.5,1e155,5.64189583547756[0-9]*e+154,"' "ggx-proxy dh 1e155: $out"
+out=$(run "ggx-proxy" "alpha,dh" "1,1e308")
+ok 'echo "$out" | tail -1 | grep -q "^1,1e308,5.641895835477562[0-9]*e+307,"' "ggx-proxy dh 1e308: $out"
+# ggx-rect with bounds +-1e300: the mean is the mass over the area. [-1e300,1e300] x [-1,1] at
+# alpha 0.3 holds the y-marginal mass 1/sqrt(1 + 0.09) = 0.9578262852211514 over the area 4e300,
+# 2.3945657130528785e-301; [-1e300,1e300]^2 (area 4e600) underflows to 0.
+out=$(printf 'alpha_x,alpha_y,x0,x1,y0,y1
+0.3,0.3,-1e300,1e300,-1,1
+0.3,0.3,-1e300,1e300,-1e300,1e300
+' | "$mfkit" eval ggx-rect)
+ok 'echo "$out" | sed -n 2p | grep -q ",2.39456571305287[0-9]*e-301$"' "ggx-rect +-1e300 x +-1: $out"
+ok '[ "$(echo "$out" | sed -n 3p)" = "0.3,0.3,-1e300,1e300,-1e300,1e300,0" ]' "ggx-rect +-1e300 square: $out"
+expect_error "1e400 out of range" "alpha,dh
+1e400,1
+" "'1e400' is out of the range of a double" eval ggx-proxy
+expect_error "UTF-8 BOM" "$(printf '\xef\xbb\xbfalpha,dh\n1,1\n')" "byte-order mark" eval ggx-proxy
+printf 'alpha,dh\n1\0,1\n' >"$tmp/nul.csv"
+"$mfkit" eval ggx-proxy <"$tmp/nul.csv" >"$tmp/out" 2>"$tmp/err"; rc=$?
+ok '[ $rc -eq 2 ] && [ ! -s "$tmp/out" ] && grep -q "line 2: binary input" "$tmp/err"' "NUL byte named binary: $(cat "$tmp/err")"
+head -c 300 /bin/sh >"$tmp/bin.csv"
+"$mfkit" eval ggx-proxy <"$tmp/bin.csv" >"$tmp/out" 2>"$tmp/err"; rc=$?
+ok '[ $rc -eq 2 ] && [ ! -s "$tmp/out" ] && grep -q "binary input" "$tmp/err"' "an executable named binary: $(cat "$tmp/err")"
+# 100k header columns: linear header parsing (was quadratic: 30 s); the row echoes every column
+awk 'BEGIN{for(i=0;i<100000;i++) printf "c%d,", i; print "alpha,dh"; for(i=0;i<100000;i++) printf "0,"; print "0.5,0"}' >"$tmp/wide.csv"
+ok '[ "$("$mfkit" eval ggx-proxy <"$tmp/wide.csv" | tail -1 | tr , "\n" | tail -3 | tr "\n" " ")" = "0.5 0.5 0.5 " ]' "100k columns"
+awk 'BEGIN{for(i=0;i<100000;i++) printf "c%d,", i; print "c77777"}' >"$tmp/dup.csv"
+"$mfkit" eval ggx-proxy <"$tmp/dup.csv" >"$tmp/out" 2>"$tmp/err"
+ok 'grep -q "names column .c77777. twice" "$tmp/err"' "duplicate among 100k columns: $(cat "$tmp/err")"
 
 # --- help everywhere ---------------------------------------------------------------------------
 for args in "--help" "eval --help" "eval ndf --help" "validate --help"; do

@@ -81,11 +81,11 @@ expect_error "missing file" 3 "missing.exr" maps leadr "$tmp/missing.exr" --out 
 expect_error "missing output directory" 3 "nodir" maps leadr "$tmp/n.exr" --out "$tmp/nodir/x"
 expect_error "unknown map type" 2 "unknown map type 'lear'" maps lear "$tmp/n.exr" --out "$tmp/o/x"
 expect_error "no --out" 2 "needs --out PREFIX" maps leadr "$tmp/n.exr"
-expect_error "bad --green" 2 "'left' is not up or down" maps leadr "$tmp/n.exr" --out "$tmp/o/x" --green left
+expect_error "bad --green" 2 "--green: expected up or down, got 'left'" maps leadr "$tmp/n.exr" --out "$tmp/o/x" --green left
 expect_error "--texel-size without --height" 2 "need --height" maps leadr "$tmp/n.exr" --out "$tmp/o/x" --texel-size 2
 expect_error "--green with --height" 2 "not with --height" maps leadr "$tmp/h.exr" --height --green down --out "$tmp/o/x"
-expect_error "negative base alpha" 2 "--base-alpha: '-1'" maps leadr "$tmp/n.exr" --out "$tmp/o/x" --base-alpha -1
-expect_error "zero texel size" 2 "--texel-size: '0'" maps leadr "$tmp/h.exr" --height --texel-size 0 --out "$tmp/o/x"
+expect_error "negative base alpha" 2 "--base-alpha: expected a finite number >= 0, got '-1'" maps leadr "$tmp/n.exr" --out "$tmp/o/x" --base-alpha -1
+expect_error "zero texel size" 2 "--texel-size: expected a finite number > 0, got '0'" maps leadr "$tmp/h.exr" --height --texel-size 0 --out "$tmp/o/x"
 expect_error "unknown option" 2 "unknown option '--bogus'" maps leadr "$tmp/n.exr" --out "$tmp/o/x" --bogus
 ok '[ -z "$(ls "$tmp/o")" ] && [ ! -e "$tmp/nodir" ]' "no output after errors: $(ls "$tmp/o")"
 # a failure while committing (a directory in the way of the last file) leaves no file either

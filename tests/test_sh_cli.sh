@@ -65,8 +65,8 @@ expect_error "short row" 2 "l_short.csv:2: 5 fields, but the header has 6" sh pr
 expect_error "missing lights file" 3 "missing.csv: cannot open" sh project "$tmp/constant.exr" --lights "$tmp/missing.csv"
 expect_error "missing env" 3 "missing.exr" sh project "$tmp/missing.exr"
 expect_error "NaN texel" 2 "texel (2, 1) .*channel G is NaN" sh project "$tmp/nan.exr"
-expect_error "bad --up" 2 "--up: 'x' is not z or y" sh project "$tmp/constant.exr" --up x
-expect_error "no ENV" 2 "project needs an ENV" sh project
+expect_error "bad --up" 2 "--up: expected z or y, got 'x'" sh project "$tmp/constant.exr" --up x
+expect_error "no ENV" 2 "missing argument: usage: mfkit sh project ENV" sh project
 expect_error "unknown subcommand" 2 "unknown subcommand 'proj'" sh proj "$tmp/constant.exr"
 expect_error "unknown option" 2 "unknown option '--bogus'" sh project "$tmp/constant.exr" --bogus
 

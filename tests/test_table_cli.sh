@@ -67,7 +67,7 @@ ok '[ "$(head -c 4 "$tmp/d.dds")" = "DDS " ] && [ "$(stat -c %s "$tmp/d.dds")" -
 # --- errors: one line, exit 2 or 3, no stdout, no output file ----------------------------------------
 expect_error "no subcommand" 2 "needs a subcommand" table
 expect_error "unknown subcommand" 2 "unknown subcommand 'frobnicate'" table frobnicate
-expect_error "convert without OUT" 2 "convert needs IN and OUT" table convert "$tmp/t.json"
+expect_error "convert without OUT" 2 "missing argument: usage: mfkit table convert IN OUT" table convert "$tmp/t.json"
 expect_error "unknown option" 2 "unknown option '--bogus'" table convert "$tmp/t.json" "$tmp/x.exr" --bogus
 expect_error "unknown output format" 2 "unknown output format" table convert "$tmp/t.json" "$tmp/x.xyz"
 expect_error "write-only input" 2 "cannot read csv files" table convert "$tmp/c.csv" "$tmp/x.exr"

@@ -10,6 +10,5 @@ int cli_table(int argc, char **argv);    /* argv[0] = "table"; an error without 
 int cli_fit(int argc, char **argv);      /* argv[0] = "fit"; an error without Ceres/OpenImageIO */
 int cli_maps(int argc, char **argv);     /* argv[0] = "maps"; an error without OpenImageIO */
 int cli_sh(int argc, char **argv);       /* argv[0] = "sh"; an error without OpenImageIO */
-void cli_eval_usage(FILE *f);
 
 #endif /* MF_CLI_H */

@@ -13,6 +13,7 @@
  * in [3, 8] or whose first n vertices are not all given gives nan.
  */
 #include "cli.h"
+#include "cli_opt.h"
 #include "cli_util.h"
 
 #include "mfkit/mfkit.h"
@@ -283,30 +284,53 @@ static int count(const char *const *list, int max)
     return n;
 }
 
-void cli_eval_usage(FILE *f)
+static const char *const k_ndf_names[] = {"ggx", "beckmann", NULL};
+static const char *const k_fresnel_names[] = {"none", "schlick", NULL};
+static const char *const k_g2_names[] = {"joint", "separable", NULL};
+static const char *const k_sided_names[] = {"one", "two", NULL};
+static const char *const k_layout_names[] = {"end-points", "cell-centres", NULL};
+
+/* The options of eval, in the order of k_eval_opts. */
+enum { E_NDF, E_FRESNEL, E_G2, E_POINTS, E_SIDED, E_GRID, E_LAMBDA, E_LAYOUT, E_NOPTS };
+static const cli_opt k_eval_opts[E_NOPTS] = {
+    {.name = "--ndf", .kind = CLI_OPT_ENUM, .choices = k_ndf_names, .mask = OPT_NDF,
+     .help = "the NDF (required by the functions marked *)"},
+    {.name = "--fresnel", .kind = CLI_OPT_ENUM, .choices = k_fresnel_names, .mask = OPT_FRESNEL, .def = "none",
+     .help = "brdf only; schlick adds the input column f0"},
+    {.name = "--g2", .kind = CLI_OPT_ENUM, .choices = k_g2_names, .mask = OPT_G2, .def = "joint",
+     .help = "masking-shadowing of brdf and albedo"},
+    {.name = "--points", .metavar = "N", .kind = CLI_OPT_INT, .lo = 16, .hi = 2048, .multiple = 8, .mask = OPT_POINTS,
+     .def = "256", .help = "albedo only: quadrature points per axis, a multiple of 8 in [16, 2048]"},
+    {.name = "--sided", .kind = CLI_OPT_ENUM, .choices = k_sided_names, .mask = OPT_SIDED, .def = "two",
+     .help = "polygon functions: two counts the polygon from either side; one only when it faces the shading "
+             "point (vertices clockwise seen from it)"},
+    {.name = "--grid", .metavar = "N", .kind = CLI_OPT_INT, .lo = 1, .hi = MF_LEADR_GRID_MAX, .mask = OPT_GRID,
+     .def = "5", .help = "leadr: the N x N Gaussian grid of LEADR Sec. 5.1"},
+    {.name = "--lambda", .metavar = "L", .kind = CLI_OPT_DOUBLE, .dlo = 0.0, .dhi = INFINITY, .lo_open = 1,
+     .mask = OPT_GRID, .def = "1.8", .help = "leadr: the grid covers [-L, L] standard deviations"},
+    {.name = "--grid-layout", .kind = CLI_OPT_ENUM, .choices = k_layout_names, .mask = OPT_GRID, .def = "end-points",
+     .help = "leadr: the two readings of Sec. 5.1 (docs/math.md, correction C-L7)"},
+};
+
+static const cli_command k_eval_cmd = {
+    .name = "eval",
+    .synopsis = "FUNCTION",
+    .min_pos = 0, /* "missing FUNCTION" below */
+    .max_pos = 1,
+    .description = "Reads CSV with a header from stdin and writes CSV to stdout (< in.csv > out.csv): every input\n"
+                   "column echoed, then the outputs (%.17g). Rows outside the domain give nan. Directions are unit\n"
+                   "vectors in the z-up shading frame, pointing away from the surface.\n",
+    .opts = k_eval_opts,
+    .nopts = E_NOPTS,
+    .epilog = NULL, /* the function list: eval_usage */
+};
+
+static void eval_usage(FILE *f)
 {
-    fprintf(f,
-            "usage: mfkit eval FUNCTION [--ndf ggx|beckmann] [--fresnel none|schlick] [--g2 joint|separable]\n"
-            "                           [--points N] [--sided one|two] [--grid N] [--lambda L]\n"
-            "                           [--grid-layout end-points|cell-centres] < in.csv > out.csv\n\n"
-            "Reads CSV with a header from stdin and writes CSV to stdout: every input column echoed,\n"
-            "then the outputs (%%.17g). Rows outside the domain give nan. Directions are unit vectors in\n"
-            "the z-up shading frame, pointing away from the surface.\n\n"
-            "options:\n"
-            "  --ndf ggx|beckmann      the NDF (required where marked *)\n"
-            "  --fresnel none|schlick  brdf only; schlick adds the input column f0 (default none)\n"
-            "  --g2 joint|separable    masking-shadowing of brdf and albedo (default joint)\n"
-            "  --points N              albedo only: quadrature points per axis, a multiple of 8 in [16, 2048]\n"
-            "                          (default 256)\n"
-            "  --sided one|two         polygon functions: two (default) counts the polygon from either side;\n"
-            "                          one only when it faces the shading point (vertices clockwise seen from it)\n"
-            "  --grid N                leadr: the N x N Gaussian grid of LEADR Sec. 5.1 (default 5)\n"
-            "  --lambda L              leadr: the grid covers [-L, L] standard deviations (default 1.8)\n"
-            "  --grid-layout end-points|cell-centres\n"
-            "                          leadr: the two readings of Sec. 5.1 (docs/math.md, correction C-L7; default end-points)\n\n"
-            "Polygons: n (3..8) vertices v0..v7 (positions relative to the shading point); columns v3..v7\n"
-            "may be absent and empty vertex fields are unused.\n\n"
-            "functions (inputs -> outputs):\n");
+    cli_opt_usage(&k_eval_cmd, f);
+    fprintf(f, "\nPolygons: n (3..8) vertices v0..v7 (positions relative to the shading point); columns v3..v7\n"
+               "may be absent and empty vertex fields are unused.\n\n"
+               "functions (inputs -> outputs):\n");
     for (int i = 0; i < N_FUNCTIONS; ++i) {
         const eval_function *e = &k_functions[i];
         fprintf(f, "  %-16s%s %s\n    ", e->name, (e->options & OPT_NDF) ? "*" : " ", e->summary);
@@ -327,92 +351,57 @@ void cli_eval_usage(FILE *f)
         }
         fprintf(f, "\n");
     }
+    fprintf(f, "\nexit status: 0 success, 2 usage or input error, 3 I/O error\n");
 }
 
 int cli_eval(int argc, char **argv)
 {
     const char *cmd = "eval";
-    if (argc < 2)
-        return cli_error(cmd, "missing FUNCTION (see 'mfkit eval --help')");
-    if (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0) {
-        cli_eval_usage(stdout);
+    const eval_function *e = NULL;
+    /* the function first: it decides which options apply */
+    if (argc >= 2 && argv[1][0] != '-') {
+        for (int i = 0; i < N_FUNCTIONS; ++i)
+            if (strcmp(argv[1], k_functions[i].name) == 0)
+                e = &k_functions[i];
+        if (!e)
+            return cli_error(cmd, "unknown function '%s' (see 'mfkit eval --help')", argv[1]);
+    }
+    cli_val v[E_NOPTS];
+    const char *pos[1];
+    int npos;
+    int rc = cli_opt_parse(&k_eval_cmd, argc - 1, argv + 1, e ? e->options : ~0u, e ? e->name : cmd, v, pos, &npos);
+    if (rc == CLI_PARSE_HELP) {
+        eval_usage(stdout);
         return 0;
     }
-    const eval_function *e = NULL;
-    for (int i = 0; i < N_FUNCTIONS; ++i)
-        if (strcmp(argv[1], k_functions[i].name) == 0)
-            e = &k_functions[i];
+    if (rc)
+        return rc;
     if (!e)
-        return cli_error(cmd, "unknown function '%s' (see 'mfkit eval --help')", argv[1]);
+        return cli_error(cmd, "missing FUNCTION (see 'mfkit eval --help')");
 
     eval_opts o = {MF_NDF_GGX, 0, MF_FRESNEL_NONE, MF_G2_JOINT, 256, MF_POLYGON_TWO_SIDED,
                    5, 1.8, MF_LEADR_GRID_END_POINTS};
-    static const struct {
-        const char *name;
-        unsigned opt;
-    } k_options[] = {{"--ndf", OPT_NDF},       {"--fresnel", OPT_FRESNEL}, {"--g2", OPT_G2},
-                     {"--points", OPT_POINTS}, {"--sided", OPT_SIDED},     {"--grid", OPT_GRID},
-                     {"--lambda", OPT_GRID},   {"--grid-layout", OPT_GRID}};
-    for (int i = 2; i < argc; ++i) {
-        const char *a = argv[i];
-        if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
-            cli_eval_usage(stdout);
-            return 0;
-        }
-        unsigned opt = 0;
-        for (size_t k = 0; k < sizeof k_options / sizeof k_options[0]; ++k)
-            if (!strcmp(a, k_options[k].name))
-                opt = k_options[k].opt;
-        if (!opt)
-            return cli_error(cmd, "%s: unknown option '%s' (see 'mfkit eval --help')", e->name, a);
-        if (!(e->options & opt))
-            return cli_error(cmd, "%s: does not take %s", e->name, a);
-        if (i + 1 >= argc)
-            return cli_error(cmd, "%s: option %s needs a value", e->name, a);
-        const char *v = argv[++i];
-        if (!strcmp(a, "--ndf")) {
-            if (mf_ndf_type_parse(v, &o.ndf) != 0)
-                return cli_error(cmd, "--ndf: unknown NDF '%s' (expected ggx or beckmann)", v);
-            o.have_ndf = 1;
-        } else if (!strcmp(a, "--fresnel")) {
-            if (!strcmp(v, "none"))
-                o.fresnel = MF_FRESNEL_NONE;
-            else if (!strcmp(v, "schlick"))
-                o.fresnel = MF_FRESNEL_SCHLICK;
-            else
-                return cli_error(cmd, "--fresnel: unknown value '%s' (expected none or schlick)", v);
-        } else if (!strcmp(a, "--g2")) {
-            if (!strcmp(v, "joint"))
-                o.g2 = MF_G2_JOINT;
-            else if (!strcmp(v, "separable"))
-                o.g2 = MF_G2_SEPARABLE;
-            else
-                return cli_error(cmd, "--g2: unknown value '%s' (expected joint or separable)", v);
-        } else if (!strcmp(a, "--sided")) {
-            if (!strcmp(v, "one"))
-                o.sided = MF_POLYGON_ONE_SIDED;
-            else if (!strcmp(v, "two"))
-                o.sided = MF_POLYGON_TWO_SIDED;
-            else
-                return cli_error(cmd, "--sided: unknown value '%s' (expected one or two)", v);
-        } else if (!strcmp(a, "--points")) {
-            if (cli_parse_int(v, 16, 2048, &o.points) != 0 || o.points % 8 != 0)
-                return cli_error(cmd, "--points: '%s' is not a multiple of 8 in [16, 2048]", v);
-        } else if (!strcmp(a, "--grid")) {
-            if (cli_parse_int(v, 1, MF_LEADR_GRID_MAX, &o.grid) != 0)
-                return cli_error(cmd, "--grid: '%s' is not an integer in [1, %d]", v, MF_LEADR_GRID_MAX);
-        } else if (!strcmp(a, "--lambda")) {
-            if (cli_parse_double(v, &o.lambda) != 0 || !(o.lambda > 0.0) || !isfinite(o.lambda))
-                return cli_error(cmd, "--lambda: '%s' is not a positive number", v);
-        } else { /* --grid-layout */
-            if (!strcmp(v, "end-points"))
-                o.layout = MF_LEADR_GRID_END_POINTS;
-            else if (!strcmp(v, "cell-centres"))
-                o.layout = MF_LEADR_GRID_CELL_CENTRES;
-            else
-                return cli_error(cmd, "--grid-layout: unknown value '%s' (expected end-points or cell-centres)", v);
-        }
-    }
+    static const mf_ndf_type ndfs[] = {MF_NDF_GGX, MF_NDF_BECKMANN};
+    static const mf_fresnel_type fresnels[] = {MF_FRESNEL_NONE, MF_FRESNEL_SCHLICK};
+    static const mf_g2_form g2s[] = {MF_G2_JOINT, MF_G2_SEPARABLE};
+    static const mf_polygon_sided sideds[] = {MF_POLYGON_ONE_SIDED, MF_POLYGON_TWO_SIDED};
+    static const mf_leadr_grid_layout layouts[] = {MF_LEADR_GRID_END_POINTS, MF_LEADR_GRID_CELL_CENTRES};
+    if (v[E_NDF].set)
+        o.ndf = ndfs[v[E_NDF].i], o.have_ndf = 1;
+    if (v[E_FRESNEL].set)
+        o.fresnel = fresnels[v[E_FRESNEL].i];
+    if (v[E_G2].set)
+        o.g2 = g2s[v[E_G2].i];
+    if (v[E_POINTS].set)
+        o.points = v[E_POINTS].i;
+    if (v[E_SIDED].set)
+        o.sided = sideds[v[E_SIDED].i];
+    if (v[E_GRID].set)
+        o.grid = v[E_GRID].i;
+    if (v[E_LAMBDA].set)
+        o.lambda = v[E_LAMBDA].d;
+    if (v[E_LAYOUT].set)
+        o.layout = layouts[v[E_LAYOUT].i];
     if ((e->options & OPT_NDF) && !o.have_ndf)
         return cli_error(cmd, "%s: --ndf ggx|beckmann is required", e->name);
 
@@ -470,9 +459,10 @@ int cli_eval(int argc, char **argv)
                 in[k] = NAN; /* an empty vertex field: unused */
                 continue;
             }
-            if (cli_parse_double(s, &in[k]) != 0) {
-                status = cli_error(cmd, "%s: stdin: data row %d, column '%s': '%s' is not a number", e->name, r + 1,
-                                   inputs[k], s);
+            int pc = cli_parse_double(s, &in[k]);
+            if (pc != 0) {
+                status = cli_error(cmd, "%s: stdin: data row %d, column '%s': '%s' %s", e->name, r + 1, inputs[k], s,
+                                   cli_num_error(pc));
                 break;
             }
         }

@@ -8,6 +8,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
+#include "cli_opt.h"
 #include "cli_util.h"
 
 #include <stdlib.h>
@@ -15,35 +16,53 @@
 
 static const char *const k_cmd = "maps";
 
-static void usage(FILE *f)
-{
-    fprintf(f,
-            "usage: mfkit maps lean|leadr|bump-roughness|toksvig INPUT --out PREFIX [options]\n\n"
-            "Reads a tangent-space normal map (or, with --height, a height map) and writes the moment or\n"
-            "roughness maps of every level of a box-filtered MIP chain (computed in double) as float EXR:\n"
-            "  leadr           PREFIX_m1_mip<k>.exr  R,G,B = E[x], E[y], 0   (mfkit/LEADR slopes -n.xy/n.z)\n"
-            "                  PREFIX_m2_mip<k>.exr  R,G,B = E[x^2], E[y^2], E[xy]\n"
-            "  lean            the same files with R,G = E[n.x/n.z], E[n.y/n.z] = -E[x], -E[y] (LEAN's sign)\n"
-            "  bump-roughness  PREFIX_roughness_mip<k>.exr  alpha_1, alpha_2, dir_x, dir_y (Beckmann, Hery)\n"
-            "  toksvig         PREFIX_toksvig_mip<k>.exr    alpha, len, n_x, n_y, n_z (Toksvig)\n"
-            "Level k + 1 halves each side of level k (odd sizes round down, exact area-weighted box).\n"
-            "Frame: x to the right, y up the image (OpenGL); base roughness added as covariance.\n\n"
-            "options:\n"
-            "  --out PREFIX            output file prefix (its directory must exist)\n"
-            "  --green up|down         normal maps: green is +y up (OpenGL, default) or down (DirectX)\n"
-            "  --encoding auto|unorm|raw  normal maps: unorm n = 2c - 1, raw n = c; auto (default): unorm\n"
-            "                          for unsigned integer files (PNG, TIFF), raw for float (EXR, float TIFF)\n"
-            "  --normal-tolerance E    accepted | |n| - 1 | (default 1e-3 + sqrt(3)/(2^bits - 1) for\n"
-            "                          integer files, 1e-3 for float files)\n"
-            "  --height                the input is a height map (first channel)\n"
-            "  --height-scale S        height units per stored value (default 1)\n"
-            "  --texel-size T          distance between texels, same unit (default 1)\n"
-            "  --edge wrap|clamp       height maps: periodic central differences (default) or one-sided\n"
-            "                          differences at the borders\n"
-            "  --base-alpha A          base Beckmann roughness (>= 0, default 0), added as covariance A^2/2\n"
-            "  --quiet                 no progress on stderr (shown only on a terminal anyway)\n\n"
-            "exit status: 0 success, 2 usage or input error, 3 I/O error\n");
-}
+static const char *const k_green_names[] = {"up", "down", NULL};
+static const char *const k_encoding_names[] = {"auto", "unorm", "raw", NULL};
+static const char *const k_edge_names[] = {"wrap", "clamp", NULL};
+enum { M_OUT, M_GREEN, M_ENCODING, M_TOLERANCE, M_HEIGHT, M_HEIGHT_SCALE, M_TEXEL_SIZE, M_EDGE, M_BASE_ALPHA, M_QUIET,
+       M_NOPTS };
+static const cli_opt k_maps_opts[M_NOPTS] = {
+    {.name = "--out", .metavar = "PREFIX", .kind = CLI_OPT_STRING, .required = 1,
+     .help = "output file prefix (its directory must exist)"},
+    {.name = "--green", .kind = CLI_OPT_ENUM, .choices = k_green_names, .def = "up",
+     .help = "normal maps: green is +y up (OpenGL) or down (DirectX)"},
+    {.name = "--encoding", .kind = CLI_OPT_ENUM, .choices = k_encoding_names, .def = "auto",
+     .help = "normal maps: unorm n = 2c - 1, raw n = c; auto: unorm for unsigned integer files (PNG, TIFF), raw "
+             "for float (EXR, float TIFF)"},
+    {.name = "--normal-tolerance", .metavar = "E", .kind = CLI_OPT_DOUBLE, .dlo = 0.0, .dhi = INFINITY,
+     .def = "1e-3 + sqrt(3)/(2^bits - 1) for integer files, 1e-3 for float files", .help = "accepted | |n| - 1 |"},
+    {.name = "--height", .kind = CLI_OPT_FLAG, .help = "the input is a height map (first channel)"},
+    {.name = "--height-scale", .metavar = "S", .kind = CLI_OPT_DOUBLE, .dlo = -INFINITY, .dhi = INFINITY, .def = "1",
+     .help = "height units per stored value"},
+    {.name = "--texel-size", .metavar = "T", .kind = CLI_OPT_DOUBLE, .dlo = 0.0, .dhi = INFINITY, .lo_open = 1,
+     .def = "1", .help = "distance between texels, same unit"},
+    {.name = "--edge", .kind = CLI_OPT_ENUM, .choices = k_edge_names, .def = "wrap",
+     .help = "height maps: periodic central differences, or one-sided differences at the borders"},
+    {.name = "--base-alpha", .metavar = "A", .kind = CLI_OPT_DOUBLE, .dlo = 0.0, .dhi = INFINITY, .def = "0",
+     .help = "base Beckmann roughness, added as covariance A^2/2"},
+    {.name = "--quiet", .kind = CLI_OPT_FLAG, .help = "no progress on stderr (shown only on a terminal anyway)"},
+};
+static const cli_command k_maps_cmd = {
+    .name = "maps",
+    .synopsis = "lean|leadr|bump-roughness|toksvig INPUT",
+    .min_pos = 0, /* checked with their own messages */
+    .max_pos = 2,
+    .description =
+        "Reads a tangent-space normal map (or, with --height, a height map) and writes the moment or\n"
+        "roughness maps of every level of a box-filtered MIP chain (computed in double) as float EXR:\n"
+        "  leadr           PREFIX_m1_mip<k>.exr  R,G,B = E[x], E[y], 0   (mfkit/LEADR slopes -n.xy/n.z)\n"
+        "                  PREFIX_m2_mip<k>.exr  R,G,B = E[x^2], E[y^2], E[xy]\n"
+        "  lean            the same files with R,G = E[n.x/n.z], E[n.y/n.z] = -E[x], -E[y] (LEAN's sign)\n"
+        "  bump-roughness  PREFIX_roughness_mip<k>.exr  alpha_1, alpha_2, dir_x, dir_y (Beckmann, Hery)\n"
+        "  toksvig         PREFIX_toksvig_mip<k>.exr    alpha, len, n_x, n_y, n_z (Toksvig)\n"
+        "Level k + 1 halves each side of level k (odd sizes round down, exact area-weighted box).\n"
+        "Frame: x to the right, y up the image (OpenGL); base roughness added as covariance.\n",
+    .opts = k_maps_opts,
+    .nopts = M_NOPTS,
+    .epilog = "exit status: 0 success, 2 usage or input error, 3 I/O error\n",
+};
+
+static void usage(FILE *f) { cli_opt_usage(&k_maps_cmd, f); }
 
 #ifndef MFKIT_HAVE_CXX_DEPS
 
@@ -121,7 +140,7 @@ static int write_level(out_list *l, const maps_args *a, const char *tag, int lev
         int nc = l->cap ? 2 * l->cap : 16;
         out_file *p = realloc(l->f, sizeof *p * (size_t)nc);
         if (!p)
-            return cli_error(k_cmd, "out of memory"), 3;
+            return cli_error(k_cmd, "out of memory"), CLI_EXIT_IO;
         l->f = p;
         l->cap = nc;
     }
@@ -131,7 +150,7 @@ static int write_level(out_list *l, const maps_args *a, const char *tag, int lev
     if (!o->final_path || !o->tmp_path) {
         free(o->final_path);
         free(o->tmp_path);
-        return cli_error(k_cmd, "out of memory"), 3;
+        return cli_error(k_cmd, "out of memory"), CLI_EXIT_IO;
     }
     ++l->n;
     char level_s[32], alpha_s[64];
@@ -152,7 +171,7 @@ static int write_level(out_list *l, const maps_args *a, const char *tag, int lev
     mf_status st = mf_image_write_ex(o->tmp_path, img, &opt, msg, sizeof msg);
     if (st != MF_OK) {
         cli_error(k_cmd, "%s: %s", o->final_path, msg[0] ? msg : mf_status_str(st));
-        return st == MF_ERR_DOMAIN || st == MF_ERR_UNSUPPORTED ? 2 : 3;
+        return cli_exit_code(st);
     }
     return 0;
 }
@@ -186,7 +205,7 @@ static int check_prefix_dir(const char *prefix)
     size_t n = (size_t)(slash - prefix);
     char *dir = malloc(n + 2);
     if (!dir)
-        return cli_error(k_cmd, "out of memory"), 3;
+        return cli_error(k_cmd, "out of memory"), CLI_EXIT_IO;
     if (n == 0)
         strcpy(dir, "/");
     else {
@@ -196,9 +215,9 @@ static int check_prefix_dir(const char *prefix)
     struct stat sb;
     int rc = 0;
     if (stat(dir, &sb) != 0)
-        rc = 3, cli_error(k_cmd, "--out %s: directory '%s': %s", prefix, dir, strerror(errno));
+        rc = CLI_EXIT_IO, cli_error(k_cmd, "--out %s: directory '%s': %s", prefix, dir, strerror(errno));
     else if (!S_ISDIR(sb.st_mode))
-        rc = 3, cli_error(k_cmd, "--out %s: '%s' is not a directory", prefix, dir);
+        rc = CLI_EXIT_IO, cli_error(k_cmd, "--out %s: '%s' is not a directory", prefix, dir);
     free(dir);
     return rc;
 }
@@ -227,7 +246,7 @@ static int decode_normals(const maps_args *a, const mf_image *img, const char *p
     if (tol < 0)
         tol = 1e-3 + (bits > 0 && bits < 32 ? sqrt(3.0) / (ldexp(1.0, bits) - 1.0) : 0.0);
     if (mf_map_alloc(out, img->width, img->height, 3) != MF_OK)
-        return cli_error(k_cmd, "out of memory"), 3;
+        return cli_error(k_cmd, "out of memory"), CLI_EXIT_IO;
     const char *chname[3] = {"R", "G", "B"};
     for (int j = 0; j < img->height; ++j)
         for (int i = 0; i < img->width; ++i) {
@@ -269,7 +288,7 @@ static int decode_normals(const maps_args *a, const mf_image *img, const char *p
 static int normals_from_slopes(const mf_map *s, mf_map *out)
 {
     if (mf_map_alloc(out, s->width, s->height, 3) != MF_OK)
-        return cli_error(k_cmd, "out of memory"), 3;
+        return cli_error(k_cmd, "out of memory"), CLI_EXIT_IO;
     size_t n = (size_t)s->width * s->height;
     for (size_t t = 0; t < n; ++t) {
         double sx = s->data[2 * t], sy = s->data[2 * t + 1];
@@ -292,7 +311,7 @@ static int emit_level(out_list *l, const maps_args *a, const mf_map *m, int leve
     if (a->mode == MODE_LEAN || a->mode == MODE_LEADR) {
         img.pixels = malloc(sizeof(float) * 3 * n);
         if (!img.pixels)
-            return cli_error(k_cmd, "out of memory"), 3;
+            return cli_error(k_cmd, "out of memory"), CLI_EXIT_IO;
         const double sign = a->mode == MODE_LEAN ? -1.0 : 1.0;
         for (size_t t = 0; t < n; ++t) {
             const double *p = m->data + t * MF_MAP_MOMENTS;
@@ -318,7 +337,7 @@ static int emit_level(out_list *l, const maps_args *a, const mf_map *m, int leve
         img.channels = 4;
         img.pixels = malloc(sizeof(float) * 4 * n);
         if (!img.pixels)
-            return cli_error(k_cmd, "out of memory"), 3;
+            return cli_error(k_cmd, "out of memory"), CLI_EXIT_IO;
         for (size_t t = 0; t < n; ++t) {
             mf_slope_moments mo = mf_map_moments_at(m, (int)(t % (size_t)w), (int)(t / (size_t)w));
             mf_gaussian_slopes g = mf_moments_to_gaussian(&mo);
@@ -340,7 +359,7 @@ static int emit_level(out_list *l, const maps_args *a, const mf_map *m, int leve
         img.channels = 5;
         img.pixels = malloc(sizeof(float) * 5 * n);
         if (!img.pixels)
-            return cli_error(k_cmd, "out of memory"), 3;
+            return cli_error(k_cmd, "out of memory"), CLI_EXIT_IO;
         for (size_t t = 0; t < n; ++t) {
             const double *p = m->data + 3 * t;
             double len = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
@@ -364,91 +383,40 @@ static int emit_level(out_list *l, const maps_args *a, const mf_map *m, int leve
 static int parse_args(int argc, char **argv, maps_args *a)
 {
     memset(a, 0, sizeof *a);
-    a->tolerance = -1.0;
-    a->height_scale = 1.0;
-    a->texel_size = 1.0;
-    int set_green = 0, set_encoding = 0, set_tol = 0, set_scale = 0, set_texel = 0, set_edge = 0;
-    for (int i = 1; i < argc; ++i) {
-        const char *o = argv[i];
-        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
-        int takes = !strcmp(o, "--out") || !strcmp(o, "--green") || !strcmp(o, "--encoding") ||
-                    !strcmp(o, "--normal-tolerance") || !strcmp(o, "--height-scale") || !strcmp(o, "--texel-size") ||
-                    !strcmp(o, "--edge") || !strcmp(o, "--base-alpha");
-        if (takes && !v)
-            return cli_error(k_cmd, "option %s needs a value", o);
-        if (!strcmp(o, "--out")) {
-            a->prefix = v;
-            if (!*v)
-                return cli_error(k_cmd, "--out: empty prefix");
-        } else if (!strcmp(o, "--green")) {
-            set_green = 1;
-            if (!strcmp(v, "up"))
-                a->green_down = 0;
-            else if (!strcmp(v, "down"))
-                a->green_down = 1;
-            else
-                return cli_error(k_cmd, "--green: '%s' is not up or down", v);
-        } else if (!strcmp(o, "--encoding")) {
-            set_encoding = 1;
-            if (!strcmp(v, "auto"))
-                a->encoding = 0;
-            else if (!strcmp(v, "unorm"))
-                a->encoding = 1;
-            else if (!strcmp(v, "raw"))
-                a->encoding = 2;
-            else
-                return cli_error(k_cmd, "--encoding: '%s' is not auto, unorm or raw", v);
-        } else if (!strcmp(o, "--edge")) {
-            set_edge = 1;
-            if (!strcmp(v, "wrap"))
-                a->edge = MF_MAP_EDGE_WRAP;
-            else if (!strcmp(v, "clamp"))
-                a->edge = MF_MAP_EDGE_CLAMP;
-            else
-                return cli_error(k_cmd, "--edge: '%s' is not wrap or clamp", v);
-        } else if (!strcmp(o, "--normal-tolerance")) {
-            set_tol = 1;
-            if (cli_parse_double(v, &a->tolerance) != 0 || !(a->tolerance >= 0.0) || !isfinite(a->tolerance))
-                return cli_error(k_cmd, "--normal-tolerance: '%s' is not a finite number >= 0", v);
-        } else if (!strcmp(o, "--height-scale")) {
-            set_scale = 1;
-            if (cli_parse_double(v, &a->height_scale) != 0 || !isfinite(a->height_scale))
-                return cli_error(k_cmd, "--height-scale: '%s' is not a finite number", v);
-        } else if (!strcmp(o, "--texel-size")) {
-            set_texel = 1;
-            if (cli_parse_double(v, &a->texel_size) != 0 || !(a->texel_size > 0.0) || !isfinite(a->texel_size))
-                return cli_error(k_cmd, "--texel-size: '%s' is not a finite number > 0", v);
-        } else if (!strcmp(o, "--base-alpha")) {
-            if (cli_parse_double(v, &a->base_alpha) != 0 || !(a->base_alpha >= 0.0) || !isfinite(a->base_alpha))
-                return cli_error(k_cmd, "--base-alpha: '%s' is not a finite number >= 0", v);
-        } else if (!strcmp(o, "--height")) {
-            a->height = 1;
-        } else if (!strcmp(o, "--quiet")) {
-            a->quiet = 1;
-        } else if (o[0] == '-' && o[1] != '\0') {
-            return cli_error(k_cmd, "unknown option '%s' (see 'mfkit maps --help')", o);
-        } else if (!a->mode_name) {
-            a->mode_name = o;
-            if (!strcmp(o, "lean"))
-                a->mode = MODE_LEAN;
-            else if (!strcmp(o, "leadr"))
-                a->mode = MODE_LEADR;
-            else if (!strcmp(o, "bump-roughness"))
-                a->mode = MODE_BUMP;
-            else if (!strcmp(o, "toksvig"))
-                a->mode = MODE_TOKSVIG;
-            else
-                return cli_error(k_cmd, "unknown map type '%s' (lean, leadr, bump-roughness, toksvig)", o);
-            continue;
-        } else if (!a->input) {
-            a->input = o;
-            continue;
-        } else {
-            return cli_error(k_cmd, "unexpected argument '%s' (one INPUT)", o);
-        }
-        if (takes)
-            ++i;
+    cli_val v[M_NOPTS];
+    const char *pos[2];
+    int npos;
+    int prc = cli_opt_parse(&k_maps_cmd, argc - 1, argv + 1, ~0u, NULL, v, pos, &npos);
+    if (prc == CLI_PARSE_HELP) {
+        usage(stdout);
+        return 0;
     }
+    if (prc)
+        return prc;
+    static const maps_mode modes[] = {MODE_LEAN, MODE_LEADR, MODE_BUMP, MODE_TOKSVIG};
+    static const char *const mode_names[] = {"lean", "leadr", "bump-roughness", "toksvig"};
+    if (npos >= 1) {
+        a->mode_name = pos[0];
+        int m = 0;
+        while (m < 4 && strcmp(pos[0], mode_names[m]) != 0)
+            ++m;
+        if (m == 4)
+            return cli_error(k_cmd, "unknown map type '%s' (lean, leadr, bump-roughness, toksvig)", pos[0]);
+        a->mode = modes[m];
+    }
+    a->input = npos >= 2 ? pos[1] : NULL;
+    a->prefix = v[M_OUT].set ? v[M_OUT].s : NULL;
+    a->green_down = v[M_GREEN].set && v[M_GREEN].i == 1;
+    a->encoding = v[M_ENCODING].set ? (int)v[M_ENCODING].i : 0;
+    a->tolerance = v[M_TOLERANCE].set ? v[M_TOLERANCE].d : -1.0;
+    a->height = v[M_HEIGHT].set;
+    a->height_scale = v[M_HEIGHT_SCALE].set ? v[M_HEIGHT_SCALE].d : 1.0;
+    a->texel_size = v[M_TEXEL_SIZE].set ? v[M_TEXEL_SIZE].d : 1.0;
+    a->edge = v[M_EDGE].set && v[M_EDGE].i == 1 ? MF_MAP_EDGE_CLAMP : MF_MAP_EDGE_WRAP;
+    a->base_alpha = v[M_BASE_ALPHA].set ? v[M_BASE_ALPHA].d : 0.0;
+    a->quiet = v[M_QUIET].set;
+    int set_green = v[M_GREEN].set, set_encoding = v[M_ENCODING].set, set_tol = v[M_TOLERANCE].set;
+    int set_scale = v[M_HEIGHT_SCALE].set, set_texel = v[M_TEXEL_SIZE].set, set_edge = v[M_EDGE].set;
     if (!a->mode_name)
         return cli_error(k_cmd, "needs a map type: lean, leadr, bump-roughness or toksvig (see 'mfkit maps --help')");
     if (!a->input)
@@ -464,11 +432,6 @@ static int parse_args(int argc, char **argv, maps_args *a)
 
 int cli_maps(int argc, char **argv)
 {
-    for (int i = 1; i < argc; ++i)
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-            usage(stdout);
-            return 0;
-        }
     maps_args a;
     int rc = parse_args(argc, argv, &a);
     if (rc >= 0)
@@ -499,7 +462,7 @@ int cli_maps(int argc, char **argv)
         if (a.height) {
             mf_map hm;
             if (mf_map_alloc(&hm, img.width, img.height, 1) != MF_OK) {
-                rc = 3, cli_error(k_cmd, "out of memory");
+                rc = CLI_EXIT_IO, cli_error(k_cmd, "out of memory");
                 goto done;
             }
             size_t n = (size_t)img.width * img.height;
@@ -514,7 +477,7 @@ int cli_maps(int argc, char **argv)
                                isnan(img.pixels[bad * (size_t)img.channels]) ? "NaN" : "infinite");
                 goto done;
             } else if (st != MF_OK) {
-                rc = 3, cli_error(k_cmd, "out of memory");
+                rc = CLI_EXIT_IO, cli_error(k_cmd, "out of memory");
                 goto done;
             }
             if (a.mode == MODE_TOKSVIG) {
@@ -534,7 +497,7 @@ int cli_maps(int argc, char **argv)
                 st = mf_map_slopes_from_normals(&normals, &slopes, &bad);
                 mf_map_free(&normals);
                 if (st != MF_OK) {
-                    rc = 3, cli_error(k_cmd, "out of memory");
+                    rc = CLI_EXIT_IO, cli_error(k_cmd, "out of memory");
                     goto done;
                 }
             }
@@ -543,7 +506,7 @@ int cli_maps(int argc, char **argv)
             st = mf_map_moments_from_slopes(&slopes, &cur);
             mf_map_free(&slopes);
             if (st != MF_OK) {
-                rc = 3, cli_error(k_cmd, "out of memory");
+                rc = CLI_EXIT_IO, cli_error(k_cmd, "out of memory");
                 goto done;
             }
         }
@@ -569,14 +532,14 @@ int cli_maps(int argc, char **argv)
                 mf_map_free(&cur);
                 cur = next;
                 if (st != MF_OK)
-                    rc = 3, cli_error(k_cmd, "out of memory");
+                    rc = CLI_EXIT_IO, cli_error(k_cmd, "out of memory");
             }
         }
         if (rc == 0)
             rc = commit(&files);
         out_list_discard(&files);
         if (rc == 0 && cli_buf_write(&b, stdout) != 0)
-            rc = 3, cli_error(k_cmd, "stdout: write failed");
+            rc = CLI_EXIT_IO, cli_error(k_cmd, "stdout: write failed");
         cli_buf_free(&b);
     }
 done:

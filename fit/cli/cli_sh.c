@@ -7,31 +7,44 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
+#include "cli_opt.h"
 #include "cli_util.h"
 
 #include <string.h>
 
 static const char *const k_cmd = "sh";
 
-static void usage(FILE *f)
-{
-    fprintf(f,
-            "usage: mfkit sh project ENV [--lights FILE] [--up z|y]\n\n"
-            "Projects a latitude-longitude environment of radiance (EXR, HDR, TIFF, ...) onto the 9 real\n"
-            "spherical harmonics of order <= 2 (R&H 2001 basis, mf_sh.h), each pixel weighted by its exact\n"
-            "solid angle, and prints the coefficients of each channel (an alpha channel A is skipped) as\n"
-            "JSON: L00, L1m1, L10, L11, L2m2, L2m1, L20, L21, L22 (index (l, m), 'm' for minus).\n\n"
-            "Mapping: row 0 at the top touches the up pole, the last row the down pole; column 0 starts at\n"
-            "phi = 0 and phi grows with the column.\n"
-            "  --up z   (default) up = +z, phi = 0 at +x, growing towards +y; coefficients in that frame\n"
-            "  --up y   up = +y, phi = 0 at +x, growing towards -z; coefficients in the y-up frame (the\n"
-            "           z-up projection rotated by mf_sh_rotate)\n\n"
-            "  --lights FILE  adds directional lights from a CSV with the header dir_x,dir_y,dir_z,r,g,b:\n"
-            "           the direction towards the light in the output frame (any non-zero length), and its\n"
-            "           irradiance at normal incidence per channel (W m^-2 if ENV is in W m^-2 sr^-1; >= 0),\n"
-            "           added as c += E Y(dir) to the channels R, G, B of ENV\n\n"
-            "exit status: 0 success, 2 usage or input error, 3 I/O error\n");
-}
+static const char *const k_up_names[] = {"z", "y", NULL};
+enum { S_LIGHTS, S_UP, S_NOPTS };
+static const cli_opt k_sh_opts[S_NOPTS] = {
+    {.name = "--lights", .metavar = "FILE", .kind = CLI_OPT_STRING,
+     .help = "adds directional lights from a CSV with the header dir_x,dir_y,dir_z,r,g,b: the direction towards "
+             "the light in the output frame (any non-zero length), and its irradiance at normal incidence per "
+             "channel (W m^-2 if ENV is in W m^-2 sr^-1; >= 0), added as c += E Y(dir) to the channels R, G, B of "
+             "ENV"},
+    {.name = "--up", .kind = CLI_OPT_ENUM, .choices = k_up_names, .def = "z",
+     .help = "z: up = +z, phi = 0 at +x, growing towards +y; coefficients in that frame.\ny: up = +y, phi = 0 at "
+             "+x, growing towards -z; coefficients in the y-up frame (the z-up projection rotated by "
+             "mf_sh_rotate)"},
+};
+static const cli_command k_sh_cmd = {
+    .name = "sh project",
+    .synopsis = "ENV",
+    .min_pos = 1,
+    .max_pos = 1,
+    .description =
+        "Projects a latitude-longitude environment of radiance (EXR, HDR, TIFF, ...) onto the 9 real\n"
+        "spherical harmonics of order <= 2 (R&H 2001 basis, mf_sh.h), each pixel weighted by its exact\n"
+        "solid angle, and prints the coefficients of each channel (an alpha channel A is skipped) as\n"
+        "JSON: L00, L1m1, L10, L11, L2m2, L2m1, L20, L21, L22 (index (l, m), 'm' for minus).\n\n"
+        "Mapping: row 0 at the top touches the up pole, the last row the down pole; column 0 starts at\n"
+        "phi = 0 and phi grows with the column.\n",
+    .opts = k_sh_opts,
+    .nopts = S_NOPTS,
+    .epilog = "exit status: 0 success, 2 usage or input error, 3 I/O error\n",
+};
+
+static void usage(FILE *f) { cli_opt_usage(&k_sh_cmd, f); }
 
 #ifndef MFKIT_HAVE_CXX_DEPS
 
@@ -98,7 +111,7 @@ static int read_lights(const char *path, sh_light **out, int *count)
     *count = 0;
     FILE *f = fopen(path, "r");
     if (!f)
-        return cli_error(k_cmd, "--lights %s: cannot open: %s", path, strerror(errno)), 3;
+        return cli_error(k_cmd, "--lights %s: cannot open: %s", path, strerror(errno)), CLI_EXIT_IO;
     char *line = NULL;
     size_t cap = 0;
     ssize_t got;
@@ -108,9 +121,17 @@ static int read_lights(const char *path, sh_light **out, int *count)
     char *fields[64];
     while ((got = getline(&line, &cap, f)) >= 0) {
         ++lineno;
-        if ((size_t)got != strlen(line)) {
-            rc = cli_error(k_cmd, "%s:%ld: contains a NUL byte (binary file?)", path, lineno);
+        if (lineno == 1 && got >= 3 && memcmp(line, "\xEF\xBB\xBF", 3) == 0) {
+            rc = cli_error(k_cmd, "%s:1: starts with a UTF-8 byte-order mark (BOM): save the CSV without it", path);
             goto out;
+        }
+        for (ssize_t k = 0; k < got; ++k) {
+            unsigned char ch = (unsigned char)line[k];
+            if ((ch < 0x20 && ch != '\t' && ch != '\r' && ch != '\n') || ch == 0x7f) {
+                rc = cli_error(k_cmd, "%s:%ld: binary input, not CSV text (byte 0x%02x at column %ld)", path, lineno,
+                               ch, (long)k + 1);
+                goto out;
+            }
         }
         char *t = trim(line);
         if (!*t)
@@ -158,9 +179,10 @@ static int read_lights(const char *path, sh_light **out, int *count)
         double v[6];
         for (int c = 0; c < 6; ++c) {
             const char *s = fields[idx[c]];
-            if (cli_parse_double(s, &v[c]) != 0 || !isfinite(v[c])) {
-                rc = cli_error(k_cmd, "%s:%ld: column %d (%s): '%s' is not a finite number", path, lineno, idx[c] + 1,
-                               cols[c], s);
+            int pc = cli_parse_double(s, &v[c]);
+            if (pc != 0 || !isfinite(v[c])) {
+                rc = cli_error(k_cmd, "%s:%ld: column %d (%s): '%s' %s", path, lineno, idx[c] + 1, cols[c], s,
+                               pc == CLI_NUM_RANGE ? cli_num_error(pc) : "is not a finite number");
                 goto out;
             }
             if (c >= 3 && v[c] < 0.0) {
@@ -179,7 +201,7 @@ static int read_lights(const char *path, sh_light **out, int *count)
             ncap = ncap ? 2 * ncap : 16;
             sh_light *p = realloc(lights, sizeof *p * (size_t)ncap);
             if (!p) {
-                rc = 3, cli_error(k_cmd, "out of memory");
+                rc = CLI_EXIT_IO, cli_error(k_cmd, "out of memory");
                 goto out;
             }
             lights = p;
@@ -190,7 +212,7 @@ static int read_lights(const char *path, sh_light **out, int *count)
         ++n;
     }
     if (ferror(f)) {
-        rc = 3, cli_error(k_cmd, "--lights %s: read error: %s", path, strerror(errno));
+        rc = CLI_EXIT_IO, cli_error(k_cmd, "--lights %s: read error: %s", path, strerror(errno));
         goto out;
     }
     if (!have_header)
@@ -209,33 +231,18 @@ out:
 
 static int sh_project(int argc, char **argv)
 {
-    const char *env = NULL, *lights_path = NULL;
-    int up_y = 0;
-    for (int i = 1; i < argc; ++i) {
-        if (!strcmp(argv[i], "--lights") || !strcmp(argv[i], "--up")) {
-            if (i + 1 >= argc)
-                return cli_error(k_cmd, "option %s needs a value", argv[i]);
-            if (argv[i][2] == 'l') {
-                lights_path = argv[++i];
-            } else {
-                const char *v = argv[++i];
-                if (!strcmp(v, "z"))
-                    up_y = 0;
-                else if (!strcmp(v, "y"))
-                    up_y = 1;
-                else
-                    return cli_error(k_cmd, "--up: '%s' is not z or y", v);
-            }
-        } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
-            return cli_error(k_cmd, "unknown option '%s' (see 'mfkit sh --help')", argv[i]);
-        } else if (!env) {
-            env = argv[i];
-        } else {
-            return cli_error(k_cmd, "unexpected argument '%s' (project takes one ENV)", argv[i]);
-        }
+    cli_val ov[S_NOPTS];
+    const char *pos[1];
+    int npos;
+    int prc = cli_opt_parse(&k_sh_cmd, argc - 1, argv + 1, ~0u, NULL, ov, pos, &npos);
+    if (prc == CLI_PARSE_HELP) {
+        usage(stdout);
+        return 0;
     }
-    if (!env)
-        return cli_error(k_cmd, "project needs an ENV image (see 'mfkit sh --help')");
+    if (prc)
+        return prc;
+    const char *env = pos[0], *lights_path = ov[S_LIGHTS].set ? ov[S_LIGHTS].s : NULL;
+    int up_y = ov[S_UP].set && ov[S_UP].i == 1;
 
     sh_light *lights = NULL;
     int nlights = 0, rc;
@@ -249,7 +256,7 @@ static int sh_project(int argc, char **argv)
     if (st != MF_OK) {
         free(lights);
         cli_error(k_cmd, "%s", msg[0] ? msg : mf_status_str(st));
-        return st == MF_ERR_UNSUPPORTED ? 2 : 3;
+        return cli_exit_code(st);
     }
     rc = 0;
     double *coeffs = NULL;
@@ -275,7 +282,7 @@ static int sh_project(int argc, char **argv)
     chan = malloc(sizeof(int) * (size_t)img.channels);
     coeffs = malloc(sizeof(double) * MF_SH_COEFFS * (size_t)img.channels);
     if (!chan || !coeffs) {
-        rc = 3, cli_error(k_cmd, "out of memory");
+        rc = CLI_EXIT_IO, cli_error(k_cmd, "out of memory");
         goto done;
     }
     for (int c = 0; c < img.channels; ++c)
@@ -345,7 +352,7 @@ static int sh_project(int argc, char **argv)
     }
     cli_buf_printf(&b, "  }\n}\n");
     if (cli_buf_write(&b, stdout) != 0)
-        rc = 3, cli_error(k_cmd, "stdout: write failed");
+        rc = CLI_EXIT_IO, cli_error(k_cmd, "stdout: write failed");
 done:
     cli_buf_free(&b);
     free(chan);

@@ -5,6 +5,7 @@
  * on stderr, and a failed convert leaves no output file (the writers are atomic).
  */
 #include "cli.h"
+#include "cli_opt.h"
 #include "cli_util.h"
 
 #include <string.h>
@@ -25,30 +26,52 @@ int cli_table(int argc, char **argv)
 
 static const char *const k_cmd = "table";
 
+enum { T_HALF, T_DDS_FIELDS, T_PREFIX, T_NOPTS };
+static const cli_opt k_convert_opts[T_NOPTS] = {
+    {.name = "--half", .kind = CLI_OPT_FLAG, .help = "store half floats (.exr, .dds); prints the conversion error"},
+    {.name = "--dds-fields", .metavar = "LIST", .kind = CLI_OPT_STRING,
+     .help = "the fields of the R,G,B,A channels of a .dds, names or '-' for a channel of zeros (default: the first "
+             "4 fields)"},
+    {.name = "--prefix", .metavar = "NAME", .kind = CLI_OPT_STRING,
+     .help = "identifier prefix of .h/.glsl/.hlsl (default: OUT's file name)"},
+};
+static const cli_command k_convert_cmd = {
+    .name = "table convert",
+    .synopsis = "IN OUT",
+    .min_pos = 2,
+    .max_pos = 2,
+    .description = "Lookup-table files (docs/tables.md), the format from the extension:\n"
+                   "  read and write  .exr (OpenEXR, float32 or half)  .dds (RGBA32F/RGBA16F + FILE.json sidecar)\n"
+                   "                  .json (metadata + data)          .npy (NumPy + FILE.json sidecar)\n"
+                   "  write only      .h (C header)  .glsl .hlsl (lookup snippets)  .csv\n",
+    .opts = k_convert_opts,
+    .nopts = T_NOPTS,
+    .epilog = NULL,
+};
+static const cli_command k_info_cmd = {
+    .name = "table info",
+    .synopsis = "FILE",
+    .min_pos = 1,
+    .max_pos = 1,
+    .description = "Prints the axes (parameterisation, texel centres), the record layout, each field's range and\n"
+                   "NaN count, and the metadata.\n",
+    .opts = NULL,
+    .nopts = 0,
+    .epilog = "exit status: 0 success, 2 usage error, 3 I/O or format error\n",
+};
+
 static void usage(FILE *f)
 {
-    fprintf(f,
-            "usage: mfkit table convert IN OUT [--half] [--dds-fields A,B,C,D] [--prefix NAME]\n"
-            "       mfkit table info FILE\n\n"
-            "Lookup-table files (docs/tables.md), the format from the extension:\n"
-            "  read and write  .exr (OpenEXR, float32 or half)  .dds (RGBA32F/RGBA16F + FILE.json sidecar)\n"
-            "                  .json (metadata + data)          .npy (NumPy + FILE.json sidecar)\n"
-            "  write only      .h (C header)  .glsl .hlsl (lookup snippets)  .csv\n\n"
-            "convert options:\n"
-            "  --half                store half floats (.exr, .dds); prints the conversion error\n"
-            "  --dds-fields LIST     the fields of the R,G,B,A channels of a .dds, names or '-' for a\n"
-            "                        channel of zeros (default: the first 4 fields)\n"
-            "  --prefix NAME         identifier prefix of .h/.glsl/.hlsl (default: OUT's file name)\n\n"
-            "info prints the axes (parameterisation, texel centres), the record layout, each field's\n"
-            "range and NaN count, and the metadata.\n\n"
-            "exit status: 0 success, 2 usage error, 3 I/O or format error\n");
+    cli_opt_usage(&k_convert_cmd, f);
+    fputc('\n', f);
+    cli_opt_usage(&k_info_cmd, f);
 }
 
-/* Exit code of a failed read or write: 2 for what the user asked (format, option), 3 else. */
+/* Exit code of a failed read or write (cli_exit_code: 2 for what the user asked, 3 else). */
 static int fail(mf_status st, const char *msg)
 {
     cli_error(k_cmd, "%s", msg);
-    return (st == MF_ERR_DOMAIN || st == MF_ERR_UNSUPPORTED) ? 2 : 3;
+    return cli_exit_code(st);
 }
 
 /* "-", a field name: parses up to 4 comma-separated entries into ch (-1 = zeros). */
@@ -109,33 +132,19 @@ static void print_half_error(cli_buf *b, const mf_table *t, const mf_half_error 
 
 static int table_convert(int argc, char **argv)
 {
-    const char *in = NULL, *out = NULL, *dds = NULL, *prefix = NULL;
-    int half = 0;
-    for (int i = 1; i < argc; ++i) {
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-            usage(stdout);
-            return 0;
-        } else if (!strcmp(argv[i], "--half")) {
-            half = 1;
-        } else if (!strcmp(argv[i], "--dds-fields") || !strcmp(argv[i], "--prefix")) {
-            if (i + 1 >= argc)
-                return cli_error(k_cmd, "option %s needs a value", argv[i]);
-            if (argv[i][2] == 'd')
-                dds = argv[++i];
-            else
-                prefix = argv[++i];
-        } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
-            return cli_error(k_cmd, "unknown option '%s' (see 'mfkit table --help')", argv[i]);
-        } else if (!in) {
-            in = argv[i];
-        } else if (!out) {
-            out = argv[i];
-        } else {
-            return cli_error(k_cmd, "unexpected argument '%s' (convert takes IN and OUT)", argv[i]);
-        }
+    cli_val v[T_NOPTS];
+    const char *pos[2];
+    int npos;
+    int prc = cli_opt_parse(&k_convert_cmd, argc - 1, argv + 1, ~0u, NULL, v, pos, &npos);
+    if (prc == CLI_PARSE_HELP) {
+        usage(stdout);
+        return 0;
     }
-    if (!in || !out)
-        return cli_error(k_cmd, "convert needs IN and OUT (see 'mfkit table --help')");
+    if (prc)
+        return prc;
+    const char *in = pos[0], *out = pos[1];
+    const char *dds = v[T_DDS_FIELDS].set ? v[T_DDS_FIELDS].s : NULL, *prefix = v[T_PREFIX].set ? v[T_PREFIX].s : NULL;
+    int half = v[T_HALF].set;
     mf_table_format fin = mf_table_format_from_path(in), fout = mf_table_format_from_path(out);
     if (!mf_table_format_readable(fin))
         return cli_error(k_cmd, "%s: cannot read %s files (readable: .exr .dds .json .npy)", in,
@@ -153,8 +162,7 @@ static int table_convert(int argc, char **argv)
     char msg[1024];
     mf_status st = mf_table_read(in, &t, NULL, msg, sizeof msg);
     if (st != MF_OK) {
-        cli_error(k_cmd, "%s", msg);
-        return 3;
+        return fail(st, msg);
     }
     mf_table_write_options o;
     mf_table_write_options_default(&o);
@@ -187,21 +195,16 @@ static int table_convert(int argc, char **argv)
 
 static int table_info(int argc, char **argv)
 {
-    const char *file = NULL;
-    for (int i = 1; i < argc; ++i) {
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-            usage(stdout);
-            return 0;
-        } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
-            return cli_error(k_cmd, "unknown option '%s' (see 'mfkit table --help')", argv[i]);
-        } else if (!file) {
-            file = argv[i];
-        } else {
-            return cli_error(k_cmd, "unexpected argument '%s' (info takes one FILE)", argv[i]);
-        }
+    const char *pos[1];
+    int npos;
+    int prc = cli_opt_parse(&k_info_cmd, argc - 1, argv + 1, ~0u, NULL, NULL, pos, &npos);
+    if (prc == CLI_PARSE_HELP) {
+        usage(stdout);
+        return 0;
     }
-    if (!file)
-        return cli_error(k_cmd, "info needs a FILE (see 'mfkit table --help')");
+    if (prc)
+        return prc;
+    const char *file = pos[0];
     mf_table_format fmt = mf_table_format_from_path(file);
     if (!mf_table_format_readable(fmt))
         return cli_error(k_cmd, "%s: cannot read %s files (readable: .exr .dds .json .npy)", file,
@@ -211,8 +214,7 @@ static int table_info(int argc, char **argv)
     char msg[1024];
     mf_status st = mf_table_read(file, &t, &info, msg, sizeof msg);
     if (st != MF_OK) {
-        cli_error(k_cmd, "%s", msg);
-        return 3;
+        return fail(st, msg);
     }
     const char *storage = info.half_float ? "float16" : "float32";
     cli_buf b = {0};

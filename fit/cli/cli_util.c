@@ -24,19 +24,43 @@ int cli_error(const char *cmd, const char *fmt, ...)
     return 2;
 }
 
+int cli_exit_code(mf_status st)
+{
+    switch (st) {
+    case MF_OK:
+        return CLI_EXIT_OK;
+    case MF_ERR_CHECK_FAILED:
+        return CLI_EXIT_CHECK_FAILED;
+    case MF_ERR_DOMAIN:
+    case MF_ERR_UNSUPPORTED:
+        return CLI_EXIT_USAGE;
+    case MF_ERR_IO:
+    case MF_ERR_FORMAT:
+    case MF_ERR_ALLOC:
+        return CLI_EXIT_IO;
+    default:
+        return CLI_EXIT_FIT;
+    }
+}
+
 int cli_parse_double(const char *s, double *out)
 {
     if (!s || !*s)
-        return -1;
+        return CLI_NUM_INVALID;
     char *end;
     errno = 0;
     double v = strtod(s, &end);
     if (end == s || *end != '\0')
-        return -1;
+        return CLI_NUM_INVALID;
     if (errno == ERANGE && isinf(v))
-        return -1; /* overflow: 1e999 is not a number we can hold */
+        return CLI_NUM_RANGE; /* overflow: 1e400 is a number, but not one a double holds */
     *out = v;
     return 0;
+}
+
+const char *cli_num_error(int code)
+{
+    return code == CLI_NUM_RANGE ? "is out of the range of a double (|x| > 1.8e308)" : "is not a number";
 }
 
 int cli_parse_int(const char *s, long lo, long hi, long *out)
@@ -230,6 +254,30 @@ static void free_fields(char **f, int n)
     free(f);
 }
 
+/* The header's column indices sorted by name (ties by index), for duplicate detection and
+ * cli_csv_column: O(n log n) instead of comparing every pair (100k columns took 30 s). */
+static const cli_csv *g_sort_csv; /* qsort has no user pointer in C11 */
+
+static int cmp_col(const void *a, const void *b)
+{
+    int i = *(const int *)a, j = *(const int *)b;
+    int c = strcmp(g_sort_csv->header[i], g_sort_csv->header[j]);
+    return c ? c : (i > j) - (i < j);
+}
+
+static int build_index(cli_csv *csv)
+{
+    csv->sorted = malloc(sizeof(int) * (size_t)csv->ncols);
+    if (!csv->sorted)
+        return -1;
+    for (int i = 0; i < csv->ncols; ++i)
+        csv->sorted[i] = i;
+    g_sort_csv = csv;
+    qsort(csv->sorted, (size_t)csv->ncols, sizeof(int), cmp_col);
+    g_sort_csv = NULL;
+    return 0;
+}
+
 int cli_csv_read(FILE *in, cli_csv *csv, char *msg, size_t msg_size)
 {
     memset(csv, 0, sizeof *csv);
@@ -240,9 +288,17 @@ int cli_csv_read(FILE *in, cli_csv *csv, char *msg, size_t msg_size)
     int cap_rows = 0;
     while ((got = getline(&line, &cap, in)) >= 0) {
         ++lineno;
-        if (memchr(line, '\0', (size_t)got) != NULL && strlen(line) < (size_t)got) {
-            snprintf(msg, msg_size, "line %ld: contains a NUL byte (binary input?)", lineno);
+        if (lineno == 1 && got >= 3 && memcmp(line, "\xEF\xBB\xBF", 3) == 0) {
+            snprintf(msg, msg_size, "line 1: starts with a UTF-8 byte-order mark (BOM): save the CSV without it");
             goto fail;
+        }
+        for (ssize_t k = 0; k < got; ++k) {
+            unsigned char c = (unsigned char)line[k];
+            if ((c < 0x20 && c != '\t' && c != '\r' && c != '\n') || c == 0x7f) {
+                snprintf(msg, msg_size, "line %ld: binary input, not CSV text (byte 0x%02x at column %ld)", lineno, c,
+                         (long)k + 1);
+                goto fail;
+            }
         }
         char *t = trim(line);
         if (*t == '\0')
@@ -256,17 +312,21 @@ int cli_csv_read(FILE *in, cli_csv *csv, char *msg, size_t msg_size)
         if (!csv->header) {
             csv->header = fields;
             csv->ncols = n;
-            for (int i = 0; i < n; ++i) {
+            for (int i = 0; i < n; ++i)
                 if (!fields[i][0]) {
                     snprintf(msg, msg_size, "line %ld: header column %d is empty", lineno, i + 1);
                     goto fail;
                 }
-                for (int j = 0; j < i; ++j)
-                    if (strcmp(fields[i], fields[j]) == 0) {
-                        snprintf(msg, msg_size, "line %ld: header names column '%s' twice", lineno, fields[i]);
-                        goto fail;
-                    }
+            if (build_index(csv) != 0) {
+                snprintf(msg, msg_size, "out of memory");
+                goto fail;
             }
+            for (int i = 1; i < n; ++i)
+                if (strcmp(csv->header[csv->sorted[i]], csv->header[csv->sorted[i - 1]]) == 0) {
+                    snprintf(msg, msg_size, "line %ld: header names column '%s' twice", lineno,
+                             csv->header[csv->sorted[i]]);
+                    goto fail;
+                }
             continue;
         }
         if (n != csv->ncols) {
@@ -309,13 +369,22 @@ void cli_csv_free(cli_csv *csv)
         free_fields(csv->cells[r], csv->ncols);
     free(csv->cells);
     free_fields(csv->header, csv->ncols);
+    free(csv->sorted);
     memset(csv, 0, sizeof *csv);
 }
 
 int cli_csv_column(const cli_csv *csv, const char *name)
 {
-    for (int i = 0; i < csv->ncols; ++i)
-        if (strcmp(csv->header[i], name) == 0)
+    int lo = 0, hi = csv->ncols - 1; /* binary search of the sorted index; names are unique */
+    while (lo <= hi) {
+        int mid = lo + (hi - lo) / 2, i = csv->sorted[mid];
+        int c = strcmp(csv->header[i], name);
+        if (c == 0)
             return i;
+        if (c < 0)
+            lo = mid + 1;
+        else
+            hi = mid - 1;
+    }
     return -1;
 }

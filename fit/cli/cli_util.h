@@ -7,6 +7,20 @@
 
 #include "mfkit/mf_validate.h"
 
+/* The exit status of every mfkit command (docs/cli.md, "Exit status"). */
+enum {
+    CLI_EXIT_OK = 0,
+    CLI_EXIT_CHECK_FAILED = 1, /* a validation check (core properties, the LTC gate) failed */
+    CLI_EXIT_USAGE = 2,        /* usage or input error: bad option, bad CSV field, out-of-domain request */
+    CLI_EXIT_IO = 3,           /* I/O error: a file missing, unreadable, corrupt or unwritable; out of memory */
+    CLI_EXIT_FIT = 4,          /* a fit failed (no convergence) */
+    CLI_EXIT_INTERRUPTED = 130 /* SIGINT / SIGTERM (128 + 2, the shell's convention) */
+};
+/* The one mapping from a library status to an exit status: MF_OK 0, MF_ERR_CHECK_FAILED 1,
+ * MF_ERR_DOMAIN and MF_ERR_UNSUPPORTED 2, MF_ERR_IO, MF_ERR_FORMAT and MF_ERR_ALLOC 3,
+ * MF_ERR_NO_CONVERGENCE (and any other) 4. */
+int cli_exit_code(mf_status st);
+
 /* Prints "mfkit <cmd>: <message>" on one line of stderr. Always returns 2 (usage/input error). */
 int cli_error(const char *cmd, const char *fmt, ...)
 #if defined(__GNUC__)
@@ -15,8 +29,12 @@ int cli_error(const char *cmd, const char *fmt, ...)
     ;
 
 /* Strict number parsing: the whole string must be a finite or NaN/Inf number ("nan", "inf").
- * Returns 0 on success. */
+ * Returns 0 on success, CLI_NUM_INVALID for text that is not a number, CLI_NUM_RANGE for a
+ * number too large for a double (1e400; an underflow such as 1e-400 gives 0 or a subnormal). */
+enum { CLI_NUM_INVALID = -1, CLI_NUM_RANGE = -2 };
 int cli_parse_double(const char *s, double *out);
+/* The reason for a non-zero cli_parse_double code: "is not a number", "is out of the range ...". */
+const char *cli_num_error(int code);
 /* Strict integer parsing in [lo, hi]. Returns 0 on success. */
 int cli_parse_int(const char *s, long lo, long hi, long *out);
 
@@ -44,10 +62,12 @@ typedef struct {
     int ncols, nrows;
     char **header;   /* ncols names */
     char ***cells;   /* nrows x ncols strings */
+    int *sorted;     /* the column indices sorted by name (cli_csv_column) */
 } cli_csv;
 
 /* Reads a CSV (comma-separated, no quoting; surrounding spaces and CR are trimmed; blank lines
- * skipped).  On error fills msg ("line N: ...") and returns non-zero. */
+ * skipped).  A UTF-8 byte-order mark and control bytes (binary input) are errors that say so.
+ * On error fills msg ("line N: ...") and returns non-zero. */
 int cli_csv_read(FILE *f, cli_csv *csv, char *msg, size_t msg_size);
 void cli_csv_free(cli_csv *csv);
 /* Index of the column named `name`, or -1. */

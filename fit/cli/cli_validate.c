@@ -6,6 +6,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
+#include "cli_opt.h"
 #include "cli_util.h"
 
 #include "mfkit/mfkit.h"
@@ -19,30 +20,38 @@
 #include <time.h>
 #include <unistd.h>
 
-static void usage(FILE *f)
-{
-    fprintf(f,
-            "usage: mfkit validate [--json] [--json-file PATH] [--quiet]\n"
-            "       mfkit validate TABLE [--brdf NAME] [--quick] [--seed S] [--json] [--json-file PATH]\n\n"
-            "Without TABLE: runs the property checks of the core math over a grid of the whole domain\n"
-            "(alpha 1e-4..1, view angles up to 89.99 deg, anisotropy up to 1:100, non-centred means up to\n"
-            "slope 2) and prints one row per check: name, worst value, bound, pass/FAIL, cases, where the\n"
-            "worst was.\n\n"
-            "With TABLE (an LTC table: .exr, .dds, .json, .npy written by mfkit, or a .csv in the layout of\n"
-            "the reference ltc_code table): runs the LTC gate (docs/validation.md): finite values, energy,\n"
-            "normalisation, smoothness and, with the BRDF (--brdf, else the table's \"brdf\" metadata),\n"
-            "albedo by quadrature and Monte Carlo and polygon shading against Monte Carlo.\n\n"
-            "options:\n"
-            "  --brdf NAME       the BRDF the table approximates (ggx, beckmann, lambert, ...); 'none':\n"
-            "                    model-free checks only\n"
-            "  --quick           model checks on an 8 x 8 grid of texels (default: every texel for the\n"
-            "                    albedo, a 16 x 16 grid for polygons)\n"
-            "  --seed S          seed of the Monte Carlo checks (default 1)\n"
-            "  --json            print the report as JSON on stdout instead of the table\n"
-            "  --json-file PATH  also write the JSON report to PATH (atomically)\n"
-            "  --quiet           no progress on stderr (progress is shown only on a terminal anyway)\n\n"
-            "exit status: 0 all checks passed, 1 a check failed, 2 usage error, 3 I/O error\n");
-}
+enum { V_BRDF, V_QUICK, V_SEED, V_JSON, V_JSON_FILE, V_QUIET, V_NOPTS };
+static const cli_opt k_validate_opts[V_NOPTS] = {
+    {.name = "--brdf", .metavar = "NAME", .kind = CLI_OPT_STRING,
+     .help = "with TABLE: the BRDF the table approximates (ggx, beckmann, lambert, ...; the list: mfkit fit ltc "
+             "--help); 'none': model-free checks only (default: the table's \"brdf\" metadata)"},
+    {.name = "--quick", .kind = CLI_OPT_FLAG,
+     .help = "with TABLE: model checks on an 8 x 8 grid of texels (default: every texel for the albedo, a 16 x 16 "
+             "grid for polygons)"},
+    {.name = "--seed", .metavar = "S", .kind = CLI_OPT_U64, .def = "1", .help = "seed of the Monte Carlo checks"},
+    {.name = "--json", .kind = CLI_OPT_FLAG, .help = "print the report as JSON on stdout instead of the table"},
+    {.name = "--json-file", .metavar = "PATH", .kind = CLI_OPT_STRING,
+     .help = "also write the JSON report to PATH (atomically)"},
+    {.name = "--quiet", .kind = CLI_OPT_FLAG, .help = "no progress on stderr (progress is shown only on a terminal anyway)"},
+};
+static const cli_command k_validate_cmd = {
+    .name = "validate",
+    .synopsis = "[TABLE]",
+    .min_pos = 0,
+    .max_pos = 1,
+    .description =
+        "Without TABLE: runs the property checks of the core math over a grid of the whole domain\n"
+        "(alpha 1e-4..1, view angles up to 89.99 deg, anisotropy up to 1:100, non-centred means up to\n"
+        "slope 2) and prints one row per check: name, worst value, bound, pass/FAIL, cases, where the\n"
+        "worst was.\n\n"
+        "With TABLE (an LTC table: .exr, .dds, .json, .npy written by mfkit, or a .csv in the layout of\n"
+        "the reference ltc_code table): runs the LTC gate (docs/validation.md): finite values, energy,\n"
+        "normalisation, smoothness and, with the BRDF (--brdf, else the table's \"brdf\" metadata),\n"
+        "albedo by quadrature and Monte Carlo and polygon shading against Monte Carlo.\n",
+    .opts = k_validate_opts,
+    .nopts = V_NOPTS,
+    .epilog = "exit status: 0 all checks passed, 1 a check failed, 2 usage error, 3 I/O error\n",
+};
 
 typedef struct {
     int show;
@@ -96,7 +105,7 @@ static int validate_table(const char *path, const char *brdf, int quick, uint64_
     }
     if (st != MF_OK) {
         cli_error(cmd, "%s", msg[0] ? msg : mf_status_str(st));
-        return st == MF_ERR_DOMAIN || st == MF_ERR_UNSUPPORTED ? 2 : 3;
+        return cli_exit_code(st);
     }
     const mf_brdf_model *model = NULL;
     const char *name = brdf ? brdf : mf_table_get_meta(&t, "brdf");
@@ -126,9 +135,9 @@ static int validate_table(const char *path, const char *brdf, int quick, uint64_
     mf_table_free(&t);
     if (st == MF_ERR_DOMAIN)
         return cli_error(cmd, "%s: not an LTC table layout (two axes r: alpha = r^2 and u: cos = 1 - u^2, fields "
-                              "minv_00, minv_20, minv_02, minv_22, magnitude)", path), 3;
+                              "minv_00, minv_20, minv_02, minv_22, magnitude)", path), CLI_EXIT_IO;
     if (st != MF_OK && st != MF_ERR_CHECK_FAILED)
-        return cli_error(cmd, "%s: %s", path, mf_status_str(st)), 3;
+        return cli_error(cmd, "%s: %s", path, mf_status_str(st)), CLI_EXIT_IO;
     int all = (st == MF_OK);
     cli_buf jb = {0}, tb = {0};
     cli_buf_printf(&jb, "{\n  \"tool\": \"mfkit validate\",\n  \"version\": \"%s\",\n  \"table\": ", MFKIT_VERSION);
@@ -176,11 +185,11 @@ static int validate_table(const char *path, const char *brdf, int quick, uint64_
                        "%.4g; relative mean %.4g, p95 %.4g, worst %.4g (MC se mean %.2g)\n",
                        stats.polygons, stats.entries, stats.mean_abs, stats.p95_abs, stats.worst_abs, stats.mean_rel,
                        stats.p95_rel, stats.worst_rel, stats.mean_se);
-    int rc = all ? 0 : 1;
+    int rc = all ? CLI_EXIT_OK : CLI_EXIT_CHECK_FAILED;
     if (json_file && cli_buf_write_file_atomic(&jb, json_file, msg, sizeof msg) != 0)
-        rc = 3, cli_error(cmd, "--json-file %s", msg);
-    if (rc != 3 && cli_buf_write(json ? &jb : &tb, stdout) != 0)
-        rc = 3, cli_error(cmd, "stdout: write failed");
+        rc = CLI_EXIT_IO, cli_error(cmd, "--json-file %s", msg);
+    if (rc != CLI_EXIT_IO && cli_buf_write(json ? &jb : &tb, stdout) != 0)
+        rc = CLI_EXIT_IO, cli_error(cmd, "stdout: write failed");
     cli_buf_free(&jb);
     cli_buf_free(&tb);
     return rc;
@@ -190,45 +199,20 @@ static int validate_table(const char *path, const char *brdf, int quick, uint64_
 int cli_validate(int argc, char **argv)
 {
     const char *cmd = "validate";
-    int json = 0, quiet = 0, quick = 0;
-    const char *json_file = NULL, *table_path = NULL, *brdf = NULL;
-    unsigned long long seed = 1;
-    for (int i = 1; i < argc; ++i) {
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-            usage(stdout);
-            return 0;
-        } else if (!strcmp(argv[i], "--json")) {
-            json = 1;
-        } else if (!strcmp(argv[i], "--quiet")) {
-            quiet = 1;
-        } else if (!strcmp(argv[i], "--json-file")) {
-            if (i + 1 >= argc)
-                return cli_error(cmd, "option --json-file needs a value");
-            json_file = argv[++i];
-            if (!*json_file)
-                return cli_error(cmd, "--json-file: empty path");
-        } else if (!strcmp(argv[i], "--quick")) {
-            quick = 1;
-        } else if (!strcmp(argv[i], "--brdf")) {
-            if (i + 1 >= argc)
-                return cli_error(cmd, "option --brdf needs a value");
-            brdf = argv[++i];
-        } else if (!strcmp(argv[i], "--seed")) {
-            if (i + 1 >= argc)
-                return cli_error(cmd, "option --seed needs a value");
-            char *end;
-            const char *v = argv[++i];
-            seed = strtoull(v, &end, 10);
-            if (!*v || *end || *v == '-')
-                return cli_error(cmd, "--seed: '%s' is not a non-negative integer", v);
-        } else if (argv[i][0] == '-') {
-            return cli_error(cmd, "unknown option '%s' (see 'mfkit validate --help')", argv[i]);
-        } else if (!table_path) {
-            table_path = argv[i];
-        } else {
-            return cli_error(cmd, "unexpected argument '%s' (one table at a time)", argv[i]);
-        }
+    cli_val v[V_NOPTS];
+    const char *pos[1];
+    int npos;
+    int prc = cli_opt_parse(&k_validate_cmd, argc - 1, argv + 1, ~0u, NULL, v, pos, &npos);
+    if (prc == CLI_PARSE_HELP) {
+        cli_opt_usage(&k_validate_cmd, stdout);
+        return 0;
     }
+    if (prc)
+        return prc;
+    int json = v[V_JSON].set, quiet = v[V_QUIET].set, quick = v[V_QUICK].set;
+    const char *json_file = v[V_JSON_FILE].set ? v[V_JSON_FILE].s : NULL;
+    const char *table_path = npos ? pos[0] : NULL, *brdf = v[V_BRDF].set ? v[V_BRDF].s : NULL;
+    unsigned long long seed = v[V_SEED].set ? v[V_SEED].u : 1;
     if (!table_path && (quick || brdf))
         return cli_error(cmd, "--quick and --brdf need a TABLE argument");
     if (table_path)
@@ -236,25 +220,26 @@ int cli_validate(int argc, char **argv)
     int n = mf_validate_core_count();
     mf_check *checks = calloc((size_t)n, sizeof *checks);
     if (!checks)
-        return cli_error(cmd, "out of memory");
+        return cli_error(cmd, "out of memory"), CLI_EXIT_IO;
     progress_state ps = {!quiet && isatty(fileno(stderr)), {0, 0}};
     clock_gettime(CLOCK_MONOTONIC, &ps.start);
     mf_status st = mf_validate_core(checks, n, progress, &ps);
     if (st != MF_OK && st != MF_ERR_CHECK_FAILED) {
         free(checks);
-        return cli_error(cmd, "%s", mf_status_str(st));
+        cli_error(cmd, "%s", mf_status_str(st));
+        return cli_exit_code(st);
     }
     int all = (st == MF_OK);
     cli_buf jb = {0}, tb = {0};
     report_json(&jb, checks, n, all);
     cli_buf_checks_table(&tb, checks, n, all);
     free(checks);
-    int rc = all ? 0 : 1;
+    int rc = all ? CLI_EXIT_OK : CLI_EXIT_CHECK_FAILED;
     char msg[512];
     if (json_file && cli_buf_write_file_atomic(&jb, json_file, msg, sizeof msg) != 0)
-        rc = 3, cli_error(cmd, "--json-file %s", msg);
-    if (rc != 3 && cli_buf_write(json ? &jb : &tb, stdout) != 0)
-        rc = 3, cli_error(cmd, "stdout: write failed");
+        rc = CLI_EXIT_IO, cli_error(cmd, "--json-file %s", msg);
+    if (rc != CLI_EXIT_IO && cli_buf_write(json ? &jb : &tb, stdout) != 0)
+        rc = CLI_EXIT_IO, cli_error(cmd, "stdout: write failed");
     cli_buf_free(&jb);
     cli_buf_free(&tb);
     return rc;

@@ -327,14 +327,70 @@ static int rect_args_valid(double alpha_x, double alpha_y)
     return alpha_x > 0.0 && alpha_y > 0.0 && isfinite(alpha_x) && isfinite(alpha_y);
 }
 
-/* Stretched sides in the domain (finite, |.| <= RECT_MAX_COORD)?  P22(s, t) ds dt = p(u, v) du dv,
- * so the mean over the rectangle is unit_rect_mean / (alpha_x alpha_y). */
+/* P22(s, t) ds dt = p(u, v) du dv, so the mean over the rectangle is unit_rect_mean / (alpha_x
+ * alpha_y); stretched sides beyond RECT_MAX_COORD go to rect_mean_large. */
+static int side_within(rect_side s, double lim) { return fabs(s.a0) <= lim && fabs(s.a1) <= lim && s.w <= lim; }
+
+/* m / (alpha_x alpha_y) * 2^scale2 with one rounding at the end: no intermediate overflow or
+ * underflow (the exponents are added as integers). */
+static double scaled_quotient(double m, double alpha_x, double alpha_y, int scale2)
+{
+    int em, ex, ey;
+    double fm = frexp(m, &em), fx = frexp(alpha_x, &ex), fy = frexp(alpha_y, &ey);
+    return ldexp(fm / fx / fy, em - ex - ey + scale2);
+}
+
+/* The edge term with every product scaled by 1/M^2, M = max(q, |y0|, |y1|): the same angle
+ * (atan2 is invariant to a common positive factor) without overflow for coordinates up to
+ * DBL_MAX; q = hypot(1, x). */
+static double edge_term_scaled(double x, double y0, double y1, double w)
+{
+    double q = hypot(1.0, x);
+    double m = fmax(q, fmax(fabs(y0), fabs(y1)));
+    double qs = q / m, ws = w / m;
+    return x / q * atan2(ws * qs, qs * qs + (y0 / m) * (y1 / m));
+}
+
+/* The mean for stretched coordinates beyond RECT_MAX_COORD (finite):
+ *  - far from the peak (distance d > RECT_MAX_COORD): 1 + u^2 + v^2 = u^2 + v^2 to 1e-200, which
+ *    is homogeneous of degree -4, so the mean over R is 2^(-4k) times the mean over R / 2^k; k
+ *    brings the nearest point to ~2^50 (1 is still negligible there: 1e-30);
+ *  - otherwise the edge form, with the atan2 arguments scaled (edge_term_scaled) and the division
+ *    by the area done in exponent arithmetic; where its edges cancel (condition above
+ *    RECT_MAX_COND) and the far-field scaling does not apply, no accurate value is available:
+ *    NaN (mf_filter.h states the domain). */
+static double rect_mean_large(double alpha_x, double alpha_y, rect_side u, rect_side v)
+{
+    double du = side_dist0(u), dv = side_dist0(v), d = hypot(du, dv);
+    if (d > RECT_MAX_COORD) {
+        int e;
+        (void)frexp(d, &e);
+        int k = e - 50;
+        rect_side us = {ldexp(u.a0, -k), ldexp(u.a1, -k), ldexp(u.w, -k)};
+        rect_side vs = {ldexp(v.a0, -k), ldexp(v.a1, -k), ldexp(v.w, -k)};
+        if (side_within(us, RECT_MAX_COORD) && side_within(vs, RECT_MAX_COORD))
+            return scaled_quotient(unit_rect_mean(us, vs), alpha_x, alpha_y, -4 * k);
+        return NAN;
+    }
+    double e1 = edge_term_scaled(u.a1, v.a0, v.a1, v.w), e2 = edge_term_scaled(u.a0, v.a0, v.a1, v.w);
+    double e3 = edge_term_scaled(v.a1, u.a0, u.a1, u.w), e4 = edge_term_scaled(v.a0, u.a0, u.a1, u.w);
+    double sum = (e1 - e2) + (e3 - e4);
+    double mag = fabs(e1) + fabs(e2) + fabs(e3) + fabs(e4);
+    if (!(sum > 0.0 && mag <= RECT_MAX_COND * sum))
+        return NAN;
+    /* sum / (2 pi u.w v.w alpha_x alpha_y), u.w v.w may overflow */
+    int eu, ev;
+    double fu = frexp(u.w, &eu), fv = frexp(v.w, &ev);
+    return scaled_quotient(sum / (2.0 * MF_PI) / fu / fv, alpha_x, alpha_y, -eu - ev);
+}
+
 static double rect_mean_stretched(double alpha_x, double alpha_y, rect_side u, rect_side v)
 {
-    double lim = RECT_MAX_COORD;
-    if (!(fabs(u.a0) <= lim) || !(fabs(u.a1) <= lim) || !(u.w <= lim) || !(fabs(v.a0) <= lim)
-        || !(fabs(v.a1) <= lim) || !(v.w <= lim))
+    if (!isfinite(u.a0) || !isfinite(u.a1) || !isfinite(u.w) || !isfinite(v.a0) || !isfinite(v.a1)
+        || !isfinite(v.w))
         return NAN;
+    if (!side_within(u, RECT_MAX_COORD) || !side_within(v, RECT_MAX_COORD))
+        return rect_mean_large(alpha_x, alpha_y, u, v);
     return unit_rect_mean(u, v) / alpha_x / alpha_y;
 }
 
@@ -369,9 +425,18 @@ double mf_filter_ggx_proxy_alpha(double alpha, double dh)
     /* [Kaplanyan 2016, Eq. 19] solved exactly (correction C-K3):
      *   alpha'^2 = dh q / (4 atan(dh / q)),  q = sqrt(4 alpha^2 + dh^2).
      * Rearranged with dh q = (dh^2 / t) ... = 4 (alpha^2 + dh^2/4) t: no 0/0 as dh -> 0. */
-    double q = hypot(2.0 * alpha, dh), t = dh / q;
-    double a_sq = (alpha * alpha + 0.25 * dh * dh) * (t / atan(t));
-    return sqrt(a_sq);
+    /* Scaled by the power of two e of the larger input, so that the squares neither overflow
+     * (dh >= 1e155) nor lose a subnormal dh: scaling by 2^-e is exact, so inputs that needed no
+     * scaling give the same bits as without it. */
+    int e;
+    (void)frexp(fmax(alpha, dh), &e);
+    double a = ldexp(alpha, -e), d = ldexp(dh, -e);
+    double q = hypot(2.0 * a, d), t = d / q;
+    /* t / atan(t) = 1 + t^2/3 - ...: exactly 1 in double below 2^-27 (t^2/3 < 2^-55), where
+     * t / atan(t) would be 0/0 once t underflows (a subnormal dh against alpha >= 1). */
+    double ratio = t < 0x1p-27 ? 1.0 : t / atan(t);
+    double a_sq = (a * a + 0.25 * d * d) * ratio;
+    return ldexp(sqrt(a_sq), e);
 }
 
 double mf_filter_ggx_proxy_alpha_approx(double alpha, double dh)

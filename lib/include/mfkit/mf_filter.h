@@ -154,7 +154,11 @@ double mf_filter_ggx_rect_antiderivative(double alpha_x, double alpha_y, double 
  *    stretched length L, ~400 for the tested range, ~5000 at the domain limit);
  *  - sides below 1e-9 alpha are replaced by their midpoint (relative error < 1e-18).
  * Measured relative error <= 3e-15 (docs/math.md, tests/test_filter.c).  Domain: alpha > 0,
- * widths >= 0, all finite, and |position| / alpha, width / alpha <= 1e100; NaN outside. */
+ * widths >= 0, all finite, and the stretched ends and widths (position / alpha, width / alpha)
+ * finite; NaN outside.  Beyond 1e100 in stretched units the edge form is evaluated with scaled
+ * arguments (e.g. bounds +-1e300) and rectangles farther than 1e100 from the peak by the
+ * degree -4 homogeneity of the far tail; the one case left NaN is a rectangle that reaches
+ * beyond 1e100 and whose edges cancel (condition > 16) without being that far from the peak. */
 double mf_filter_ggx_rect_mean(double alpha_x, double alpha_y, double cx, double cy, double wx, double wy);
 /* The same over [x0, x1] x [y0, y1] (x0 <= x1, y0 <= y1); prefer the centre/width form for
  * tiny rectangles, whose width is then exact. */

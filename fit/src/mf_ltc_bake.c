@@ -1,0 +1,346 @@
+/*
+ * mf_ltc_bake.c -- fit -> gate -> export of an isotropic LTC table (see mf_ltc_bake.h).
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "mfkit/mf_ltc_bake.h"
+#include "mfkit/io/mf_table_io.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+void mf_ltc_bake_options_default(mf_ltc_bake_options *o)
+{
+    memset(o, 0, sizeof *o);
+    mf_ltcfit_options_default(&o->fit);
+    o->out_dir = "out";
+    o->tool = "mf_ltc_bake";
+    o->version = "";
+}
+
+static double now_seconds(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static void set_msg(mf_ltc_bake_report *r, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(r->message, sizeof r->message, fmt, ap);
+    va_end(ap);
+}
+
+/* mkdir -p: 0 if dir is (now) a directory, else -1 with errno (ENOTDIR: exists as a file). */
+static int make_dir(const char *dir)
+{
+    char path[MF_LTC_BAKE_PATH_LEN];
+    size_t n = strlen(dir);
+    if (n == 0 || n >= sizeof path) {
+        errno = ENAMETOOLONG;
+        return -1;
+    }
+    memcpy(path, dir, n + 1);
+    for (size_t i = 1; i <= n; ++i)
+        if (path[i] == '/' || path[i] == '\0') {
+            char c = path[i];
+            path[i] = '\0';
+            if (mkdir(path, 0777) != 0 && errno != EEXIST)
+                return -1;
+            path[i] = c;
+        }
+    struct stat st;
+    if (stat(dir, &st) != 0)
+        return -1;
+    if (!S_ISDIR(st.st_mode)) {
+        errno = ENOTDIR;
+        return -1;
+    }
+    return 0;
+}
+
+/* ---- the gate report (JSON) ------------------------------------------------------------------
+ * A small growable buffer and JSON emitter, private to this file.  The format is that of the
+ * command line's check reports ("checks": [{name, what, worst, bound, passed, cases, worst_at}]);
+ * non-finite numbers are null.  To be replaced by the shared internal JSON/buffer helpers of the
+ * table I/O layer when those land. */
+typedef struct {
+    char *data;
+    size_t len, cap;
+    int failed;
+} jbuf;
+
+static void jb_printf(jbuf *b, const char *fmt, ...)
+{
+    if (b->failed)
+        return;
+    for (;;) {
+        va_list ap;
+        va_start(ap, fmt);
+        size_t room = b->cap - b->len;
+        int n = vsnprintf(b->data ? b->data + b->len : NULL, room, fmt, ap);
+        va_end(ap);
+        if (n < 0) {
+            b->failed = 1;
+            return;
+        }
+        if ((size_t)n < room) {
+            b->len += (size_t)n;
+            return;
+        }
+        size_t cap = b->cap ? b->cap * 2 : 4096;
+        while (cap < b->len + (size_t)n + 1)
+            cap *= 2;
+        char *p = realloc(b->data, cap);
+        if (!p) {
+            b->failed = 1;
+            return;
+        }
+        b->data = p;
+        b->cap = cap;
+    }
+}
+
+static void jb_string(jbuf *b, const char *s)
+{
+    jb_printf(b, "\"");
+    for (; *s; ++s) {
+        if (*s == '"' || *s == '\\')
+            jb_printf(b, "\\%c", *s);
+        else if ((unsigned char)*s < 0x20)
+            jb_printf(b, "\\u%04x", (unsigned char)*s);
+        else
+            jb_printf(b, "%c", *s);
+    }
+    jb_printf(b, "\"");
+}
+
+static void jb_number(jbuf *b, double v)
+{
+    if (isfinite(v))
+        jb_printf(b, "%.17g", v);
+    else
+        jb_printf(b, "null");
+}
+
+static void gate_json(jbuf *b, const mf_ltc_bake_options *o, const mf_ltc_bake_report *r)
+{
+    jb_printf(b, "{\n  \"tool\": ");
+    jb_string(b, o->tool ? o->tool : "mf_ltc_bake");
+    jb_printf(b, ",\n  \"version\": ");
+    jb_string(b, o->version ? o->version : "");
+    jb_printf(b, ",\n  \"brdf\": ");
+    jb_string(b, o->model->name);
+    jb_printf(b, ",\n  \"passed\": %s,\n  \"fit\": {\"worst_residual\": ", r->gate_passed ? "true" : "false");
+    jb_number(b, r->fit.worst_residual);
+    jb_printf(b, ", \"max_iterations\": %d, \"total_iterations\": %ld, \"not_converged\": %d},\n  \"checks\": [\n",
+              r->fit.max_iterations, r->fit.total_iterations, r->fit.not_converged);
+    for (int i = 0; i < r->nchecks; ++i) {
+        const mf_check *c = &r->checks[i];
+        jb_printf(b, "    {\"name\": ");
+        jb_string(b, c->name);
+        jb_printf(b, ", \"what\": ");
+        jb_string(b, c->what);
+        jb_printf(b, ", \"worst\": ");
+        jb_number(b, c->worst);
+        jb_printf(b, ", \"bound\": ");
+        jb_number(b, c->bound);
+        jb_printf(b, ", \"passed\": %s, \"cases\": %ld, \"worst_at\": ", c->passed ? "true" : "false", c->cases);
+        jb_string(b, c->worst_at);
+        jb_printf(b, "}%s\n", i + 1 < r->nchecks ? "," : "");
+    }
+    jb_printf(b, "  ]\n}\n");
+}
+
+/* Writes b to path through a temporary beside it and a rename; no file is left on failure. */
+static mf_status write_file_atomic(const jbuf *b, const char *path, mf_ltc_bake_report *r)
+{
+    if (b->failed) {
+        set_msg(r, "%s: out of memory", path);
+        return MF_ERR_ALLOC;
+    }
+    char tmp[MF_LTC_BAKE_PATH_LEN + 32];
+    snprintf(tmp, sizeof tmp, "%s.tmp%ld", path, (long)getpid());
+    FILE *f = fopen(tmp, "wb");
+    int ok = f != NULL;
+    if (ok && b->len)
+        ok = fwrite(b->data, 1, b->len, f) == b->len;
+    if (f) {
+        ok = ok && fflush(f) == 0 && fsync(fileno(f)) == 0;
+        ok = (fclose(f) == 0) && ok;
+    }
+    if (!ok || rename(tmp, path) != 0) {
+        set_msg(r, "%s: write failed: %s", path, strerror(errno));
+        remove(tmp);
+        return MF_ERR_IO;
+    }
+    return MF_OK;
+}
+
+/* ---- export ---------------------------------------------------------------------------------- */
+
+static mf_status add_file(mf_ltc_bake_report *r, const char *dir, const char *suffix, char **path)
+{
+    if (r->nfiles >= MF_LTC_BAKE_MAX_FILES)
+        return MF_ERR_INTERNAL;
+    char *p = r->files[r->nfiles];
+    int n = snprintf(p, MF_LTC_BAKE_PATH_LEN, "%s/%s%s", dir, r->stem, suffix);
+    if (n < 0 || n >= MF_LTC_BAKE_PATH_LEN) {
+        set_msg(r, "%s: path too long", dir);
+        return MF_ERR_DOMAIN;
+    }
+    *path = p;
+    return MF_OK;
+}
+
+static mf_status export_all(const mf_ltc_bake_options *o, const mf_table *t, mf_ltc_bake_report *r)
+{
+    static const struct {
+        const char *suffix;
+        int half;
+        int dds_set; /* 0 all fields, 1 ltc_1, 2 ltc_2 */
+    } files[] = {{".exr", 0, 0},       {"_half.exr", 1, 0},   {"_1.dds", 0, 1}, {"_2.dds", 0, 2},
+                 {"_1_f16.dds", 1, 1}, {"_2_f16.dds", 1, 2}, {".h", 0, 0},     {".glsl", 0, 0},
+                 {".hlsl", 0, 0},      {".json", 0, 0},      {".npy", 0, 0}};
+    char msg[1024];
+    char *path;
+    mf_status st;
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i) {
+        if ((st = add_file(r, o->out_dir, files[i].suffix, &path)) != MF_OK)
+            return st;
+        mf_table_write_options wo;
+        mf_table_write_options_default(&wo);
+        wo.half_float = files[i].half;
+        wo.prefix = r->stem;
+        if (files[i].dds_set) {
+            wo.dds_fields_set = 1;
+            int base = files[i].dds_set == 1 ? MF_LTC_F_MINV_00 : MF_LTC_F_MAGNITUDE;
+            for (int c = 0; c < 4; ++c)
+                wo.dds_fields[c] = base + c;
+        }
+        st = mf_table_write(path, t, &wo, NULL, msg, sizeof msg);
+        if (st != MF_OK) {
+            set_msg(r, "%s (%s)", msg[0] ? msg : path, mf_status_str(st));
+            return st;
+        }
+        ++r->nfiles;
+    }
+    if ((st = add_file(r, o->out_dir, "_fit.json", &path)) != MF_OK)
+        return st;
+    st = mf_ltcfit_write_sidecar(path, o->model, &o->fit, t, &r->fit, msg, sizeof msg);
+    if (st != MF_OK) {
+        set_msg(r, "%s", msg[0] ? msg : path);
+        return st;
+    }
+    ++r->nfiles;
+    if ((st = add_file(r, o->out_dir, "_gate.json", &path)) != MF_OK)
+        return st;
+    jbuf b = {0};
+    gate_json(&b, o, r);
+    st = write_file_atomic(&b, path, r);
+    free(b.data);
+    if (st != MF_OK)
+        return st;
+    ++r->nfiles;
+    return MF_OK;
+}
+
+/* ---- the pipeline ---------------------------------------------------------------------------- */
+
+mf_status mf_ltc_bake(const mf_ltc_bake_options *o, mf_ltc_bake_report *r)
+{
+    memset(r, 0, sizeof *r);
+    r->stage = MF_LTC_BAKE_STAGE_FIT;
+    if (!o || !o->model || !o->out_dir || !o->out_dir[0]) {
+        set_msg(r, "no model or no output directory");
+        return MF_ERR_DOMAIN;
+    }
+    snprintf(r->stem, sizeof r->stem, "ltc_%s", o->model->name);
+    for (char *s = r->stem; *s; ++s)
+        if (*s == '-')
+            *s = '_';
+    int n = snprintf(r->checkpoint, sizeof r->checkpoint, "%s/%s.checkpoint", o->out_dir, r->stem);
+    if (n < 0 || n >= (int)sizeof r->checkpoint) {
+        set_msg(r, "%s: path too long", o->out_dir);
+        return MF_ERR_DOMAIN;
+    }
+    if (make_dir(o->out_dir) != 0) {
+        set_msg(r, "%s: cannot create the output directory: %s", o->out_dir, strerror(errno));
+        return MF_ERR_IO;
+    }
+    mf_ltcfit_options fo = o->fit;
+    fo.checkpoint = r->checkpoint;
+    fo.resume = o->resume;
+    fo.cancel = o->cancel;
+    fo.progress = o->progress;
+    fo.progress_user = o->progress_user;
+    if (!o->resume)
+        remove(r->checkpoint); /* a fresh fit never mixes with an old checkpoint */
+
+    mf_table t;
+    char msg[1024] = "";
+    double t0 = now_seconds();
+    mf_status st = mf_ltcfit_table(o->model, &fo, &t, &r->fit, msg, sizeof msg);
+    r->fit_seconds = now_seconds() - t0;
+    if (st != MF_OK) {
+        set_msg(r, "%s%s%s", mf_status_str(st), msg[0] ? ": " : "", msg);
+        return st;
+    }
+    if (r->fit.interrupted) {
+        r->interrupted = 1;
+        set_msg(r, "interrupted after %d of %d columns; no table written; resume continues from %s",
+                r->fit.columns_done, fo.n_r, r->checkpoint);
+        return MF_ERR_NO_CONVERGENCE;
+    }
+
+    r->stage = MF_LTC_BAKE_STAGE_GATE;
+    mf_ltc_gate_options go;
+    mf_ltc_gate_options_default(&go);
+    go.seed = fo.seed;
+    go.threads = fo.threads;
+    t0 = now_seconds();
+    mf_status gs = mf_ltc_gate_run(&t, o->model, &go, r->checks, (int)(sizeof r->checks / sizeof r->checks[0]),
+                                   &r->nchecks);
+    r->gate_seconds = now_seconds() - t0;
+    if (gs != MF_OK && gs != MF_ERR_CHECK_FAILED) {
+        mf_table_free(&t);
+        set_msg(r, "gate: %s", mf_status_str(gs));
+        return gs;
+    }
+    r->gate_passed = gs == MF_OK;
+    if (!r->gate_passed && !o->force) {
+        mf_table_free(&t);
+        set_msg(r, "the gate failed; nothing exported");
+        return MF_ERR_CHECK_FAILED;
+    }
+
+    r->stage = MF_LTC_BAKE_STAGE_EXPORT;
+    t0 = now_seconds();
+    st = mf_table_set_meta(&t, "validated", r->gate_passed ? "true" : "false");
+    if (st != MF_OK)
+        set_msg(r, "metadata: %s", mf_status_str(st));
+    else
+        st = export_all(o, &t, r);
+    r->export_seconds = now_seconds() - t0;
+    mf_table_free(&t);
+    if (st != MF_OK)
+        return st;
+    r->exported = 1;
+    r->stage = MF_LTC_BAKE_STAGE_DONE;
+    remove(r->checkpoint);
+    return MF_OK;
+}
+
+void mf_ltc_bake_report_free(mf_ltc_bake_report *r)
+{
+    if (r)
+        mf_ltcfit_result_free(&r->fit);
+}
