@@ -18,7 +18,7 @@
  *     Ties keep the earlier case.
  *   - A NaN value fails the check: worst becomes NaN and worst_at "NaN at <where>" for the first
  *     NaN recorded; later values (NaN or not) only count as cases.  A NaN never hides behind a
- *     larger value, and it is never turned into a number (a JSON writer prints it as null).
+ *     larger value, and it is never turned into a number (mfkit's JSON writer prints it as the string "NaN", mf_json.h).
  *   - +infinity is an ordinary (failing) value: the users record it for a case that could not be
  *     evaluated at all (a singular matrix, a model that returned NaN inside a quadrature), with
  *     a worst_at that says so.
