@@ -19,8 +19,8 @@ static const char *const k_cmd = "maps";
 static const char *const k_green_names[] = {"up", "down", NULL};
 static const char *const k_encoding_names[] = {"auto", "unorm", "raw", NULL};
 static const char *const k_edge_names[] = {"wrap", "clamp", NULL};
-enum { M_OUT, M_GREEN, M_ENCODING, M_TOLERANCE, M_HEIGHT, M_HEIGHT_SCALE, M_TEXEL_SIZE, M_EDGE, M_BASE_ALPHA, M_QUIET,
-       M_NOPTS };
+enum { M_OUT, M_GREEN, M_ENCODING, M_TOLERANCE, M_HEIGHT, M_HEIGHT_SCALE, M_TEXEL_SIZE, M_EDGE, M_BASE_ALPHA,
+       M_TABLE_FORMAT, M_QUIET, M_NOPTS };
 static const cli_opt k_maps_opts[M_NOPTS] = {
     {.name = "--out", .metavar = "PREFIX", .kind = CLI_OPT_STRING, .required = 1,
      .help = "output file prefix (its directory must exist)"},
@@ -40,6 +40,10 @@ static const cli_opt k_maps_opts[M_NOPTS] = {
      .help = "height maps: periodic central differences, or one-sided differences at the borders"},
     {.name = "--base-alpha", .metavar = "A", .kind = CLI_OPT_DOUBLE, .dlo = 0.0, .dhi = INFINITY, .def = "0",
      .help = "base Beckmann roughness, added as covariance A^2/2"},
+    {.name = "--table-format", .metavar = "LIST", .kind = CLI_OPT_STRING,
+     .help = "also write every level's moments as a moment_map table in each format of LIST (comma-separated "
+             "extensions: exr,dds,json,npy,h,glsl,hlsl,csv): PREFIX_moments_mip<k>.<ext> (lean, leadr, "
+             "bump-roughness)"},
     {.name = "--quiet", .kind = CLI_OPT_FLAG, .help = "no progress on stderr (shown only on a terminal anyway)"},
 };
 static const cli_command k_maps_cmd = {
@@ -55,6 +59,8 @@ static const cli_command k_maps_cmd = {
         "  lean            the same files with R,G = E[n.x/n.z], E[n.y/n.z] = -E[x], -E[y] (LEAN's sign)\n"
         "  bump-roughness  PREFIX_roughness_mip<k>.exr  alpha_1, alpha_2, dir_x, dir_y (Beckmann, Hery)\n"
         "  toksvig         PREFIX_toksvig_mip<k>.exr    alpha, len, n_x, n_y, n_z (Toksvig)\n"
+        "  --table-format  PREFIX_moments_mip<k>.<ext>  the level's moments E[x], E[y], E[x^2], E[xy], E[y^2]\n"
+        "                  as a moment_map table (docs/tables.md), in every table format\n"
         "Level k + 1 halves each side of level k (odd sizes round down, exact area-weighted box).\n"
         "Frame: x to the right, y up the image (OpenGL); base roughness added as covariance.\n",
     .opts = k_maps_opts,
@@ -79,6 +85,7 @@ int cli_maps(int argc, char **argv)
 #else
 
 #include "mfkit/io/mf_image.h"
+#include "mfkit/io/mf_table_io.h"
 #include "mfkit/mfkit.h"
 
 #include <errno.h>
@@ -95,6 +102,10 @@ typedef struct {
     double tolerance; /* < 0: default */
     double height_scale, texel_size, base_alpha;
     mf_map_edge edge;
+    const char *table_formats; /* --table-format LIST, or NULL */
+    int ntables;
+    char table_ext[8][8];      /* the extensions of LIST */
+    char *table_dir;           /* the temporary directory of the table files (malloc), or NULL */
 } maps_args;
 
 /* Output files: written to tmp, renamed to final at the end. */
@@ -174,6 +185,68 @@ static int write_level(out_list *l, const maps_args *a, const char *tag, int lev
         return cli_exit_code(st);
     }
     return 0;
+}
+
+/* The moment_map tables of level `level` (mf_map_moments_to_table) in every --table-format, written
+ * (each atomically, with its sidecar) into the temporary directory a->table_dir under their final
+ * names, so that generated code names the final file; commit() moves them beside the EXRs. */
+static int write_level_tables(out_list *l, const maps_args *a, const mf_map *m, int level)
+{
+    mf_table t;
+    mf_status st = mf_map_moments_to_table(m, level, &t);
+    if (st != MF_OK)
+        return cli_error(k_cmd, "level %d: cannot make its table: %s", level, mf_status_str(st)), CLI_EXIT_IO;
+    if (mf_table_set_meta(&t, "source", a->input) != MF_OK || mf_table_set_meta(&t, "tool", "mfkit maps") != MF_OK) {
+        mf_table_free(&t);
+        return cli_error(k_cmd, "level %d: table metadata full", level), CLI_EXIT_IO;
+    }
+    const char *slash = strrchr(a->prefix, '/');
+    const char *base = slash ? slash + 1 : a->prefix;
+    size_t dirlen = slash ? (size_t)(slash - a->prefix) + 1 : 0;
+    int rc = 0;
+    for (int j = 0; j < a->ntables && rc == 0; ++j) {
+        size_t n = strlen(a->table_dir) + strlen(a->prefix) + 64;
+        char *tmp = malloc(n), *fin = malloc(n), *side_tmp = malloc(n + 8), *side_fin = malloc(n + 8);
+        if (!tmp || !fin || !side_tmp || !side_fin) {
+            free(tmp), free(fin), free(side_tmp), free(side_fin);
+            rc = CLI_EXIT_IO, cli_error(k_cmd, "out of memory");
+            break;
+        }
+        snprintf(tmp, n, "%s/%s_moments_mip%d.%s", a->table_dir, base, level, a->table_ext[j]);
+        snprintf(fin, n, "%.*s%s_moments_mip%d.%s", (int)dirlen, a->prefix, base, level, a->table_ext[j]);
+        snprintf(side_tmp, n + 8, "%s.json", tmp);
+        snprintf(side_fin, n + 8, "%s.json", fin);
+        char msg[1024];
+        st = mf_table_write(tmp, &t, NULL, NULL, msg, sizeof msg);
+        if (st != MF_OK) {
+            rc = cli_exit_code(st), cli_error(k_cmd, "%s: %s", fin, msg);
+        } else {
+            struct stat sb;
+            int has_side = stat(side_tmp, &sb) == 0;
+            for (int k = 0; k < 1 + has_side && rc == 0; ++k) {
+                if (l->n == l->cap) {
+                    int nc = l->cap ? 2 * l->cap : 16;
+                    out_file *p = realloc(l->f, sizeof *p * (size_t)nc);
+                    if (!p) {
+                        rc = CLI_EXIT_IO, cli_error(k_cmd, "out of memory");
+                        break;
+                    }
+                    l->f = p;
+                    l->cap = nc;
+                }
+                l->f[l->n].tmp_path = k ? side_tmp : tmp;
+                l->f[l->n].final_path = k ? side_fin : fin;
+                ++l->n;
+                if (k)
+                    side_tmp = side_fin = NULL;
+                else
+                    tmp = fin = NULL;
+            }
+        }
+        free(tmp), free(fin), free(side_tmp), free(side_fin);
+    }
+    mf_table_free(&t);
+    return rc;
 }
 
 /* Renames every temporary to its final name; on a failure removes what was renamed. */
@@ -415,6 +488,7 @@ static int parse_args(int argc, char **argv, maps_args *a)
     a->edge = v[M_EDGE].set && v[M_EDGE].i == 1 ? MF_MAP_EDGE_CLAMP : MF_MAP_EDGE_WRAP;
     a->base_alpha = v[M_BASE_ALPHA].set ? v[M_BASE_ALPHA].d : 0.0;
     a->quiet = v[M_QUIET].set;
+    a->table_formats = v[M_TABLE_FORMAT].set ? v[M_TABLE_FORMAT].s : NULL;
     int set_green = v[M_GREEN].set, set_encoding = v[M_ENCODING].set, set_tol = v[M_TOLERANCE].set;
     int set_scale = v[M_HEIGHT_SCALE].set, set_texel = v[M_TEXEL_SIZE].set, set_edge = v[M_EDGE].set;
     if (!a->mode_name)
@@ -427,6 +501,31 @@ static int parse_args(int argc, char **argv, maps_args *a)
         return cli_error(k_cmd, "--green, --encoding and --normal-tolerance apply to normal maps, not with --height");
     if (!a->height && (set_scale || set_texel || set_edge))
         return cli_error(k_cmd, "--height-scale, --texel-size and --edge need --height");
+    if (a->table_formats) {
+        if (a->mode == MODE_TOKSVIG)
+            return cli_error(k_cmd, "--table-format: toksvig filters normals, not moments (use lean, leadr or "
+                                    "bump-roughness for moment_map tables)");
+        const char *p = a->table_formats;
+        while (*p) {
+            const char *e = strchr(p, ',');
+            size_t n = e ? (size_t)(e - p) : strlen(p);
+            char probe[16];
+            if (n == 0 || n >= sizeof a->table_ext[0] || a->ntables == 8)
+                return cli_error(k_cmd, "--table-format %s: expected up to 8 comma-separated extensions "
+                                        "(exr,dds,json,npy,h,glsl,hlsl,csv)", a->table_formats);
+            snprintf(probe, sizeof probe, "x.%.*s", (int)n, p);
+            if (mf_table_format_from_path(probe) == MF_TABLE_FORMAT_UNKNOWN)
+                return cli_error(k_cmd, "--table-format: unknown table format '%.*s' (exr,dds,json,npy,h,glsl,hlsl,csv)",
+                                 (int)n, p);
+            for (int j = 0; j < a->ntables; ++j)
+                if (!strncmp(a->table_ext[j], p, n) && a->table_ext[j][n] == '\0')
+                    return cli_error(k_cmd, "--table-format: '%.*s' given twice", (int)n, p);
+            snprintf(a->table_ext[a->ntables++], sizeof a->table_ext[0], "%.*s", (int)n, p);
+            p += n;
+            if (*p == ',' && *++p == '\0')
+                return cli_error(k_cmd, "--table-format %s: a trailing comma", a->table_formats);
+        }
+    }
     return -1; /* parsed */
 }
 
@@ -513,6 +612,23 @@ int cli_maps(int argc, char **argv)
     }
     mf_image_free(&img);
 
+    if (a.ntables) { /* the table files' temporary directory, beside the outputs */
+        const char *slash = strrchr(a.prefix, '/');
+        size_t dl = slash ? (size_t)(slash - a.prefix) + 1 : 0, n = dl + 64;
+        a.table_dir = malloc(n);
+        if (!a.table_dir) {
+            rc = CLI_EXIT_IO, cli_error(k_cmd, "out of memory");
+            goto done;
+        }
+        snprintf(a.table_dir, n, "%.*s.mfkit_maps_tables.tmp%ld", (int)dl, a.prefix, (long)getpid());
+        if (mkdir(a.table_dir, 0700) != 0) {
+            rc = CLI_EXIT_IO, cli_error(k_cmd, "--out %s: cannot create the temporary directory %s: %s", a.prefix,
+                                        a.table_dir, strerror(errno));
+            free(a.table_dir);
+            a.table_dir = NULL;
+            goto done;
+        }
+    }
     {
         out_list files = {NULL, 0, 0};
         const int levels = mf_map_mip_count(cur.width, cur.height);
@@ -524,6 +640,8 @@ int cli_maps(int argc, char **argv)
                         k + 1 == levels ? "\n" : "");
             int first = files.n;
             rc = emit_level(&files, &a, &cur, k);
+            if (rc == 0 && a.ntables)
+                rc = write_level_tables(&files, &a, &cur, k);
             for (int f = first; rc == 0 && f < files.n; ++f)
                 cli_buf_printf(&b, "%s: level %d, %d x %d\n", files.f[f].final_path, k, cur.width, cur.height);
             if (rc == 0 && k + 1 < levels) {
@@ -538,6 +656,10 @@ int cli_maps(int argc, char **argv)
         if (rc == 0)
             rc = commit(&files);
         out_list_discard(&files);
+        if (a.table_dir) {
+            rmdir(a.table_dir);
+            free(a.table_dir);
+        }
         if (rc == 0 && cli_buf_write(&b, stdout) != 0)
             rc = CLI_EXIT_IO, cli_error(k_cmd, "stdout: write failed");
         cli_buf_free(&b);

@@ -22,6 +22,7 @@ int cli_table(int argc, char **argv)
 #else
 
 #include "mfkit/mf_table.h"
+#include "mfkit/mf_table_kind.h"
 #include "mfkit/io/mf_table_io.h"
 
 static const char *const k_cmd = "table";
@@ -53,8 +54,9 @@ static const cli_command k_info_cmd = {
     .synopsis = "FILE",
     .min_pos = 1,
     .max_pos = 1,
-    .description = "Prints the axes (parameterisation, texel centres), the record layout, each field's range and\n"
-                   "NaN count, and the metadata.\n",
+    .description = "Prints the table's kind (mf_table_kind.h: its layout and the checks of its gate), the axes\n"
+                   "(parameterisation, texel centres), the record layout, each field's range and NaN count, and\n"
+                   "the metadata.\n",
     .opts = NULL,
     .nopts = 0,
     .epilog = "exit status: 0 success, 2 usage error, 3 I/O or format error\n",
@@ -193,6 +195,33 @@ static int table_convert(int argc, char **argv)
     return rc;
 }
 
+/* "kind: NAME -- description; axes ...; fields ...; gate: checks" or why there is none
+ * (mf_table_kind.h). */
+static void describe_kind(cli_buf *b, const mf_table *t)
+{
+    char why[256];
+    const mf_table_kind *k = mf_table_kind_of(t, why, sizeof why);
+    if (!k) {
+        cli_buf_printf(b, "kind: none (%s); 'mfkit validate' has no gate for it\n", why);
+        return;
+    }
+    cli_buf_printf(b, "kind: %s -- %s (%s)\n", k->name, k->description,
+                   mf_table_get_meta(t, "kind") ? "from the \"kind\" metadata" : "recognised by its layout");
+    cli_buf_printf(b, "kind layout: %d axes (", k->naxes);
+    for (int a = 0; a < k->naxes; ++a)
+        cli_buf_printf(b, "%s%s -> %s", a ? ", " : "", k->axes[a].name, k->axes[a].physical);
+    cli_buf_printf(b, "); fields ");
+    for (int f = 0; f < k->nfields; ++f)
+        cli_buf_printf(b, "%s%s", f ? ", " : "", k->fields[f]);
+    if (k->required_fields < k->nfields)
+        cli_buf_printf(b, " (the first %d required)", k->required_fields);
+    cli_buf_printf(b, "\nkind gate ('mfkit validate FILE'):");
+    for (int c = 0; c < k->nchecks; ++c)
+        cli_buf_printf(b, " %s%s%s", k->checks[c].name, k->checks[c].needs_model ? " (needs the BRDF)" : "",
+                       c + 1 < k->nchecks ? "," : "");
+    cli_buf_printf(b, "\n");
+}
+
 static int table_info(int argc, char **argv)
 {
     const char *pos[1];
@@ -220,6 +249,7 @@ static int table_info(int argc, char **argv)
     cli_buf b = {0};
     cli_buf_printf(&b, "file: %s (%s, %s, %s)\n", file, mf_table_format_name(fmt), storage,
                    info.has_metadata ? "mfkit metadata" : "no mfkit metadata: generic axes");
+    describe_kind(&b, &t);
     cli_buf_printf(&b, "texels: %zu =", mf_table_texels(&t));
     for (int k = 0; k < t.naxes; ++k)
         cli_buf_printf(&b, "%s%d", k ? " x " : " ", t.axes[k].size);

@@ -1,7 +1,9 @@
 /*
  * cli_validate.c -- `mfkit validate`: the property checks of the core math (mf_validate.h), or,
- * with a file argument, the LTC gate (mf_ltc_gate.h) on a table file: an mfkit table (EXR, DDS,
- * JSON, NPY through mf_table_read) or the reference CSV layout (mf_ltc_reference.h).
+ * with a file argument, the gate of the table's kind (mf_table_kind.h: the LTC gate of
+ * mf_ltc_gate.h for LTC tables, the kind's own checks for GGX proxy and moment-map tables) on a
+ * table file: an mfkit table (EXR, DDS, JSON, NPY through mf_table_read) or the reference CSV
+ * layout of the LTC table (mf_ltc_reference.h).
  * Exit code 0 when every check passes, 1 when one fails, 2 for a usage error, 3 for an I/O error.
  */
 #define _POSIX_C_SOURCE 200809L
@@ -44,10 +46,12 @@ static const cli_command k_validate_cmd = {
         "(alpha 1e-4..1, view angles up to 89.99 deg, anisotropy up to 1:100, non-centred means up to\n"
         "slope 2) and prints one row per check: name, worst value, bound, pass/FAIL, cases, where the\n"
         "worst was.\n\n"
-        "With TABLE (an LTC table: .exr, .dds, .json, .npy written by mfkit, or a .csv in the layout of\n"
-        "the reference ltc_code table): runs the LTC gate (docs/validation.md): finite values, energy,\n"
-        "normalisation, smoothness and, with the BRDF (--brdf, else the table's \"brdf\" metadata),\n"
-        "albedo by quadrature and Monte Carlo and polygon shading against Monte Carlo.\n",
+        "With TABLE (.exr, .dds, .json, .npy written by mfkit, or a .csv in the layout of the reference\n"
+        "ltc_code table): finds the table's kind (its \"kind\" metadata, else its layout) and runs that\n"
+        "kind's gate (docs/validation.md).  LTC tables: finite values, energy, normalisation, smoothness\n"
+        "and, with the BRDF (--brdf, else the table's \"brdf\" metadata), albedo by quadrature and Monte\n"
+        "Carlo and polygon shading against Monte Carlo.  GGX proxy and moment-map tables: their own\n"
+        "model-free checks.\n",
     .opts = k_validate_opts,
     .nopts = V_NOPTS,
     .epilog = "exit status: 0 all checks passed, 1 a check failed, 2 usage error, 3 I/O error\n",
@@ -81,7 +85,61 @@ static void report_json(cli_buf *b, const mf_check *c, int n, int all_passed)
     cli_buf_printf(b, "\n}\n");
 }
 
-/* The LTC gate on a table file. */
+#ifdef MFKIT_HAVE_CXX_DEPS
+/* The gate of a table kind other than the LTC table's (model-free: GGX proxy, moment maps, ...). */
+static int validate_kind(const char *path, const mf_table *t, const mf_table_kind *kind, const char *brdf, int quick,
+                         uint64_t seed, int json, const char *json_file, int quiet)
+{
+    const char *cmd = "validate";
+    if (brdf || quick)
+        return cli_error(cmd, "%s: --brdf and --quick apply to LTC tables, this is a %s table", path, kind->name);
+    int cap = kind->nchecks + 8, n = 0;
+    mf_check *checks = calloc((size_t)cap, sizeof *checks);
+    if (!checks)
+        return cli_error(cmd, "out of memory"), CLI_EXIT_IO;
+    struct timespec t0;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    if (!quiet && isatty(fileno(stderr)))
+        fprintf(stderr, "mfkit validate: running the %s gate on %s...\n", kind->name, path);
+    mf_status st = kind->gate(t, NULL, NULL, checks, cap, &n);
+    double secs = elapsed(&t0);
+    if (st != MF_OK && st != MF_ERR_CHECK_FAILED) {
+        free(checks);
+        return cli_error(cmd, "%s: %s gate: %s", path, kind->name, mf_status_str(st)), CLI_EXIT_IO;
+    }
+    int all = (st == MF_OK);
+    cli_buf jb = {0}, tb = {0};
+    cli_buf_printf(&jb, "{\n  \"tool\": \"mfkit validate\",\n  \"version\": \"%s\",\n  \"table\": ", MFKIT_VERSION);
+    cli_buf_json_string(&jb, path);
+    cli_buf_printf(&jb, ",\n  \"kind\": \"%s\",\n  \"size\": [", kind->name);
+    for (int k = 0; k < t->naxes; ++k)
+        cli_buf_printf(&jb, "%s%d", k ? ", " : "", t->axes[k].size);
+    cli_buf_printf(&jb, "],\n  \"brdf\": null,\n  \"seed\": %llu,\n  \"seconds\": %.3f,\n", (unsigned long long)seed,
+                   secs);
+    cli_buf body = {0};
+    report_json(&body, checks, n, all);
+    const char *p = body.data ? strstr(body.data, "  \"passed\"") : NULL;
+    cli_buf_printf(&jb, "%s", p ? p : "}\n");
+    cli_buf_free(&body);
+    cli_buf_printf(&tb, "%s gate: %s (", kind->name, path);
+    for (int k = 0; k < t->naxes; ++k)
+        cli_buf_printf(&tb, "%s%d", k ? " x " : "", t->axes[k].size);
+    cli_buf_printf(&tb, ", %s), model-free checks, %.2f s\n", kind->description, secs);
+    cli_buf_checks_table(&tb, checks, n, all);
+    free(checks);
+    int rc = all ? CLI_EXIT_OK : CLI_EXIT_CHECK_FAILED;
+    char msg[1024];
+    if (json_file && cli_buf_write_file_atomic(&jb, json_file, msg, sizeof msg) != 0)
+        rc = CLI_EXIT_IO, cli_error(cmd, "--json-file %s", msg);
+    if (rc != CLI_EXIT_IO && cli_buf_write(json ? &jb : &tb, stdout) != 0)
+        rc = CLI_EXIT_IO, cli_error(cmd, "stdout: write failed");
+    cli_buf_free(&jb);
+    cli_buf_free(&tb);
+    return rc;
+}
+#endif
+
+/* The gate of the table's kind on a table file: the LTC gate for LTC tables. */
 static int validate_table(const char *path, const char *brdf, int quick, uint64_t seed, int json, const char *json_file,
                           int quiet)
 {
@@ -106,6 +164,20 @@ static int validate_table(const char *path, const char *brdf, int quick, uint64_
     if (st != MF_OK) {
         cli_error(cmd, "%s", msg[0] ? msg : mf_status_str(st));
         return cli_exit_code(st);
+    }
+    /* the table's kind decides the gate; the LTC gate below keeps its own report */
+    char why[256];
+    const mf_table_kind *kind = mf_table_kind_of(&t, why, sizeof why);
+    if (!kind) {
+        int n0 = t.axes[0].size, n1 = t.naxes > 1 ? t.axes[1].size : 0, na = t.naxes, nf = t.nfields;
+        mf_table_free(&t);
+        return cli_error(cmd, "%s: not a table of a known kind (%d axes, first %d x %d, %d fields): %s", path, na, n0,
+                         n1, nf, why), CLI_EXIT_IO;
+    }
+    if (strcmp(kind->name, "ltc_isotropic") != 0) {
+        int rc = validate_kind(path, &t, kind, brdf, quick, seed, json, json_file, quiet);
+        mf_table_free(&t);
+        return rc;
     }
     const mf_brdf_model *model = NULL;
     const char *name = brdf ? brdf : mf_table_get_meta(&t, "brdf");

@@ -18,7 +18,7 @@ static void build_c_header(mf_buf *b, const mf_table *t, const char *prefix, con
         if (!isfinite((float)t->data[i]))
             nonfinite = 1;
     mf_buf h = {0};
-    io_header_extra x = {"float32", NULL, NULL};
+    io_header_extra x = {"float32", NULL, NULL, NULL};
     io_header_text(&h, t, &x);
     mf_buf_put(&h, "", 1);
     if (h.failed) {

@@ -1,5 +1,6 @@
 /* fmt_dds.c -- .dds tables: DirectDraw Surface, DX10 header, RGBA32F or RGBA16F, one mip level;
- * metadata in "<file>.dds.json" (mf_table_io.h).  Written and read here: OpenImageIO 2.4 handles
+ * metadata in "<file>.dds.json" (mf_table_io.h); a table of more than 2 axes as its 2D atlas
+ * (mf_table.h), the layout in the sidecar's "atlas".  Written and read here: OpenImageIO 2.4 handles
  * neither uncompressed float DDS direction. */
 #include "io_internal.h"
 
@@ -11,9 +12,9 @@
 #define DXGI_R32G32B32A32_FLOAT 2u
 #define DXGI_R16G16B16A16_FLOAT 10u
 
-static void build_dds(mf_buf *b, const mf_table *t, const int *ch, int half)
+static void build_dds(mf_buf *b, const mf_table *t, const mf_table_atlas *a, const int *ch, int half)
 {
-    uint32_t w = (uint32_t)t->axes[0].size, hgt = (uint32_t)(t->naxes > 1 ? t->axes[1].size : 1);
+    uint32_t w = (uint32_t)a->width, hgt = (uint32_t)a->height;
     uint32_t bpp = half ? 8u : 16u;
     mf_buf_put(b, "DDS ", 4);
     mf_buf_u32le(b, 124);                           /* dwSize */
@@ -38,16 +39,18 @@ static void build_dds(mf_buf *b, const mf_table *t, const int *ch, int half)
     mf_buf_u32le(b, 0);                             /* miscFlag */
     mf_buf_u32le(b, 1);                             /* arraySize */
     mf_buf_u32le(b, 0);                             /* miscFlags2: alpha mode unknown */
-    size_t texels = mf_table_texels(t);
-    mf_buf_reserve(b, texels * bpp);
-    for (size_t i = 0; i < texels && !b->failed; ++i)
+    size_t pixels = (size_t)a->width * (size_t)a->height;
+    mf_buf_reserve(b, pixels * bpp);
+    for (size_t p = 0; p < pixels && !b->failed; ++p) {
+        long long i = io_atlas_texel(a, p); /* the identity for <= 2 axes */
         for (int c = 0; c < 4; ++c) {
-            double v = ch[c] < 0 ? 0.0 : t->data[i * (size_t)t->nfields + (size_t)ch[c]];
+            double v = ch[c] < 0 || i < 0 ? 0.0 : t->data[(size_t)i * (size_t)t->nfields + (size_t)ch[c]];
             if (half)
                 mf_buf_u16le(b, mf_half_from_double(v));
             else
                 mf_buf_f32le(b, (float)v);
         }
+    }
 }
 
 static mf_status read_dds(const char *path, mf_table *t, mf_table_file_info *info, char *msg, size_t msg_size)
@@ -57,8 +60,10 @@ static mf_status read_dds(const char *path, mf_table *t, mf_table_file_info *inf
     mf_status st = mf_io_read_file(path, path, &data, &len, NULL, msg, msg_size);
     if (st != MF_OK)
         return st;
-    char why[200];
+    char why[256];
     size_t off = 128;
+    mf_table_atlas atlas;
+    int have_atlas = 0;
     int half;
     if (len < 128 || memcmp(data, "DDS ", 4) != 0 || io_get_u32(data + 4) != 124 || io_get_u32(data + 76) != 32) {
         mf_io_msg(msg, msg_size, path, "not a DDS file (bad magic or header sizes)");
@@ -130,11 +135,10 @@ static mf_status read_dds(const char *path, mf_table *t, mf_table_file_info *inf
         mf_table_file_info fi;
         memset(&fi, 0, sizeof fi);
         const cJSON *dc = cJSON_GetObjectItemCaseSensitive(side, "dds_channels");
-        st = io_header_to_table(side, texels, 0, &full, &fi, why, sizeof why);
-        if (st != MF_OK || !cJSON_IsArray(dc) || cJSON_GetArraySize(dc) != 4 || full.naxes > 2 || full.axes[0].size != sizes[0] ||
-            (full.naxes == 2 ? full.axes[1].size != sizes[1] : sizes[1] != 1)) {
+        st = io_image_header_to_table(side, sizes[0], sizes[1], 0, &full, &fi, &atlas, why, sizeof why);
+        if (st != MF_OK || !cJSON_IsArray(dc) || cJSON_GetArraySize(dc) != 4) {
             if (st == MF_OK)
-                snprintf(why, sizeof why, "\"dds_channels\" or the axes do not match the file");
+                snprintf(why, sizeof why, "\"dds_channels\" must be an array of 4 field names or nulls");
             mf_io_msg(msg, msg_size, path, "sidecar %s.json: %s", io_base_name(path), why);
             cJSON_Delete(side);
             if (st == MF_OK)
@@ -142,6 +146,7 @@ static mf_status read_dds(const char *path, mf_table *t, mf_table_file_info *inf
             free(data);
             return st == MF_OK || st == MF_ERR_FORMAT ? MF_ERR_FORMAT : st;
         }
+        have_atlas = 1;
         char names[4][MF_TABLE_NAME_LEN];
         const char *np[4];
         const cJSON *v = dc->child;
@@ -188,8 +193,16 @@ static mf_status read_dds(const char *path, mf_table *t, mf_table_file_info *inf
             for (int c = 0; c < 4; ++c)
                 info->dds_fields[c] = c;
     }
-    for (size_t i = 0; i < texels * 4; ++i)
-        t->data[i] = half ? mf_half_to_double(io_get_u16(data + off + 2 * i)) : (double)io_get_f32(data + off + 4 * i);
+    for (size_t p = 0; p < texels; ++p) {
+        long long i = have_atlas ? io_atlas_texel(&atlas, p) : (long long)p;
+        if (i < 0)
+            continue; /* an unused tile */
+        for (size_t c = 0; c < 4; ++c) {
+            size_t v = 4 * p + c;
+            t->data[4 * (size_t)i + c] =
+                half ? mf_half_to_double(io_get_u16(data + off + 2 * v)) : (double)io_get_f32(data + off + 4 * v);
+        }
+    }
     if (info)
         info->half_float = half;
     free(data);
@@ -204,10 +217,15 @@ bad_unsupported:
 
 static mf_status write_dds(const char *path, const mf_table *t, const io_write_ctx *c, char *msg, size_t msg_size)
 {
-    io_header_extra x = {c->half_float ? "float16" : "float32", c->half_float ? c->half : NULL, c->ch};
+    mf_table_atlas a;
+    mf_status st = io_image_layout(path, t, &a, msg, msg_size);
+    if (st != MF_OK)
+        return st;
+    io_header_extra x = {c->half_float ? "float16" : "float32", c->half_float ? c->half : NULL, c->ch,
+                         t->naxes > 2 ? &a : NULL};
     mf_buf b = {0};
-    build_dds(&b, t, c->ch, c->half_float);
-    mf_status st = io_write_with_sidecar(path, &b, t, &x, msg, msg_size);
+    build_dds(&b, t, &a, c->ch, c->half_float);
+    st = io_write_with_sidecar(path, &b, t, &x, msg, msg_size);
     mf_buf_free(&b);
     return st;
 }
@@ -216,7 +234,7 @@ static const char *const k_ext[] = {"dds", NULL};
 const io_format_ops io_format_dds = {MF_TABLE_FORMAT_DDS,
                                      "dds",
                                      k_ext,
-                                     2,
+                                     MF_TABLE_MAX_AXES,
                                      IO_CAP_HALF | IO_CAP_METADATA | IO_CAP_SIDECAR | IO_CAP_RGBA,
                                      write_dds,
                                      read_dds};

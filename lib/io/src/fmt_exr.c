@@ -1,5 +1,6 @@
 /* fmt_exr.c -- .exr tables through the image API (mf_image.h): one channel per field, the metadata
- * in the string attribute "mfkit:table".  Needs an image backend (OpenImageIO). */
+ * in the string attribute "mfkit:table"; a table of more than 2 axes as its 2D atlas (mf_table.h),
+ * the layout in the metadata's "atlas".  Needs an image backend (OpenImageIO). */
 #include "io_internal.h"
 
 #include <ctype.h>
@@ -12,25 +13,33 @@ static mf_status write_exr(const char *path, const mf_table *t, const io_write_c
 {
     const int half = c->half_float;
     const mf_half_error *he = c->half;
-    size_t count = mf_table_texels(t) * (size_t)t->nfields;
+    mf_table_atlas a;
+    mf_status st = io_image_layout(path, t, &a, msg, msg_size);
+    if (st != MF_OK)
+        return st;
+    const size_t nf = (size_t)t->nfields, pixels = (size_t)a.width * (size_t)a.height;
     float *px = NULL;
     uint16_t *hx = NULL;
     if (half)
-        hx = malloc(count * sizeof *hx);
+        hx = malloc(pixels * nf * sizeof *hx);
     else
-        px = malloc(count * sizeof *px);
+        px = malloc(pixels * nf * sizeof *px);
     if (!px && !hx) {
         mf_io_msg(msg, msg_size, path, "out of memory");
         return MF_ERR_ALLOC;
     }
-    for (size_t i = 0; i < count; ++i) {
-        if (half)
-            hx[i] = mf_half_from_double(t->data[i]);
-        else
-            px[i] = (float)t->data[i];
+    for (size_t p = 0; p < pixels; ++p) {
+        long long texel = io_atlas_texel(&a, p); /* the identity for <= 2 axes */
+        for (size_t f = 0; f < nf; ++f) {
+            double v = texel < 0 ? 0.0 : t->data[(size_t)texel * nf + f];
+            if (half)
+                hx[p * nf + f] = mf_half_from_double(v);
+            else
+                px[p * nf + f] = (float)v;
+        }
     }
     mf_buf h = {0};
-    io_header_extra x = {half ? "float16" : "float32", half ? he : NULL, NULL};
+    io_header_extra x = {half ? "float16" : "float32", half ? he : NULL, NULL, t->naxes > 2 ? &a : NULL};
     io_header_text(&h, t, &x);
     mf_buf_put(&h, "", 1);
     if (h.failed) {
@@ -44,7 +53,7 @@ static mf_status write_exr(const char *path, const mf_table *t, const io_write_c
         names[f] = t->fields[f];
     const char *an[1] = {"mfkit:table"};
     const char *av[1] = {h.data};
-    mf_image img = {t->axes[0].size, t->naxes > 1 ? t->axes[1].size : 1, t->nfields, px};
+    mf_image img = {a.width, a.height, t->nfields, px};
     mf_image_write_options o;
     memset(&o, 0, sizeof o);
     o.half_float = half;
@@ -53,7 +62,7 @@ static mf_status write_exr(const char *path, const mf_table *t, const io_write_c
     o.nattribs = 1;
     o.attrib_names = an;
     o.attrib_values = av;
-    mf_status st = mf_image_write_ex(path, &img, &o, msg, msg_size);
+    st = mf_image_write_ex(path, &img, &o, msg, msg_size);
     free(px);
     free(hx);
     mf_buf_free(&h);
@@ -168,8 +177,10 @@ static mf_status read_exr(const char *path, mf_table *t, mf_table_file_info *inf
     st = mf_image_read_ex(path, &img, "mfkit:table", &ii, msg, msg_size);
     if (st != MF_OK)
         return st;
-    char why[200];
+    char why[256];
     int sizes[2] = {img.width, img.height};
+    mf_table_atlas atlas;
+    int have_atlas = 0;
     int naxes = img.height > 1 ? 2 : 1;
     size_t texels = io_texel_product(sizes, 2);
     int perm[MF_TABLE_MAX_FIELDS]; /* field f is channel perm[f] */
@@ -186,7 +197,7 @@ static mf_status read_exr(const char *path, mf_table *t, mf_table_file_info *inf
         st = io_json_parse(ii.attrib_value, strlen(ii.attrib_value), &h, why, sizeof why);
         if (st == MF_OK) {
             int half = info ? info->half_float : 0;
-            st = io_header_to_table(h, texels, img.channels, t, info, why, sizeof why);
+            st = io_image_header_to_table(h, img.width, img.height, img.channels, t, info, &atlas, why, sizeof why);
             if (info)
                 info->half_float = half; /* what the file stores, whatever the header says */
             cJSON_Delete(h);
@@ -195,20 +206,7 @@ static mf_status read_exr(const char *path, mf_table *t, mf_table_file_info *inf
             mf_io_msg(msg, msg_size, path, "attribute mfkit:table: %s", why);
             goto done;
         }
-        if (t->naxes != naxes && !(t->naxes == 2 && t->axes[1].size == 1)) {
-            mf_io_msg(msg, msg_size, path, "attribute mfkit:table: %d axes do not fit a %d x %d image", t->naxes,
-                    img.width, img.height);
-            mf_table_free(t);
-            st = MF_ERR_FORMAT;
-            goto done;
-        }
-        if (t->axes[0].size != img.width) {
-            mf_io_msg(msg, msg_size, path, "attribute mfkit:table: axis 0 has %d texels, the image is %d wide",
-                    t->axes[0].size, img.width);
-            mf_table_free(t);
-            st = MF_ERR_FORMAT;
-            goto done;
-        }
+        have_atlas = 1;
         for (int f = 0; f < t->nfields; ++f) {
             perm[f] = -1;
             for (int c = 0; c < img.channels; ++c)
@@ -238,9 +236,14 @@ static mf_status read_exr(const char *path, mf_table *t, mf_table_file_info *inf
             goto done;
         }
     }
-    for (size_t i = 0; i < texels; ++i)
+    for (size_t p = 0; p < texels; ++p) {
+        long long i = have_atlas ? io_atlas_texel(&atlas, p) : (long long)p;
+        if (i < 0)
+            continue; /* an unused tile */
         for (int f = 0; f < t->nfields; ++f)
-            t->data[i * (size_t)t->nfields + (size_t)f] = (double)img.pixels[i * (size_t)img.channels + (size_t)perm[f]];
+            t->data[(size_t)i * (size_t)t->nfields + (size_t)f] =
+                (double)img.pixels[p * (size_t)img.channels + (size_t)perm[f]];
+    }
 done:
     mf_image_free(&img);
     mf_image_info_free(&ii);
@@ -248,5 +251,5 @@ done:
 }
 
 static const char *const k_ext[] = {"exr", NULL};
-const io_format_ops io_format_exr = {MF_TABLE_FORMAT_EXR, "exr", k_ext, 2, IO_CAP_HALF | IO_CAP_METADATA,
+const io_format_ops io_format_exr = {MF_TABLE_FORMAT_EXR, "exr", k_ext, MF_TABLE_MAX_AXES, IO_CAP_HALF | IO_CAP_METADATA,
                                      write_exr, read_exr};

@@ -7,7 +7,7 @@
 /* JSON: {"header": ..., "data": [[record], ...]} */
 static void build_json(mf_buf *b, const mf_table *t)
 {
-    io_header_extra x = {"float32", NULL, NULL};
+    io_header_extra x = {"float32", NULL, NULL, NULL};
     mf_buf_puts(b, "{\n  \"header\": ");
     io_header_json(b, t, &x, "  ");
     mf_buf_puts(b, ",\n  \"data\": [\n");

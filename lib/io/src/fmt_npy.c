@@ -295,7 +295,7 @@ bad_unsupported:
 static mf_status write_npy(const char *path, const mf_table *t, const io_write_ctx *c, char *msg, size_t msg_size)
 {
     (void)c;
-    io_header_extra x = {"float32", NULL, NULL};
+    io_header_extra x = {"float32", NULL, NULL, NULL};
     mf_buf b = {0};
     build_npy(&b, t);
     mf_status st = io_write_with_sidecar(path, &b, t, &x, msg, msg_size);

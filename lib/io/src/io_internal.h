@@ -14,6 +14,7 @@
 #include "mfkit/io/mf_table_io.h"
 
 #define IO_TEXEL_LIMIT ((size_t)1 << 32) /* mf_table_create's limit */
+#define IO_TEXELS_ANY ((size_t)-1)        /* io_header_to_table: the count is not known yet */
 
 /* ---- the format operations ----------------------------------------------------------------- */
 
@@ -76,6 +77,7 @@ typedef struct io_header_extra {
     const char *storage;       /* "float32" or "float16" */
     const mf_half_error *half; /* NULL: no half report */
     const int *dds_fields;     /* NULL, or the 4 DDS channel fields */
+    const mf_table_atlas *atlas; /* NULL, or the 2D atlas an image file stores the table as */
 } io_header_extra;
 
 /* The metadata object, pretty-printed; every line after the first starts with `indent`. */
@@ -86,6 +88,31 @@ void io_header_text(mf_buf *b, const mf_table *t, const io_header_extra *x);
 mf_status io_write_with_sidecar(const char *path, const mf_buf *data, const mf_table *t, const io_header_extra *x,
                                 char *msg, size_t msg_size);
 
+/* ---- tables of more than two axes in images (EXR, DDS) ------------------------------------- */
+
+/* The image layout of t: for <= 2 axes the table itself (one tile: width = size of axis 0,
+ * height = size of axis 1 or 1); for more axes the 2D atlas of mf_table.h, with the layout of t's
+ * "atlas" metadata when it has a valid one, else the default (tiles_x = size of axis 2).
+ * MF_ERR_UNSUPPORTED (message set) when the atlas would be wider or higher than 65536 texels. */
+mf_status io_image_layout(const char *path, const mf_table *t, mf_table_atlas *a, char *msg, size_t msg_size);
+/* The texel-major index of the table texel at image pixel `pixel` (row-major, row 0 first) of the
+ * layout a, or -1 for a pixel of an unused tile (stored as 0). */
+static inline long long io_atlas_texel(const mf_table_atlas *a, size_t pixel)
+{
+    size_t x = pixel % (size_t)a->width, y = pixel / (size_t)a->width;
+    size_t tile = x / (size_t)a->tile_w + (size_t)a->tiles_x * (y / (size_t)a->tile_h);
+    if (tile >= (size_t)a->tiles)
+        return -1;
+    return (long long)(x % (size_t)a->tile_w +
+                       (size_t)a->tile_w * (y % (size_t)a->tile_h + (size_t)a->tile_h * tile));
+}
+/* The metadata h of an image of width x height pixels -> the table (zeroed data) and its image
+ * layout: with an "atlas" entry the table's axes must give that atlas of exactly this size,
+ * else the table must have at most 2 axes of sizes width (x height).  On failure why gets the
+ * reason and the table is zeroed. */
+mf_status io_image_header_to_table(const cJSON *h, int width, int height, int nfields_expected, mf_table *t,
+                                   mf_table_file_info *info, mf_table_atlas *a, char *why, size_t why_size);
+
 /* ---- metadata in --------------------------------------------------------------------------- */
 
 /* Parses a whole JSON document of len bytes (no NUL inside; trailing whitespace only).  On
@@ -94,7 +121,7 @@ mf_status io_json_parse(const char *s, size_t len, cJSON **root, char *why, size
 /* A number, or one of the strings mf_json_number writes for non-finite values. */
 int io_json_double(const cJSON *v, double *out);
 /* The metadata object -> a table (axes, fields, meta; zeroed data) and info.  The table must have
- * `texels` texels and, if nfields_expected > 0, that many fields.  On failure why gets the reason
+ * `texels` texels (unless IO_TEXELS_ANY) and, if nfields_expected > 0, that many fields.  On failure why gets the reason
  * and the table is zeroed. */
 mf_status io_header_to_table(const cJSON *h, size_t texels, int nfields_expected, mf_table *t,
                              mf_table_file_info *info, char *why, size_t why_size);

@@ -190,6 +190,12 @@ void io_header_json(mf_buf *b, const mf_table *t, const io_header_extra *x, cons
         mf_buf_printf(b, "\n%s  }", indent);
     else
         mf_buf_puts(b, "}");
+    if (x->atlas) {
+        const mf_table_atlas *a = x->atlas;
+        mf_buf_printf(b, ",\n%s  \"atlas\": \"tiles_x=%d tiles_y=%d tile_w=%d tile_h=%d order=axis2_fastest\"", indent,
+                      a->tiles_x, a->tiles_y, a->tile_w, a->tile_h);
+        mf_buf_printf(b, ",\n%s  \"atlas_size\": [%d, %d]", indent, a->width, a->height);
+    }
     if (x->dds_fields) {
         mf_buf_printf(b, ",\n%s  \"dds_channels\": [", indent);
         for (int c = 0; c < 4; ++c) {
@@ -461,7 +467,7 @@ mf_status io_header_to_table(const cJSON *h, size_t texels, int nfields_expected
     size_t have = io_texel_product(sizes, naxes);
     if (have == 0)
         HFAIL("metadata: more than 2^32 texels");
-    if (have != texels)
+    if (texels != IO_TEXELS_ANY && have != texels)
         HFAIL("metadata: the axes give %zu texels, the data has %zu", have, texels);
     const cJSON *fl = jget(h, "fields");
     size_t nfl = jcount(fl);
@@ -560,4 +566,57 @@ mf_status io_read_sidecar(const char *path, cJSON **root, char *msg, size_t msg_
         mf_io_msg(msg, msg_size, path, "sidecar %s: %s", io_base_name(sp.data), why);
     mf_buf_free(&sp);
     return st;
+}
+
+/* ---- tables of more than two axes in images ------------------------------------------------- */
+
+mf_status io_image_layout(const char *path, const mf_table *t, mf_table_atlas *a, char *msg, size_t msg_size)
+{
+    if (t->naxes <= 2)
+        return mf_table_atlas_layout(t, 1, a) == MF_OK ? MF_OK : MF_ERR_DOMAIN;
+    if (mf_table_atlas_from_meta(t, a) == MF_OK || mf_table_atlas_layout(t, 0, a) == MF_OK)
+        return MF_OK;
+    mf_io_msg(msg, msg_size, path, "the %d-axis table does not fit a 2D atlas of at most 65536 x 65536 texels "
+                                   "(record another tile layout with mf_table_atlas_record)", t->naxes);
+    return MF_ERR_UNSUPPORTED;
+}
+
+mf_status io_image_header_to_table(const cJSON *h, int width, int height, int nfields_expected, mf_table *t,
+                                   mf_table_file_info *info, mf_table_atlas *a, char *why, size_t why_size)
+{
+    memset(a, 0, sizeof *a);
+    const cJSON *at = cJSON_IsObject(h) ? jget(h, "atlas") : NULL;
+    mf_status st;
+    if (!at) {
+        st = io_header_to_table(h, (size_t)width * (size_t)height, nfields_expected, t, info, why, why_size);
+        if (st != MF_OK)
+            return st;
+        if (t->naxes > 2 || t->axes[0].size != width || (t->naxes == 2 ? t->axes[1].size : 1) != height) {
+            snprintf(why, why_size, "metadata: %d axes (axis 0 of %d texels) do not fit a %d x %d image%s", t->naxes,
+                     t->axes[0].size, width, height, t->naxes > 2 ? " without an \"atlas\" layout" : "");
+            mf_table_free(t);
+            return MF_ERR_FORMAT;
+        }
+        return mf_table_atlas_layout(t, 1, a) == MF_OK ? MF_OK : MF_ERR_FORMAT;
+    }
+    int tx, ty, tw, th, used = 0;
+    if (!cJSON_IsString(at) ||
+        sscanf(at->valuestring, "tiles_x=%d tiles_y=%d tile_w=%d tile_h=%d order=axis2_fastest%n", &tx, &ty, &tw,
+               &th, &used) != 4 || used == 0 || at->valuestring[used] != '\0' || tx < 1) {
+        snprintf(why, why_size, "metadata: \"atlas\" is not \"tiles_x=X tiles_y=Y tile_w=W tile_h=H "
+                                "order=axis2_fastest\"");
+        return MF_ERR_FORMAT;
+    }
+    st = io_header_to_table(h, IO_TEXELS_ANY, nfields_expected, t, info, why, why_size);
+    if (st != MF_OK)
+        return st;
+    if (t->naxes < 3 || mf_table_atlas_layout(t, tx, a) != MF_OK || a->tiles_x != tx || a->tiles_y != ty ||
+        a->tile_w != tw || a->tile_h != th || a->width != width || a->height != height) {
+        snprintf(why, why_size, "metadata: the atlas (%d x %d tiles of %d x %d) does not fit the %d axes and the "
+                                "%d x %d image", tx, ty, tw, th, t->naxes, width, height);
+        mf_table_free(t);
+        memset(a, 0, sizeof *a);
+        return MF_ERR_FORMAT;
+    }
+    return MF_OK;
 }

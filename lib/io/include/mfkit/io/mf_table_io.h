@@ -5,18 +5,22 @@
  *   .exr   OpenEXR through the image API (mf_image.h: needs the OpenImageIO backend installed,
  *          else MF_ERR_UNSUPPORTED), float32 or half, bitwise the same between runs; axis 0 = width (x), axis 1 = height (y,
  *          row 0 first), 1D tables have height 1; one channel per field, named after it; the
- *          metadata JSON in the string attribute "mfkit:table".  At most 2 axes.
+ *          metadata JSON in the string attribute "mfkit:table".  Tables of 3 to 6 axes as their
+ *          2D atlas (mf_table_atlas_layout), the layout in the metadata's "atlas" entry.
  *   .dds   DirectDraw Surface with the DX10 header, DXGI_FORMAT_R32G32B32A32_FLOAT (2) or
  *          R16G16B16A16_FLOAT (10), one mip level, the same x/y layout as EXR; 4 channels chosen
  *          from the fields (default the first 4; -1 = a channel of zeros).  DDS has no room for
- *          metadata, so the metadata JSON goes to the sidecar "<file>.dds.json".  At most 2 axes.
+ *          metadata, so the metadata JSON goes to the sidecar "<file>.dds.json".  Tables of 3 to
+ *          6 axes as their 2D atlas, as EXR.
  *          OpenImageIO 2.4 can neither write nor read uncompressed float DDS ("Unsupported
  *          compression type"), so mfkit writes and reads these files itself.
  *   .h     C header: `static const float <prefix>_data[N]`, dimensions as macros and
  *          `static const int` arrays, the metadata in a comment; compiles as C and C++ with
  *          -Wall -Wextra -pedantic.
  *   .glsl, .hlsl  lookup snippets (no data): physical inputs -> axis parameters -> texture
- *          coordinates with the texel-centre mapping, and a lookup function for 1D/2D tables.
+ *          coordinates with the texel-centre mapping, and a lookup of any number of axes
+ *          (3 to 6: the atlas, bilinear in a tile and linear across tiles, as
+ *          mf_table_atlas_lookup).
  *   .json  {"header": <metadata>, "data": [[record 0], [record 1], ...]}, records in storage
  *          order, each value "%.9g" of its float32 (exact round trip); NaN and infinities as the
  *          strings "NaN", "Infinity", "-Infinity" (the rule of mf_json.h); null and +-1e999, the
@@ -134,8 +138,8 @@ void mf_table_write_options_default(mf_table_write_options *opt);
  *   half_out  may be NULL; filled for half-float writes (zeroed otherwise).  The same numbers are
  *             stored in the file's metadata.
  * Returns MF_OK; MF_ERR_DOMAIN (NULL or invalid arguments, bad DDS field index, bad prefix);
- * MF_ERR_UNSUPPORTED (unknown extension; EXR or DDS with more than 2 axes; half_float for a
- * format without halves); MF_ERR_IO (the file or its temporary cannot be created, written or
+ * MF_ERR_UNSUPPORTED (unknown extension; an EXR or DDS atlas (tables of more than 2 axes, see
+ * docs/tables.md) wider or higher than 65536 texels; half_float for a format without halves); MF_ERR_IO (the file or its temporary cannot be created, written or
  * renamed); MF_ERR_ALLOC; MF_ERR_INTERNAL (from the OpenImageIO bridge).
  */
 mf_status mf_table_write(const char *path, const mf_table *t, const mf_table_write_options *opt,
