@@ -47,5 +47,12 @@ ok '[ $rc -eq 0 ]' "lambert 4x4 on ranges exits 0 (rc=$rc): $(tail -3 "$tmp/rg.l
 ok 'grep -q "\"r_range\": \[0.5, 1\]" "$tmp/rg/ltc_lambert_fit.json" && grep -q "\"u_range\": \[0.25, 0.75\]" "$tmp/rg/ltc_lambert_fit.json"' "sidecar records the ranges"
 ok '"$mfkit" table info "$tmp/rg/ltc_lambert.exr" | grep -E "r.*0\.5.*1" >/dev/null' "table info shows the r range: $("$mfkit" table info "$tmp/rg/ltc_lambert.exr" 2>&1 | grep -E "^ *(axis|r|u)" | head -3 | tr '\n' ' ')"
 
+# `fit ggx-proxy`: its table, read back from the float32 JSON, passes the ggx_proxy kind's gate
+# (the bounds add 3 u for the storage rounding u = 2^-24; measured proxy_exact 1.1e-7 of 1.8e-7)
+"$mfkit" fit ggx-proxy --size 16 --out "$tmp/px" --quiet >"$tmp/px.log" 2>&1; rc=$?
+ok '[ $rc -eq 0 ]' "fit ggx-proxy 16 exits 0 (rc=$rc): $(tail -3 "$tmp/px.log")"
+ok '"$mfkit" validate "$tmp/px/ggx_proxy_table.json" >"$tmp/pxv.log" 2>&1 && grep -q "^ggx_proxy gate" "$tmp/pxv.log"' \
+   "the proxy table passes its own gate when read back: $(cat "$tmp/pxv.log")"
+
 echo "test_fit_cli: $((checks-fails)) passed, $fails failed"
 [ $fails -eq 0 ]

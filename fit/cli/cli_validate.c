@@ -87,8 +87,8 @@ static void report_json(cli_buf *b, const mf_check *c, int n, int all_passed)
 
 #ifdef MFKIT_HAVE_CXX_DEPS
 /* The gate of a table kind other than the LTC table's (model-free: GGX proxy, moment maps, ...). */
-static int validate_kind(const char *path, const mf_table *t, const mf_table_kind *kind, const char *brdf, int quick,
-                         uint64_t seed, int json, const char *json_file, int quiet)
+static int validate_kind(const char *path, const mf_table *t, const mf_table_kind *kind, double storage_u,
+                         const char *brdf, int quick, uint64_t seed, int json, const char *json_file, int quiet)
 {
     const char *cmd = "validate";
     if (brdf || quick)
@@ -101,7 +101,9 @@ static int validate_kind(const char *path, const mf_table *t, const mf_table_kin
     clock_gettime(CLOCK_MONOTONIC, &t0);
     if (!quiet && isatty(fileno(stderr)))
         fprintf(stderr, "mfkit validate: running the %s gate on %s...\n", kind->name, path);
-    mf_status st = kind->gate(t, NULL, NULL, checks, cap, &n);
+    /* the model-free gates' bounds include the rounding of the file's storage (mf_table_kind.h) */
+    mf_table_storage_options so = {storage_u};
+    mf_status st = kind->gate(t, NULL, &so, checks, cap, &n);
     double secs = elapsed(&t0);
     if (st != MF_OK && st != MF_ERR_CHECK_FAILED) {
         free(checks);
@@ -152,12 +154,13 @@ static int validate_table(const char *path, const char *brdf, int quick, uint64_
     char msg[1024];
     mf_status st;
     int is_ref = 0;
+    mf_table_file_info info = {0};
     mf_table_format fmt = mf_table_format_from_path(path);
     if (fmt == MF_TABLE_FORMAT_CSV) {
         is_ref = 1;
         st = mf_ltc_reference_read_csv(path, &t, msg, sizeof msg);
     } else if (mf_table_format_readable(fmt)) {
-        st = mf_table_read(path, &t, NULL, msg, sizeof msg);
+        st = mf_table_read(path, &t, &info, msg, sizeof msg);
     } else {
         return cli_error(cmd, "%s: not a readable table format (.exr, .dds, .json, .npy, or a reference .csv)", path);
     }
@@ -175,7 +178,8 @@ static int validate_table(const char *path, const char *brdf, int quick, uint64_
                          n1, nf, why), CLI_EXIT_IO;
     }
     if (strcmp(kind->name, "ltc_isotropic") != 0) {
-        int rc = validate_kind(path, &t, kind, brdf, quick, seed, json, json_file, quiet);
+        int rc = validate_kind(path, &t, kind, mf_table_storage_roundoff(info.half_float), brdf, quick, seed, json,
+                               json_file, quiet);
         mf_table_free(&t);
         return rc;
     }

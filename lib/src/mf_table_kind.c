@@ -62,6 +62,15 @@ static mf_status ltc_gate(const mf_table *t, const mf_brdf_model *model, const v
 
 #define PROXY_EXACT_REL 1e-12
 
+double mf_table_storage_roundoff(int half_float) { return half_float ? 0x1p-11 : 0x1p-24; }
+
+/* The storage unit roundoff u of a gate's options (NULL: a table in memory, u = 2^-53). */
+static double storage_u(const void *options)
+{
+    const mf_table_storage_options *o = options;
+    return o && o->unit_roundoff > 0.0 ? o->unit_roundoff : 0x1p-53;
+}
+
 typedef struct proxy_ctx {
     const mf_table *t;
     int f[MF_GGX_PROXY_TABLE_NFIELDS];
@@ -107,12 +116,17 @@ static void proxy_fit(void *ctx, mf_check *c)
     }
 }
 
+/* Storage.  Each stored value carries a relative rounding of at most u.  alpha' is homogeneous of
+ * degree 1 in (alpha, dh) and increasing in both, so its logarithmic sensitivities are >= 0 and sum
+ * to 1 (Euler): rounding alpha and dh moves the exact alpha' by at most u relative; with the
+ * stored alpha_eff's own u, proxy_exact can grow by 2 u (+ O(u^2)), proxy_fit (two stored values)
+ * by 2 u.  The bounds add 3 u. */
 static const mf_check_def k_proxy_checks[] = {
     {"proxy_finite", "number of NaN or infinite fields per texel", 0.0, 0, proxy_finite},
-    {"proxy_exact", "|alpha_eff / exact proxy roughness(alpha, dh) - 1| (Kaplanyan 2016, Eq. 19)", PROXY_EXACT_REL, 0,
-     proxy_exact},
-    {"proxy_fit", "|alpha_eff_fit / alpha_eff - 1|, bound MF_PROXY_FIT_MAX_REL_ERROR", MF_PROXY_FIT_MAX_REL_ERROR, 0,
-     proxy_fit},
+    {"proxy_exact", "|alpha_eff / exact proxy roughness(alpha, dh) - 1| (Kaplanyan 2016, Eq. 19), bound 1e-12 + 3 u",
+     PROXY_EXACT_REL, 0, proxy_exact},
+    {"proxy_fit", "|alpha_eff_fit / alpha_eff - 1|, bound MF_PROXY_FIT_MAX_REL_ERROR + 3 u", MF_PROXY_FIT_MAX_REL_ERROR,
+     0, proxy_fit},
 };
 
 static const mf_table_kind *kind_named(const char *name);
@@ -121,7 +135,6 @@ static mf_status proxy_gate(const mf_table *t, const mf_brdf_model *model, const
                             int cap, int *count)
 {
     (void)model;
-    (void)options;
     if (count)
         *count = 0;
     const mf_table_kind *k = kind_named("ggx_proxy");
@@ -131,7 +144,11 @@ static mf_status proxy_gate(const mf_table *t, const mf_brdf_model *model, const
     p.t = t;
     for (int f = 0; f < MF_GGX_PROXY_TABLE_NFIELDS; ++f)
         p.f[f] = mf_table_field(t, mf_ggx_proxy_table_fields[f]);
-    return mf_check_run_defs(k_proxy_checks, 3, &p, 0, checks, cap, count);
+    mf_check_def defs[3];
+    memcpy(defs, k_proxy_checks, sizeof defs);
+    defs[1].bound += 3.0 * storage_u(options);
+    defs[2].bound += 3.0 * storage_u(options);
+    return mf_check_run_defs(defs, 3, &p, 0, checks, cap, count);
 }
 
 static int proxy_layout_ok(const mf_table *t, char *why, size_t why_size)
@@ -185,15 +202,14 @@ static void moment_covariance(void *ctx, mf_check *c)
 
 static const mf_check_def k_moment_checks[] = {
     {"moment_finite", "number of NaN or infinite moments per texel", 0.0, 0, moment_finite},
-    {"moment_covariance", "-(smallest eigenvalue of the slope covariance) / (m_xx + m_yy)", MOMENT_PSD_REL, 0,
-     moment_covariance},
+    {"moment_covariance", "-(smallest eigenvalue of the slope covariance) / (m_xx + m_yy), bound 1e-12 + 5 u",
+     MOMENT_PSD_REL, 0, moment_covariance},
 };
 
 static mf_status moment_gate(const mf_table *t, const mf_brdf_model *model, const void *options, mf_check *checks,
                              int cap, int *count)
 {
     (void)model;
-    (void)options;
     if (count)
         *count = 0;
     const mf_table_kind *k = kind_named("moment_map");
@@ -203,7 +219,14 @@ static mf_status moment_gate(const mf_table *t, const mf_brdf_model *model, cons
     m.t = t;
     for (int f = 0; f < MF_MOMENT_TABLE_NFIELDS; ++f)
         m.f[f] = mf_table_field(t, mf_moment_table_fields[f]);
-    return mf_check_run_defs(k_moment_checks, 2, &m, 0, checks, cap, count);
+    /* Storage: with every moment off by at most u relative, and mean^2 <= m_xx (a PSD level),
+     * var_x moves by <= 3 u m_xx, var_y by <= 3 u m_yy and the covariance by <= 3 u sqrt(m_xx m_yy)
+     * <= 1.5 u (m_xx + m_yy); the smallest eigenvalue moves by at most the perturbation's norm,
+     * <= 4.5 u (m_xx + m_yy).  The bound adds 5 u. */
+    mf_check_def defs[2];
+    memcpy(defs, k_moment_checks, sizeof defs);
+    defs[1].bound += 5.0 * storage_u(options);
+    return mf_check_run_defs(defs, 2, &m, 0, checks, cap, count);
 }
 
 static int moment_layout_ok(const mf_table *t, char *why, size_t why_size)

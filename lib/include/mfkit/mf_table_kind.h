@@ -87,6 +87,19 @@ const mf_table_kind *mf_table_kind_of(const mf_table *t, char *why, size_t why_s
 /* Records kind k in t's metadata ("kind" = k->name).  MF_ERR_DOMAIN if the metadata is full. */
 mf_status mf_table_kind_tag(mf_table *t, const mf_table_kind *k) MF_WARN_UNUSED;
 
+/* Options of the model-free gates of the ggx_proxy and moment_map kinds.  Their checks compare
+ * stored values with exact ones, so their bounds add the rounding of the storage the values came
+ * through: unit_roundoff u = 2^-53 for a table computed in memory (the default: NULL options),
+ * 2^-24 for a float32 file, 2^-11 for a half-float file (mf_table_storage_roundoff).  The added
+ * terms are derived in lib/src/mf_table_kind.c beside each check. */
+typedef struct mf_table_storage_options {
+    double unit_roundoff;
+} mf_table_storage_options;
+
+/* The unit roundoff of a file's storage: half_float non-zero -> 2^-11, else 2^-24 (float32: every
+ * mfkit file format stores at least float32). */
+double mf_table_storage_roundoff(int half_float);
+
 /* Runs the gate of t's kind (mf_table_kind_of).  MF_ERR_DOMAIN if t has no known kind. */
 mf_status mf_table_kind_gate(const mf_table *t, const mf_brdf_model *model, const void *options, mf_check *checks,
                              int cap, int *count) MF_WARN_UNUSED;
@@ -95,9 +108,10 @@ mf_status mf_table_kind_gate(const mf_table *t, const mf_brdf_model *model, cons
  * Axes log10_alpha, log10_dh (identity); fields alpha, dh (10^ of the axes), alpha_eff (the exact
  * proxy roughness, mf_filter_ggx_proxy_alpha), alpha_eff_sqrt (sqrt(alpha^2 + dh^2)) and
  * alpha_eff_fit (mf_proxy.h's fitted form).  Checks: proxy_finite (no NaN/inf), proxy_exact
- * (|alpha_eff / exact - 1| <= 1e-12: the stored value is the exact one, to the rounding of the
- * atan form and of a %.17g round trip), proxy_fit (|alpha_eff_fit / alpha_eff - 1| <=
- * MF_PROXY_FIT_MAX_REL_ERROR, the bound of the shipped coefficients).  Model-free. */
+ * (|alpha_eff / exact - 1| <= 1e-12 + 3 u: the stored value is the exact one, to the rounding of
+ * the atan form, plus the storage rounding u of the three values involved), proxy_fit
+ * (|alpha_eff_fit / alpha_eff - 1| <= MF_PROXY_FIT_MAX_REL_ERROR + 3 u, the bound of the shipped
+ * coefficients plus storage).  Model-free; options: mf_table_storage_options. */
 #define MF_GGX_PROXY_TABLE_NFIELDS 5
 extern const char *const mf_ggx_proxy_table_fields[MF_GGX_PROXY_TABLE_NFIELDS];
 
@@ -107,9 +121,10 @@ extern const char *const mf_ggx_proxy_table_fields[MF_GGX_PROXY_TABLE_NFIELDS];
  * order), fields mean_x, mean_y, m_xx, m_xy, m_yy (MF_MAP_* order).  Checks: moment_finite,
  * moment_covariance (the covariance [[m_xx - mean_x^2, c], [c, m_yy - mean_y^2]],
  * c = m_xy - mean_x mean_y, is positive semi-definite: -(smallest eigenvalue) / (m_xx + m_yy)
- * <= 1e-12; a box filter averages moment vectors of single slopes, whose covariance is exactly
- * 0, so in exact arithmetic the average's covariance is PSD; 1e-12 leaves room for the rounding
- * of sums over large footprints).  Model-free. */
+ * <= 1e-12 + 5 u; a box filter averages moment vectors of single slopes, whose covariance is
+ * exactly 0, so in exact arithmetic the average's covariance is PSD; 1e-12 leaves room for the
+ * rounding of sums over large footprints, 5 u for the storage rounding u of the five moments).
+ * Model-free; options: mf_table_storage_options. */
 #define MF_MOMENT_TABLE_NFIELDS 5
 extern const char *const mf_moment_table_fields[MF_MOMENT_TABLE_NFIELDS];
 
