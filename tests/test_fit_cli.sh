@@ -2,11 +2,8 @@
 # test_fit_cli.sh MFKIT -- `mfkit fit ltc` end to end on small tables: a fit that passes its gate
 # exports every format, the exported table round-trips through the readable formats bit for bit
 # and passes the gate again when read back; a fit that fails its gate exports nothing.
-set -u
 mfkit="$1"
-fails=0; checks=0
-tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
-ok() { checks=$((checks+1)); if ! eval "$1"; then echo "FAIL: $2" >&2; fails=$((fails+1)); fi; }
+. "$(dirname "$0")/cli_test_lib.sh"
 
 # Beckmann 8x8 passes the gate (measured: polygon mean 0.0051 of 0.01, worst texel 0.024 of 0.05)
 "$mfkit" fit ltc --brdf beckmann --size 8 --threads 2 --out "$tmp/b" --quiet >"$tmp/b.log" 2>&1; rc=$?
@@ -24,6 +21,8 @@ ok 'cmp -s "$tmp/b/ltc_beckmann.json" "$tmp/rt.json"' "fitted table round-trips 
 # the exported EXR, read back, passes the gate again
 ok '"$mfkit" validate "$tmp/b/ltc_beckmann.exr" --brdf beckmann --quick --json-file "$tmp/v.json" >"$tmp/v.log" 2>&1 || { cat "$tmp/v.log"; false; }' \
    "exported EXR passes the gate when read back (see the validate output above)"
+ok '[ "$(tail -n 1 "$tmp/v.json")" = "}" ] && [ "$(grep -c "\"passed\": true" "$tmp/v.json")" -ge 10 ]' \
+   "the gate's JSON report ends with its closing brace and nothing after it: $(tail -c 80 "$tmp/v.json" | od -c | tail -3)"
 # ltc_1 of the DDS holds the four inverse-matrix fields
 ok '"$mfkit" table info "$tmp/b/ltc_beckmann_1.dds" | grep -q "minv_00"' "DDS ltc_1 names its fields"
 
@@ -47,5 +46,4 @@ ok '[ $rc -eq 0 ]' "lambert 4x4 on ranges exits 0 (rc=$rc): $(tail -3 "$tmp/rg.l
 ok 'grep -q "\"r_range\": \[0.5, 1\]" "$tmp/rg/ltc_lambert_fit.json" && grep -q "\"u_range\": \[0.25, 0.75\]" "$tmp/rg/ltc_lambert_fit.json"' "sidecar records the ranges"
 ok '"$mfkit" table info "$tmp/rg/ltc_lambert.exr" | grep -E "r.*0\.5.*1" >/dev/null' "table info shows the r range: $("$mfkit" table info "$tmp/rg/ltc_lambert.exr" 2>&1 | grep -E "^ *(axis|r|u)" | head -3 | tr '\n' ' ')"
 
-echo "test_fit_cli: $((checks-fails)) passed, $fails failed"
-[ $fails -eq 0 ]
+finish test_fit_cli
