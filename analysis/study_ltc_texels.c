@@ -56,6 +56,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "mfkit/mfkit.h"
 #include "mfkit/mf_ltc_reference.h"
+#include "mfkit/io/mf_io.h"
 #include "mfkit/io/mf_table_io.h"
 #include "mfkit/mf_image_oiio.h"
 
@@ -66,7 +67,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #define PROG "study_ltc_texels"
@@ -348,30 +348,16 @@ int main(int argc, char **argv)
             }
     }
 
-    /* The output goes to a temporary file in the same directory, renamed at the end. */
-    size_t plen = strlen(out_path);
-    char *tmp_path = malloc(plen + 16);
-    if (!tmp_path)
-        return 4;
-    snprintf(tmp_path, plen + 16, "%s.tmp.XXXXXX", out_path);
-    int fd = mkstemp(tmp_path);
-    if (fd >= 0) { /* mkstemp creates the file 0600: give it the mode fopen would */
-        mode_t mask = umask(0);
-        umask(mask);
-        (void)fchmod(fd, 0666 & ~mask);
-    }
-    FILE *f = fd >= 0 ? fdopen(fd, "w") : NULL;
-    if (!f) {
-        fprintf(stderr, PROG ": %s: cannot create a temporary file beside it: %s\n", out_path, strerror(errno));
-        if (fd >= 0) {
-            close(fd);
-            remove(tmp_path);
-        }
-        free(tmp_path);
+    /* The output goes to a temporary file beside it, renamed at the end (mf_io_atomic). */
+    mf_io_atomic out;
+    char msg[1024];
+    if (mf_io_atomic_begin(&out, out_path, msg, sizeof msg) != MF_OK) {
+        fprintf(stderr, PROG ": %s\n", msg);
         for (int k = 0; k < npaths; ++k)
             mf_table_free(&tab[k]);
         return 4;
     }
+    FILE *f = out.file;
     char seed_text[32];
     snprintf(seed_text, sizeof seed_text, "%llu", seed);
     study_write_header(f, PROG, argc, argv, seed_text);
@@ -463,23 +449,13 @@ int main(int argc, char **argv)
                paths[0], model->name, mr, mu, stride, npoly, nsamples, sum_rel / n, worst_rel, sum_l1 / n, worst_alb);
     }
 done:
-    if (!status && (fflush(f) != 0 || ferror(f))) {
-        fprintf(stderr, PROG ": %s: write failed: %s\n", tmp_path, strerror(errno));
-        status = 4;
-    }
-    if (fclose(f) != 0 && !status) {
-        fprintf(stderr, PROG ": %s: write failed: %s\n", tmp_path, strerror(errno));
-        status = 4;
-    }
-    if (!status && rename(tmp_path, out_path) != 0) {
-        fprintf(stderr, PROG ": %s: cannot rename %s to it: %s\n", out_path, tmp_path, strerror(errno));
-        status = 4;
-    }
     if (status)
-        remove(tmp_path);
-    else
+        mf_io_atomic_abort(&out);
+    else if (mf_io_atomic_commit(&out, msg, sizeof msg) != MF_OK) {
+        fprintf(stderr, PROG ": %s\n", msg);
+        status = 4;
+    } else
         printf(PROG ": wrote %s\n", out_path);
-    free(tmp_path);
     free(ir_idx);
     free(polys);
     free(buf);

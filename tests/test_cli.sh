@@ -1,22 +1,11 @@
 #!/usr/bin/env bash
 # test_cli.sh MFKIT -- the command line end to end: every eval function, and every kind of bad
 # input gives one line on stderr, exit code 2 and nothing on stdout.
-set -u
 mfkit="$1"
-fails=0; checks=0
-tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
-
-ok() { checks=$((checks+1)); if ! eval "$1"; then echo "FAIL: $2" >&2; fails=$((fails+1)); fi; }
+. "$(dirname "$0")/cli_test_lib.sh"
 
 # expect_error DESCRIPTION STDIN ARGS... : exit 2, empty stdout, one stderr line naming the problem
-expect_error() {
-  local desc="$1" input="$2" pattern="$3"; shift 3
-  printf '%s' "$input" | "$mfkit" "$@" >"$tmp/out" 2>"$tmp/err"; local rc=$?
-  checks=$((checks+1))
-  if [ $rc -ne 2 ] || [ -s "$tmp/out" ] || [ "$(wc -l <"$tmp/err")" -ne 1 ] || ! grep -q -- "$pattern" "$tmp/err"; then
-    echo "FAIL: $desc (rc=$rc, stdout=$(head -c 200 "$tmp/out"), stderr=$(cat "$tmp/err"))" >&2; fails=$((fails+1))
-  fi
-}
+expect_error() { local desc="$1" input="$2" pattern="$3"; shift 3; expect_error_in "$desc" "$input" 2 "$pattern" "$@"; }
 
 # --- every function, one row, with the exact output header ---------------------------------
 run() { printf '%s\n%s\n' "$2" "$3" | "$mfkit" eval $1 2>"$tmp/err"; }
@@ -157,5 +146,4 @@ if [ -x /usr/bin/python3 ]; then
   ok '"$mfkit" validate --quiet --json | /usr/bin/python3 -c "import json,sys; d=json.load(sys.stdin); assert d[\"passed\"] and len(d[\"checks\"])>=8"' "validate --json parses"
 fi
 
-echo "test_cli: $((checks-fails)) passed, $fails failed"
-[ $fails -eq 0 ]
+finish test_cli

@@ -2,11 +2,8 @@
 # test_fit_cli.sh MFKIT -- `mfkit fit ltc` end to end on small tables: a fit that passes its gate
 # exports every format, the exported table round-trips through the readable formats bit for bit
 # and passes the gate again when read back; a fit that fails its gate exports nothing.
-set -u
 mfkit="$1"
-fails=0; checks=0
-tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
-ok() { checks=$((checks+1)); if ! eval "$1"; then echo "FAIL: $2" >&2; fails=$((fails+1)); fi; }
+. "$(dirname "$0")/cli_test_lib.sh"
 
 # Beckmann 8x8 passes the gate (measured: polygon mean 0.0051 of 0.01, worst texel 0.024 of 0.05)
 "$mfkit" fit ltc --brdf beckmann --size 8 --threads 2 --out "$tmp/b" --quiet >"$tmp/b.log" 2>&1; rc=$?
@@ -24,6 +21,8 @@ ok 'cmp -s "$tmp/b/ltc_beckmann.json" "$tmp/rt.json"' "fitted table round-trips 
 # the exported EXR, read back, passes the gate again
 ok '"$mfkit" validate "$tmp/b/ltc_beckmann.exr" --brdf beckmann --quick --json-file "$tmp/v.json" >"$tmp/v.log" 2>&1 || { cat "$tmp/v.log"; false; }' \
    "exported EXR passes the gate when read back (see the validate output above)"
+ok '[ "$(tail -n 1 "$tmp/v.json")" = "}" ] && [ "$(grep -c "\"passed\": true" "$tmp/v.json")" -ge 10 ]' \
+   "the gate's JSON report ends with its closing brace and nothing after it: $(tail -c 80 "$tmp/v.json" | od -c | tail -3)"
 # ltc_1 of the DDS holds the four inverse-matrix fields
 ok '"$mfkit" table info "$tmp/b/ltc_beckmann_1.dds" | grep -q "minv_00"' "DDS ltc_1 names its fields"
 
@@ -54,5 +53,4 @@ ok '[ $rc -eq 0 ]' "fit ggx-proxy 16 exits 0 (rc=$rc): $(tail -3 "$tmp/px.log")"
 ok '"$mfkit" validate "$tmp/px/ggx_proxy_table.json" >"$tmp/pxv.log" 2>&1 && grep -q "^ggx_proxy gate" "$tmp/pxv.log"' \
    "the proxy table passes its own gate when read back: $(cat "$tmp/pxv.log")"
 
-echo "test_fit_cli: $((checks-fails)) passed, $fails failed"
-[ $fails -eq 0 ]
+finish test_fit_cli

@@ -4,22 +4,8 @@
 # analytic moments with derived tolerances), as float EXR, 16-bit and 8-bit PNG (through
 # oiiotool when present), with OpenGL and DirectX green; then every bad input giving exit 2/3,
 # one stderr line, nothing on stdout and no output file.
-set -u
 mfkit="$1"; helper="$2"
-fails=0; checks=0
-tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
-
-ok() { checks=$((checks+1)); if ! eval "$1"; then echo "FAIL: $2" >&2; fails=$((fails+1)); fi; }
-
-# expect_error DESCRIPTION RC PATTERN ARGS... : exit RC, empty stdout, one stderr line matching
-expect_error() {
-  local desc="$1" want="$2" pattern="$3"; shift 3
-  "$mfkit" "$@" >"$tmp/out" 2>"$tmp/err"; local rc=$?
-  checks=$((checks+1))
-  if [ $rc -ne "$want" ] || [ -s "$tmp/out" ] || [ "$(wc -l <"$tmp/err")" -ne 1 ] || ! grep -q -- "$pattern" "$tmp/err"; then
-    echo "FAIL: $desc (rc=$rc, stdout=$(head -c 200 "$tmp/out"), stderr=$(cat "$tmp/err"))" >&2; fails=$((fails+1))
-  fi
-}
+. "$(dirname "$0")/cli_test_lib.sh"
 
 # run_check DESC CHECK-ARGS... MAPS-ARGS: runs mfkit maps, then test_maps --check
 run_maps() {
@@ -112,5 +98,4 @@ ok '[ $rc -eq 0 ] && echo "$out" | grep -q "^usage: mfkit maps lean|leadr|bump-r
 out=$("$mfkit" --help)
 ok 'echo "$out" | grep -q "maps lean|leadr"' "mfkit --help lists maps"
 
-echo "test_maps_cli: $((checks-fails)) passed, $fails failed"
-[ $fails -eq 0 ]
+finish test_maps_cli

@@ -4,21 +4,8 @@
 # (the basis at its centre times its solid angle), both z-up and y-up, directional lights from a
 # CSV; tests/test_maps.c --check-sh parses the JSON and compares.  Errors: exit 2/3, one stderr
 # line naming file, line and column, nothing on stdout.
-set -u
 mfkit="$1"; helper="$2"
-fails=0; checks=0
-tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
-
-ok() { checks=$((checks+1)); if ! eval "$1"; then echo "FAIL: $2" >&2; fails=$((fails+1)); fi; }
-
-expect_error() {
-  local desc="$1" want="$2" pattern="$3"; shift 3
-  "$mfkit" "$@" >"$tmp/out" 2>"$tmp/err"; local rc=$?
-  checks=$((checks+1))
-  if [ $rc -ne "$want" ] || [ -s "$tmp/out" ] || [ "$(wc -l <"$tmp/err")" -ne 1 ] || ! grep -q -- "$pattern" "$tmp/err"; then
-    echo "FAIL: $desc (rc=$rc, stdout=$(head -c 200 "$tmp/out"), stderr=$(cat "$tmp/err"))" >&2; fails=$((fails+1))
-  fi
-}
+. "$(dirname "$0")/cli_test_lib.sh"
 
 # project_check DESC KIND UP [LIGHTS]
 project_check() {
@@ -75,5 +62,4 @@ ok '[ $rc -eq 0 ] && echo "$out" | grep -q "^usage: mfkit sh project ENV"' "sh -
 out=$("$mfkit" sh project --help); rc=$?
 ok '[ $rc -eq 0 ] && echo "$out" | grep -q -- "--lights FILE"' "sh project --help"
 
-echo "test_sh_cli: $((checks-fails)) passed, $fails failed"
-[ $fails -eq 0 ]
+finish test_sh_cli

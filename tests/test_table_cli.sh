@@ -4,22 +4,8 @@
 # that gives back the same JSON byte for byte, half-float reporting, DDS channel choice, and
 # every error giving one line on stderr, exit 2 (usage) or 3 (I/O, format), nothing on stdout
 # and no output file.
-set -u
 mfkit="$1"; writer="$2"
-fails=0; checks=0
-tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
-
-ok() { checks=$((checks+1)); if ! eval "$1"; then echo "FAIL: $2" >&2; fails=$((fails+1)); fi; }
-
-# expect_error DESCRIPTION RC PATTERN ARGS... : exit RC, empty stdout, one stderr line matching
-expect_error() {
-  local desc="$1" want="$2" pattern="$3"; shift 3
-  "$mfkit" "$@" >"$tmp/out" 2>"$tmp/err"; local rc=$?
-  checks=$((checks+1))
-  if [ $rc -ne "$want" ] || [ -s "$tmp/out" ] || [ "$(wc -l <"$tmp/err")" -ne 1 ] || ! grep -q -- "$pattern" "$tmp/err"; then
-    echo "FAIL: $desc (rc=$rc, stdout=$(head -c 200 "$tmp/out"), stderr=$(cat "$tmp/err"))" >&2; fails=$((fails+1))
-  fi
-}
+. "$(dirname "$0")/cli_test_lib.sh"
 
 "$writer" --write-sample "$tmp/t.json" || { echo "FAIL: test_table_io --write-sample" >&2; exit 1; }
 
@@ -101,5 +87,4 @@ ok '[ $rc -eq 0 ] && echo "$out" | grep -q "mfkit table info FILE"' "table info 
 out=$("$mfkit" --help)
 ok 'echo "$out" | grep -q "table convert IN OUT"' "mfkit --help lists table"
 
-echo "test_table_cli: $((checks-fails)) passed, $fails failed"
-[ $fails -eq 0 ]
+finish test_table_cli

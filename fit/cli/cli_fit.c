@@ -201,34 +201,6 @@ static void progress(void *user, int done, int total)
             done, total, elapsed(&p->start), done == total ? "\n" : "");
 }
 
-/* mkdir -p for fit ggx-proxy (mf_ltc_bake makes its own). */
-static int make_dir(const char *dir)
-{
-    char path[4096];
-    size_t n = strlen(dir);
-    if (n == 0 || n >= sizeof path) {
-        errno = ENAMETOOLONG;
-        return -1;
-    }
-    memcpy(path, dir, n + 1);
-    for (size_t i = 1; i <= n; ++i)
-        if (path[i] == '/' || path[i] == '\0') {
-            char c = path[i];
-            path[i] = '\0';
-            if (mkdir(path, 0777) != 0 && errno != EEXIST)
-                return -1;
-            path[i] = c;
-        }
-    struct stat st;
-    if (stat(dir, &st) != 0)
-        return -1;
-    if (!S_ISDIR(st.st_mode)) {
-        errno = ENOTDIR;
-        return -1;
-    }
-    return 0;
-}
-
 static int fit_ggx_proxy(int argc, char **argv)
 {
     const char *cmd = "fit ggx-proxy";
@@ -272,11 +244,10 @@ static int fit_ggx_proxy(int argc, char **argv)
                        e[k]->max_rel_all, e[k]->worst_alpha, e[k]->worst_dh);
     cli_buf_printf(&b, "improvement (max_rel): %.4g x\n", r.sqrt_approx.max_rel / r.fit.max_rel);
     int rc = 0;
-    if (make_dir(out) != 0) {
-        cli_error(cmd, "%s: cannot create the output directory: %s", out, strerror(errno));
-        rc = CLI_EXIT_IO;
-    }
     char msg[1024];
+    mf_status ds = mf_io_make_dirs(out, msg, sizeof msg);
+    if (ds != MF_OK)
+        rc = cli_exit_code(ds), cli_error(cmd, "%s", msg);
     if (rc == 0) {
         mf_status ws = mf_proxyfit_write(out, &po, &r, &t, "mfkit fit ggx-proxy " MFKIT_VERSION, msg, sizeof msg);
         if (ws != MF_OK) {

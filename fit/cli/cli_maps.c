@@ -3,8 +3,8 @@
  * maps and their box-filtered MIP chains from a normal or height map (docs/cli.md, mf_maps.h).
  * Exit code 0 on success, 2 for a usage or input error (bad option, wrong channel count, invalid
  * texel), 3 for an I/O error (unreadable input, output directory missing).  Every output file is
- * first written to a temporary beside it; they are renamed only when all were written, so a
- * failure leaves no output.
+ * first written to a temporary beside it; they are renamed only when all were written and synced
+ * (mf_io_atomic_commit_all), so a failure leaves no output.
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
@@ -108,37 +108,19 @@ typedef struct {
     char *table_dir;           /* the temporary directory of the table files (malloc), or NULL */
 } maps_args;
 
-/* Output files: written to tmp, renamed to final at the end. */
+/* The output files: each written to its temporary (mf_io_atomic), all renamed together at the
+ * end (mf_io_atomic_commit_all). */
 typedef struct {
-    char *final_path, *tmp_path;
-} out_file;
-
-typedef struct {
-    out_file *f;
+    mf_io_atomic *f;
     int n, cap;
 } out_list;
 
-static void out_list_discard(out_list *l)
-{
-    for (int i = 0; i < l->n; ++i) {
-        if (l->f[i].tmp_path)
-            remove(l->f[i].tmp_path);
-        free(l->f[i].final_path);
-        free(l->f[i].tmp_path);
-    }
-    free(l->f);
-    memset(l, 0, sizeof *l);
-}
-
-/* PREFIX_TAG_mip<level>.exr, or with pid >= 0 the temporary PREFIX_TAG_mip<level>.tmp<pid>.exr
- * (same extension, so the writer picks the same format). */
-static char *level_path(const char *prefix, const char *tag, int level, long pid)
+/* PREFIX_TAG_mip<level>.exr */
+static char *level_path(const char *prefix, const char *tag, int level)
 {
     size_t n = strlen(prefix) + strlen(tag) + 64;
     char *s = malloc(n);
-    if (s && pid >= 0)
-        snprintf(s, n, "%s_%s_mip%d.tmp%ld.exr", prefix, tag, level, pid);
-    else if (s)
+    if (s)
         snprintf(s, n, "%s_%s_mip%d.exr", prefix, tag, level);
     return s;
 }
@@ -149,19 +131,22 @@ static int write_level(out_list *l, const maps_args *a, const char *tag, int lev
 {
     if (l->n == l->cap) {
         int nc = l->cap ? 2 * l->cap : 16;
-        out_file *p = realloc(l->f, sizeof *p * (size_t)nc);
+        mf_io_atomic *p = realloc(l->f, sizeof *p * (size_t)nc);
         if (!p)
             return cli_error(k_cmd, "out of memory"), CLI_EXIT_IO;
         l->f = p;
         l->cap = nc;
     }
-    out_file *o = &l->f[l->n];
-    o->final_path = level_path(a->prefix, tag, level, -1);
-    o->tmp_path = level_path(a->prefix, tag, level, (long)getpid());
-    if (!o->final_path || !o->tmp_path) {
-        free(o->final_path);
-        free(o->tmp_path);
+    char msg[1024];
+    char *path = level_path(a->prefix, tag, level);
+    if (!path)
         return cli_error(k_cmd, "out of memory"), CLI_EXIT_IO;
+    mf_io_atomic *o = &l->f[l->n];
+    mf_status st = mf_io_atomic_begin(o, path, msg, sizeof msg);
+    free(path);
+    if (st != MF_OK) {
+        cli_error(k_cmd, "%s", msg);
+        return cli_exit_code(st);
     }
     ++l->n;
     char level_s[32], alpha_s[64];
@@ -178,10 +163,9 @@ static int write_level(out_list *l, const maps_args *a, const char *tag, int lev
     opt.nattribs = (int)(sizeof an / sizeof an[0]);
     opt.attrib_names = an;
     opt.attrib_values = av;
-    char msg[1024];
-    mf_status st = mf_image_write_ex(o->tmp_path, img, &opt, msg, sizeof msg);
+    st = mf_image_write_into(o, img, &opt, msg, sizeof msg);
     if (st != MF_OK) {
-        cli_error(k_cmd, "%s: %s", o->final_path, msg[0] ? msg : mf_status_str(st));
+        cli_error(k_cmd, "%s", msg[0] ? msg : mf_status_str(st));
         return cli_exit_code(st);
     }
     return 0;
@@ -189,7 +173,7 @@ static int write_level(out_list *l, const maps_args *a, const char *tag, int lev
 
 /* The moment_map tables of level `level` (mf_map_moments_to_table) in every --table-format, written
  * (each atomically, with its sidecar) into the temporary directory a->table_dir under their final
- * names, so that generated code names the final file; commit() moves them beside the EXRs. */
+ * names, so that generated code names the final file; mf_io_atomic_commit_all moves them beside the EXRs. */
 static int write_level_tables(out_list *l, const maps_args *a, const mf_map *m, int level)
 {
     mf_table t;
@@ -223,20 +207,23 @@ static int write_level_tables(out_list *l, const maps_args *a, const mf_map *m, 
         } else {
             struct stat sb;
             int has_side = stat(side_tmp, &sb) == 0;
+            /* already complete under their final names: the list's commit_all fsyncs them by name
+             * (file NULL) and renames them with the EXRs, all or nothing */
             for (int k = 0; k < 1 + has_side && rc == 0; ++k) {
                 if (l->n == l->cap) {
                     int nc = l->cap ? 2 * l->cap : 16;
-                    out_file *p = realloc(l->f, sizeof *p * (size_t)nc);
-                    if (!p) {
+                    mf_io_atomic *q = realloc(l->f, sizeof *q * (size_t)nc);
+                    if (!q) {
                         rc = CLI_EXIT_IO, cli_error(k_cmd, "out of memory");
                         break;
                     }
-                    l->f = p;
+                    l->f = q;
                     l->cap = nc;
                 }
-                l->f[l->n].tmp_path = k ? side_tmp : tmp;
-                l->f[l->n].final_path = k ? side_fin : fin;
-                ++l->n;
+                mf_io_atomic *o = &l->f[l->n++];
+                memset(o, 0, sizeof *o);
+                o->tmp_path = k ? side_tmp : tmp;
+                o->path = k ? side_fin : fin;
                 if (k)
                     side_tmp = side_fin = NULL;
                 else
@@ -247,26 +234,6 @@ static int write_level_tables(out_list *l, const maps_args *a, const mf_map *m, 
     }
     mf_table_free(&t);
     return rc;
-}
-
-/* Renames every temporary to its final name; on a failure removes what was renamed. */
-static int commit(out_list *l)
-{
-    for (int i = 0; i < l->n; ++i) {
-        if (rename(l->f[i].tmp_path, l->f[i].final_path) != 0) {
-            int err = errno;
-            cli_error(k_cmd, "%s: cannot rename the temporary file: %s", l->f[i].final_path, strerror(err));
-            for (int k = 0; k < i; ++k) {
-                remove(l->f[k].final_path);
-                free(l->f[k].tmp_path);
-                l->f[k].tmp_path = NULL;
-            }
-            return 3;
-        }
-        free(l->f[i].tmp_path);
-        l->f[i].tmp_path = NULL;
-    }
-    return 0;
 }
 
 /* The directory part of the prefix must exist. */
@@ -643,7 +610,7 @@ int cli_maps(int argc, char **argv)
             if (rc == 0 && a.ntables)
                 rc = write_level_tables(&files, &a, &cur, k);
             for (int f = first; rc == 0 && f < files.n; ++f)
-                cli_buf_printf(&b, "%s: level %d, %d x %d\n", files.f[f].final_path, k, cur.width, cur.height);
+                cli_buf_printf(&b, "%s: level %d, %d x %d\n", files.f[f].path, k, cur.width, cur.height);
             if (rc == 0 && k + 1 < levels) {
                 mf_map next;
                 st = mf_map_box_downsample(&cur, &next);
@@ -653,9 +620,11 @@ int cli_maps(int argc, char **argv)
                     rc = CLI_EXIT_IO, cli_error(k_cmd, "out of memory");
             }
         }
-        if (rc == 0)
-            rc = commit(&files);
-        out_list_discard(&files);
+        if (rc == 0 && (st = mf_io_atomic_commit_all(files.f, (size_t)files.n, msg, sizeof msg)) != MF_OK)
+            rc = cli_exit_code(st), cli_error(k_cmd, "%s", msg);
+        if (rc != 0)
+            mf_io_atomic_abort_all(files.f, (size_t)files.n);
+        free(files.f);
         if (a.table_dir) {
             rmdir(a.table_dir);
             free(a.table_dir);

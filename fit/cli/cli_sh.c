@@ -73,37 +73,7 @@ typedef struct {
     double power[3]; /* r, g, b */
 } sh_light;
 
-static char *trim(char *s)
-{
-    while (*s == ' ' || *s == '\t')
-        ++s;
-    size_t n = strlen(s);
-    while (n && (s[n - 1] == ' ' || s[n - 1] == '\t' || s[n - 1] == '\r' || s[n - 1] == '\n'))
-        s[--n] = '\0';
-    return s;
-}
-
-/* Splits a line at commas in place; returns the field count (at most max, -1 if more). */
-static int split(char *line, char **fields, int max)
-{
-    int n = 0;
-    char *start = line;
-    for (char *p = line;; ++p) {
-        if (*p == ',' || *p == '\0') {
-            int end = (*p == '\0');
-            *p = '\0';
-            if (n >= max)
-                return -1;
-            fields[n++] = trim(start);
-            if (end)
-                break;
-            start = p + 1;
-        }
-    }
-    return n;
-}
-
-/* Reads the lights CSV; returns 0, or the exit code after printing the error. */
+/* Reads the lights CSV (cli_csv_read); returns 0, or the exit code after printing the error. */
 static int read_lights(const char *path, sh_light **out, int *count)
 {
     static const char *const cols[6] = {"dir_x", "dir_y", "dir_z", "r", "g", "b"};
@@ -112,114 +82,56 @@ static int read_lights(const char *path, sh_light **out, int *count)
     FILE *f = fopen(path, "r");
     if (!f)
         return cli_error(k_cmd, "--lights %s: cannot open: %s", path, strerror(errno)), CLI_EXIT_IO;
-    char *line = NULL;
-    size_t cap = 0;
-    ssize_t got;
-    long lineno = 0;
-    int have_header = 0, idx[6], n = 0, ncap = 0, ncols = 0, rc = 0;
-    sh_light *lights = NULL;
-    char *fields[64];
-    while ((got = getline(&line, &cap, f)) >= 0) {
-        ++lineno;
-        if (lineno == 1 && got >= 3 && memcmp(line, "\xEF\xBB\xBF", 3) == 0) {
-            rc = cli_error(k_cmd, "%s:1: starts with a UTF-8 byte-order mark (BOM): save the CSV without it", path);
-            goto out;
-        }
-        for (ssize_t k = 0; k < got; ++k) {
-            unsigned char ch = (unsigned char)line[k];
-            if ((ch < 0x20 && ch != '\t' && ch != '\r' && ch != '\n') || ch == 0x7f) {
-                rc = cli_error(k_cmd, "%s:%ld: binary input, not CSV text (byte 0x%02x at column %ld)", path, lineno,
-                               ch, (long)k + 1);
-                goto out;
-            }
-        }
-        char *t = trim(line);
-        if (!*t)
-            continue;
-        int nf = split(t, fields, 64);
-        if (!have_header) {
-            if (nf < 0) {
-                rc = cli_error(k_cmd, "%s:%ld: too many columns in the header", path, lineno);
-                goto out;
-            }
-            ncols = nf;
-            for (int c = 0; c < 6; ++c)
-                idx[c] = -1;
-            for (int k = 0; k < nf; ++k) {
-                int c = 0;
-                while (c < 6 && strcmp(fields[k], cols[c]) != 0)
-                    ++c;
-                if (c == 6) {
-                    rc = cli_error(k_cmd, "%s:%ld: column %d: unknown column '%s' (the header is dir_x,dir_y,dir_z,r,g,b)",
-                                   path, lineno, k + 1, fields[k]);
-                    goto out;
-                }
-                if (idx[c] >= 0) {
-                    rc = cli_error(k_cmd, "%s:%ld: column %d: '%s' appears twice", path, lineno, k + 1, fields[k]);
-                    goto out;
-                }
-                idx[c] = k;
-            }
-            for (int c = 0; c < 6; ++c)
-                if (idx[c] < 0) {
-                    rc = cli_error(k_cmd, "%s:%ld: missing column '%s' (the header is dir_x,dir_y,dir_z,r,g,b)", path,
-                                   lineno, cols[c]);
-                    goto out;
-                }
-            have_header = 1;
-            continue;
-        }
-        if (nf != ncols) {
-            if (nf < 0)
-                rc = cli_error(k_cmd, "%s:%ld: more than 64 fields, but the header has %d", path, lineno, ncols);
-            else
-                rc = cli_error(k_cmd, "%s:%ld: %d fields, but the header has %d", path, lineno, nf, ncols);
-            goto out;
-        }
+    cli_csv csv;
+    char msg[1024];
+    int rc = cli_csv_read_named(f, path, &csv, msg, sizeof msg);
+    fclose(f);
+    if (rc != 0)
+        return cli_error(k_cmd, "%s", msg), rc == CLI_CSV_IO ? CLI_EXIT_IO : CLI_EXIT_USAGE;
+    for (int k = 0; k < csv.ncols && rc == 0; ++k) {
+        int c = 0;
+        while (c < 6 && strcmp(csv.header[k], cols[c]) != 0)
+            ++c;
+        if (c == 6)
+            rc = cli_error(k_cmd, "%s:%ld: column %d: unknown column '%s' (the header is dir_x,dir_y,dir_z,r,g,b)",
+                           path, csv.header_line, k + 1, csv.header[k]);
+    }
+    int idx[6];
+    for (int c = 0; c < 6 && rc == 0; ++c)
+        if ((idx[c] = cli_csv_column(&csv, cols[c])) < 0)
+            rc = cli_error(k_cmd, "%s:%ld: missing column '%s' (the header is dir_x,dir_y,dir_z,r,g,b)", path,
+                           csv.header_line, cols[c]);
+    sh_light *lights = rc == 0 && csv.nrows > 0 ? malloc(sizeof *lights * (size_t)csv.nrows) : NULL;
+    if (rc == 0 && csv.nrows > 0 && !lights)
+        rc = CLI_EXIT_IO, cli_error(k_cmd, "out of memory");
+    for (int row = 0; row < csv.nrows && rc == 0; ++row) {
+        char **fields = csv.cells[row];
+        long lineno = csv.row_line[row];
         double v[6];
-        for (int c = 0; c < 6; ++c) {
+        for (int c = 0; c < 6 && rc == 0; ++c) {
             const char *s = fields[idx[c]];
             int pc = cli_parse_double(s, &v[c]);
-            if (pc != 0 || !isfinite(v[c])) {
+            if (pc != 0 || !isfinite(v[c]))
                 rc = cli_error(k_cmd, "%s:%ld: column %d (%s): '%s' %s", path, lineno, idx[c] + 1, cols[c], s,
                                pc == CLI_NUM_RANGE ? cli_num_error(pc) : "is not a finite number");
-                goto out;
-            }
-            if (c >= 3 && v[c] < 0.0) {
+            else if (c >= 3 && v[c] < 0.0)
                 rc = cli_error(k_cmd, "%s:%ld: column %d (%s): irradiance %s is negative", path, lineno, idx[c] + 1,
                                cols[c], s);
-                goto out;
-            }
         }
+        if (rc)
+            break;
         double len = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
         if (!(len > 0.0) || !isfinite(len)) {
             rc = cli_error(k_cmd, "%s:%ld: column %d (dir_x): the direction (%s, %s, %s) has zero length", path, lineno,
                            idx[0] + 1, fields[idx[0]], fields[idx[1]], fields[idx[2]]);
-            goto out;
+            break;
         }
-        if (n == ncap) {
-            ncap = ncap ? 2 * ncap : 16;
-            sh_light *p = realloc(lights, sizeof *p * (size_t)ncap);
-            if (!p) {
-                rc = CLI_EXIT_IO, cli_error(k_cmd, "out of memory");
-                goto out;
-            }
-            lights = p;
-        }
-        lights[n].dir = mf_vec3_make(v[0] / len, v[1] / len, v[2] / len);
+        lights[row].dir = mf_vec3_make(v[0] / len, v[1] / len, v[2] / len);
         for (int c = 0; c < 3; ++c)
-            lights[n].power[c] = v[3 + c];
-        ++n;
+            lights[row].power[c] = v[3 + c];
     }
-    if (ferror(f)) {
-        rc = CLI_EXIT_IO, cli_error(k_cmd, "--lights %s: read error: %s", path, strerror(errno));
-        goto out;
-    }
-    if (!have_header)
-        rc = cli_error(k_cmd, "%s:1: empty file: expected the header dir_x,dir_y,dir_z,r,g,b", path);
-out:
-    free(line);
-    fclose(f);
+    int n = csv.nrows;
+    cli_csv_free(&csv);
     if (rc) {
         free(lights);
         return rc;

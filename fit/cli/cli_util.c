@@ -78,41 +78,13 @@ int cli_parse_int(const char *s, long lo, long hi, long *out)
 
 void cli_buf_printf(cli_buf *b, const char *fmt, ...)
 {
-    if (b->failed)
-        return;
-    for (;;) {
-        va_list ap;
-        va_start(ap, fmt);
-        size_t room = b->cap - b->len;
-        int n = vsnprintf(b->data ? b->data + b->len : NULL, room, fmt, ap);
-        va_end(ap);
-        if (n < 0) {
-            b->failed = 1;
-            return;
-        }
-        if ((size_t)n < room) {
-            b->len += (size_t)n;
-            return;
-        }
-        size_t cap = b->cap ? b->cap * 2 : 4096;
-        while (cap < b->len + (size_t)n + 1)
-            cap *= 2;
-        char *p = realloc(b->data, cap);
-        if (!p) {
-            b->failed = 1;
-            return;
-        }
-        b->data = p;
-        b->cap = cap;
-    }
+    va_list ap;
+    va_start(ap, fmt);
+    mf_buf_vprintf(b, fmt, ap);
+    va_end(ap);
 }
 
-void cli_buf_free(cli_buf *b)
-{
-    free(b->data);
-    b->data = NULL;
-    b->len = b->cap = 0;
-}
+void cli_buf_free(cli_buf *b) { mf_buf_free(b); }
 
 int cli_buf_write(const cli_buf *b, FILE *f)
 {
@@ -125,8 +97,7 @@ int cli_buf_write(const cli_buf *b, FILE *f)
 
 int cli_buf_write_file_atomic(const cli_buf *b, const char *path, char *msg, size_t msg_size)
 {
-    mf_buf m = {b->data, b->len, b->cap, b->failed}; /* a view: not freed here */
-    return mf_io_write_buf_atomic(path, &m, msg, msg_size) == MF_OK ? 0 : -1;
+    return mf_io_write_buf_atomic(path, b, msg, msg_size) == MF_OK ? 0 : -1;
 }
 
 void cli_buf_double(cli_buf *b, double v)
@@ -139,50 +110,11 @@ void cli_buf_double(cli_buf *b, double v)
         cli_buf_printf(b, "%.17g", v);
 }
 
-/* The one JSON emitter (mf_json.h), appended through a scratch buffer. */
-static void append_json(cli_buf *b, const mf_buf *m)
-{
-    if (m->failed)
-        b->failed = 1;
-    else
-        cli_buf_printf(b, "%.*s", (int)m->len, m->data ? m->data : "");
-}
+void cli_buf_json_string(cli_buf *b, const char *s) { mf_json_string(b, s); }
 
-void cli_buf_json_string(cli_buf *b, const char *s)
-{
-    mf_buf m = {0};
-    mf_json_string(&m, s);
-    append_json(b, &m);
-    mf_buf_free(&m);
-}
+void cli_buf_json_number(cli_buf *b, double v) { mf_json_number(b, v); }
 
-void cli_buf_json_number(cli_buf *b, double v)
-{
-    mf_buf m = {0};
-    mf_json_number(&m, v);
-    append_json(b, &m);
-    mf_buf_free(&m);
-}
-
-void cli_buf_checks_json(cli_buf *b, const mf_check *c, int n)
-{
-    cli_buf_printf(b, "[\n");
-    for (int i = 0; i < n; ++i) {
-        cli_buf_printf(b, "    {\"name\": ");
-        cli_buf_json_string(b, c[i].name);
-        cli_buf_printf(b, ", \"what\": ");
-        cli_buf_json_string(b, c[i].what);
-        cli_buf_printf(b, ", \"worst\": ");
-        cli_buf_json_number(b, c[i].worst);
-        cli_buf_printf(b, ", \"bound\": ");
-        cli_buf_json_number(b, c[i].bound);
-        cli_buf_printf(b, ", \"passed\": %s, \"cases\": %ld, \"worst_at\": ", c[i].passed ? "true" : "false",
-                       c[i].cases);
-        cli_buf_json_string(b, c[i].worst_at);
-        cli_buf_printf(b, "}%s\n", i + 1 < n ? "," : "");
-    }
-    cli_buf_printf(b, "  ]");
-}
+void cli_buf_checks_json(cli_buf *b, const mf_check *c, int n) { mf_json_checks(b, c, n); }
 
 void cli_buf_checks_table(cli_buf *b, const mf_check *c, int n, int all_passed)
 {
@@ -278,25 +210,45 @@ static int build_index(cli_csv *csv)
     return 0;
 }
 
+/* "line N: ..." (name NULL) or "name:N: ..." into msg. */
+#if defined(__GNUC__)
+__attribute__((format(printf, 5, 6)))
+#endif
+static void csv_msg(char *msg, size_t msg_size, const char *name, long line, const char *fmt, ...)
+{
+    int n = name ? snprintf(msg, msg_size, "%s:%ld: ", name, line) : snprintf(msg, msg_size, "line %ld: ", line);
+    if (n < 0 || (size_t)n >= msg_size)
+        return;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg + n, msg_size - (size_t)n, fmt, ap);
+    va_end(ap);
+}
+
 int cli_csv_read(FILE *in, cli_csv *csv, char *msg, size_t msg_size)
+{
+    return cli_csv_read_named(in, NULL, csv, msg, msg_size);
+}
+
+int cli_csv_read_named(FILE *in, const char *name, cli_csv *csv, char *msg, size_t msg_size)
 {
     memset(csv, 0, sizeof *csv);
     char *line = NULL;
     size_t cap = 0;
     ssize_t got;
     long lineno = 0;
-    int cap_rows = 0;
+    int cap_rows = 0, rc = CLI_CSV_INPUT;
     while ((got = getline(&line, &cap, in)) >= 0) {
         ++lineno;
         if (lineno == 1 && got >= 3 && memcmp(line, "\xEF\xBB\xBF", 3) == 0) {
-            snprintf(msg, msg_size, "line 1: starts with a UTF-8 byte-order mark (BOM): save the CSV without it");
+            csv_msg(msg, msg_size, name, 1, "starts with a UTF-8 byte-order mark (BOM): save the CSV without it");
             goto fail;
         }
         for (ssize_t k = 0; k < got; ++k) {
             unsigned char c = (unsigned char)line[k];
             if ((c < 0x20 && c != '\t' && c != '\r' && c != '\n') || c == 0x7f) {
-                snprintf(msg, msg_size, "line %ld: binary input, not CSV text (byte 0x%02x at column %ld)", lineno, c,
-                         (long)k + 1);
+                csv_msg(msg, msg_size, name, lineno, "binary input, not CSV text (byte 0x%02x at column %ld)", c,
+                        (long)k + 1);
                 goto fail;
             }
         }
@@ -305,62 +257,72 @@ int cli_csv_read(FILE *in, cli_csv *csv, char *msg, size_t msg_size)
             continue;
         char **fields;
         int n = split(t, &fields);
-        if (n < 0) {
-            snprintf(msg, msg_size, "out of memory");
-            goto fail;
-        }
+        if (n < 0)
+            goto out_of_memory;
         if (!csv->header) {
             csv->header = fields;
             csv->ncols = n;
+            csv->header_line = lineno;
             for (int i = 0; i < n; ++i)
                 if (!fields[i][0]) {
-                    snprintf(msg, msg_size, "line %ld: header column %d is empty", lineno, i + 1);
+                    csv_msg(msg, msg_size, name, lineno, "header column %d is empty", i + 1);
                     goto fail;
                 }
-            if (build_index(csv) != 0) {
-                snprintf(msg, msg_size, "out of memory");
-                goto fail;
-            }
+            if (build_index(csv) != 0)
+                goto out_of_memory;
             for (int i = 1; i < n; ++i)
                 if (strcmp(csv->header[csv->sorted[i]], csv->header[csv->sorted[i - 1]]) == 0) {
-                    snprintf(msg, msg_size, "line %ld: header names column '%s' twice", lineno,
-                             csv->header[csv->sorted[i]]);
+                    csv_msg(msg, msg_size, name, lineno, "header names column '%s' twice", csv->header[csv->sorted[i]]);
                     goto fail;
                 }
             continue;
         }
         if (n != csv->ncols) {
-            snprintf(msg, msg_size, "line %ld: %d fields, but the header has %d", lineno, n, csv->ncols);
+            csv_msg(msg, msg_size, name, lineno, "%d fields, but the header has %d", n, csv->ncols);
             free_fields(fields, n);
             goto fail;
         }
         if (csv->nrows == cap_rows) {
             int nc = cap_rows ? 2 * cap_rows : 64;
             char ***p = realloc(csv->cells, sizeof(char **) * (size_t)nc);
-            if (!p) {
+            long *pl = p ? realloc(csv->row_line, sizeof(long) * (size_t)nc) : NULL;
+            if (p)
+                csv->cells = p;
+            if (!pl) {
                 free_fields(fields, n);
-                snprintf(msg, msg_size, "out of memory");
-                goto fail;
+                goto out_of_memory;
             }
-            csv->cells = p;
+            csv->row_line = pl;
             cap_rows = nc;
         }
+        csv->row_line[csv->nrows] = lineno;
         csv->cells[csv->nrows++] = fields;
     }
     if (ferror(in)) {
-        snprintf(msg, msg_size, "read error: %s", strerror(errno));
+        int err = errno;
+        if (name)
+            snprintf(msg, msg_size, "%s: read error: %s", name, strerror(err));
+        else
+            snprintf(msg, msg_size, "read error: %s", strerror(err));
+        rc = CLI_CSV_IO;
         goto fail;
     }
     free(line);
     if (!csv->header) {
-        snprintf(msg, msg_size, "empty input: expected a CSV header line");
-        return -1;
+        if (name)
+            snprintf(msg, msg_size, "%s: empty input: expected a CSV header line", name);
+        else
+            snprintf(msg, msg_size, "empty input: expected a CSV header line");
+        return CLI_CSV_INPUT;
     }
     return 0;
+out_of_memory:
+    snprintf(msg, msg_size, "out of memory");
+    rc = CLI_CSV_IO;
 fail:
     free(line);
     cli_csv_free(csv);
-    return -1;
+    return rc;
 }
 
 void cli_csv_free(cli_csv *csv)
@@ -370,6 +332,7 @@ void cli_csv_free(cli_csv *csv)
     free(csv->cells);
     free_fields(csv->header, csv->ncols);
     free(csv->sorted);
+    free(csv->row_line);
     memset(csv, 0, sizeof *csv);
 }
 

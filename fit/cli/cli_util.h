@@ -5,6 +5,7 @@
 #include <stddef.h>
 #include <stdio.h>
 
+#include "mfkit/io/mf_io.h"
 #include "mfkit/mf_validate.h"
 
 /* The exit status of every mfkit command (docs/cli.md, "Exit status"). */
@@ -38,12 +39,9 @@ const char *cli_num_error(int code);
 /* Strict integer parsing in [lo, hi]. Returns 0 on success. */
 int cli_parse_int(const char *s, long lo, long hi, long *out);
 
-/* A growable text buffer: output is written only when a command has fully succeeded. */
-typedef struct {
-    char *data;
-    size_t len, cap;
-    int failed; /* allocation failed */
-} cli_buf;
+/* A growable text buffer (mf_buf of mf_io.h): output is written only when a command has fully
+ * succeeded. */
+typedef mf_buf cli_buf;
 
 void cli_buf_printf(cli_buf *b, const char *fmt, ...)
 #if defined(__GNUC__)
@@ -53,8 +51,8 @@ void cli_buf_printf(cli_buf *b, const char *fmt, ...)
 void cli_buf_free(cli_buf *b);
 /* Writes the buffer to f and flushes; returns 0 on success. */
 int cli_buf_write(const cli_buf *b, FILE *f);
-/* Writes the buffer to path atomically (temporary file in the same directory, then rename).
- * On failure fills msg and returns non-zero; no file is left behind. */
+/* Writes the buffer to path atomically (mf_io_write_buf_atomic).  On failure fills msg and
+ * returns non-zero; no file is left behind. */
 int cli_buf_write_file_atomic(const cli_buf *b, const char *path, char *msg, size_t msg_size);
 
 /* CSV table read whole from a stream: a header row and data rows of the same width. */
@@ -63,12 +61,18 @@ typedef struct {
     char **header;   /* ncols names */
     char ***cells;   /* nrows x ncols strings */
     int *sorted;     /* the column indices sorted by name (cli_csv_column) */
+    long header_line; /* the line of the header (1-based; blank lines are counted) */
+    long *row_line;   /* the line of each data row */
 } cli_csv;
 
 /* Reads a CSV (comma-separated, no quoting; surrounding spaces and CR are trimmed; blank lines
  * skipped).  A UTF-8 byte-order mark and control bytes (binary input) are errors that say so.
- * On error fills msg ("line N: ...") and returns non-zero. */
+ * On error fills msg ("line N: ...") and returns CLI_CSV_INPUT (the text is not a valid CSV
+ * table) or CLI_CSV_IO (a read error, out of memory). */
+enum { CLI_CSV_INPUT = -1, CLI_CSV_IO = -2 };
 int cli_csv_read(FILE *f, cli_csv *csv, char *msg, size_t msg_size);
+/* cli_csv_read of the file called name: messages "name:N: ..." (name: the file's path). */
+int cli_csv_read_named(FILE *f, const char *name, cli_csv *csv, char *msg, size_t msg_size);
 void cli_csv_free(cli_csv *csv);
 /* Index of the column named `name`, or -1. */
 int cli_csv_column(const cli_csv *csv, const char *name);
@@ -76,11 +80,11 @@ int cli_csv_column(const cli_csv *csv, const char *name);
 /* Formats a double with %.17g ("nan", "inf", "-inf" for non-finite values). */
 void cli_buf_double(cli_buf *b, double v);
 
-/* JSON: a quoted, escaped string; a number with %.17g, or null for NaN/inf (JSON has neither). */
+/* JSON (mf_json.h): a quoted, escaped string; a number with %.17g, or "NaN" / "Infinity" /
+ * "-Infinity". */
 void cli_buf_json_string(cli_buf *b, const char *s);
 void cli_buf_json_number(cli_buf *b, double v);
-/* A report of checks: the JSON array [{"name", "what", "worst", "bound", "passed", "cases",
- * "worst_at"}, ...] (indented for an object member), and the plain-text table with its verdict. */
+/* A report of checks: the JSON array of mf_json_checks, and the plain-text table with its verdict. */
 void cli_buf_checks_json(cli_buf *b, const mf_check *c, int n);
 void cli_buf_checks_table(cli_buf *b, const mf_check *c, int n, int all_passed);
 

@@ -247,7 +247,8 @@ static int validate_table(const char *path, const char *brdf, int quick, uint64_
     /* The checks, as for the core report (drop its opening lines). */
     cli_buf body = {0};
     report_json(&body, checks, n, all);
-    const char *p = body.data ? strstr(body.data, "  \"passed\"") : NULL;
+    mf_buf_put(&body, "", 1); /* a C string for strstr */
+    const char *p = body.failed ? NULL : strstr(body.data, "  \"passed\"");
     cli_buf_printf(&jb, "%s", p ? p : "}\n");
     cli_buf_free(&body);
 

@@ -3,17 +3,16 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "mfkit/mf_ltc_bake.h"
+#include "mfkit/io/mf_io.h"
+#include "mfkit/io/mf_json.h"
 #include "mfkit/io/mf_table_io.h"
 
 #include <errno.h>
-#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <time.h>
-#include <unistd.h>
 
 void mf_ltc_bake_options_default(mf_ltc_bake_options *o)
 {
@@ -39,150 +38,25 @@ static void set_msg(mf_ltc_bake_report *r, const char *fmt, ...)
     va_end(ap);
 }
 
-/* mkdir -p: 0 if dir is (now) a directory, else -1 with errno (ENOTDIR: exists as a file). */
-static int make_dir(const char *dir)
-{
-    char path[MF_LTC_BAKE_PATH_LEN];
-    size_t n = strlen(dir);
-    if (n == 0 || n >= sizeof path) {
-        errno = ENAMETOOLONG;
-        return -1;
-    }
-    memcpy(path, dir, n + 1);
-    for (size_t i = 1; i <= n; ++i)
-        if (path[i] == '/' || path[i] == '\0') {
-            char c = path[i];
-            path[i] = '\0';
-            if (mkdir(path, 0777) != 0 && errno != EEXIST)
-                return -1;
-            path[i] = c;
-        }
-    struct stat st;
-    if (stat(dir, &st) != 0)
-        return -1;
-    if (!S_ISDIR(st.st_mode)) {
-        errno = ENOTDIR;
-        return -1;
-    }
-    return 0;
-}
-
 /* ---- the gate report (JSON) ------------------------------------------------------------------
- * A small growable buffer and JSON emitter, private to this file.  The format is that of the
- * command line's check reports ("checks": [{name, what, worst, bound, passed, cases, worst_at}]);
- * non-finite numbers are null.  To be replaced by the shared internal JSON/buffer helpers of the
- * table I/O layer when those land. */
-typedef struct {
-    char *data;
-    size_t len, cap;
-    int failed;
-} jbuf;
-
-static void jb_printf(jbuf *b, const char *fmt, ...)
+ * The format of the command line's check reports (mf_json_checks), after the fit's summary;
+ * non-finite numbers as the strings of mf_json.h. */
+static void gate_json(mf_buf *b, const mf_ltc_bake_options *o, const mf_ltc_bake_report *r)
 {
-    if (b->failed)
-        return;
-    for (;;) {
-        va_list ap;
-        va_start(ap, fmt);
-        size_t room = b->cap - b->len;
-        int n = vsnprintf(b->data ? b->data + b->len : NULL, room, fmt, ap);
-        va_end(ap);
-        if (n < 0) {
-            b->failed = 1;
-            return;
-        }
-        if ((size_t)n < room) {
-            b->len += (size_t)n;
-            return;
-        }
-        size_t cap = b->cap ? b->cap * 2 : 4096;
-        while (cap < b->len + (size_t)n + 1)
-            cap *= 2;
-        char *p = realloc(b->data, cap);
-        if (!p) {
-            b->failed = 1;
-            return;
-        }
-        b->data = p;
-        b->cap = cap;
-    }
-}
-
-static void jb_string(jbuf *b, const char *s)
-{
-    jb_printf(b, "\"");
-    for (; *s; ++s) {
-        if (*s == '"' || *s == '\\')
-            jb_printf(b, "\\%c", *s);
-        else if ((unsigned char)*s < 0x20)
-            jb_printf(b, "\\u%04x", (unsigned char)*s);
-        else
-            jb_printf(b, "%c", *s);
-    }
-    jb_printf(b, "\"");
-}
-
-static void jb_number(jbuf *b, double v)
-{
-    if (isfinite(v))
-        jb_printf(b, "%.17g", v);
-    else
-        jb_printf(b, "null");
-}
-
-static void gate_json(jbuf *b, const mf_ltc_bake_options *o, const mf_ltc_bake_report *r)
-{
-    jb_printf(b, "{\n  \"tool\": ");
-    jb_string(b, o->tool ? o->tool : "mf_ltc_bake");
-    jb_printf(b, ",\n  \"version\": ");
-    jb_string(b, o->version ? o->version : "");
-    jb_printf(b, ",\n  \"brdf\": ");
-    jb_string(b, o->model->name);
-    jb_printf(b, ",\n  \"passed\": %s,\n  \"fit\": {\"worst_residual\": ", r->gate_passed ? "true" : "false");
-    jb_number(b, r->fit.worst_residual);
-    jb_printf(b, ", \"max_iterations\": %d, \"total_iterations\": %ld, \"not_converged\": %d},\n  \"checks\": [\n",
-              r->fit.max_iterations, r->fit.total_iterations, r->fit.not_converged);
-    for (int i = 0; i < r->nchecks; ++i) {
-        const mf_check *c = &r->checks[i];
-        jb_printf(b, "    {\"name\": ");
-        jb_string(b, c->name);
-        jb_printf(b, ", \"what\": ");
-        jb_string(b, c->what);
-        jb_printf(b, ", \"worst\": ");
-        jb_number(b, c->worst);
-        jb_printf(b, ", \"bound\": ");
-        jb_number(b, c->bound);
-        jb_printf(b, ", \"passed\": %s, \"cases\": %ld, \"worst_at\": ", c->passed ? "true" : "false", c->cases);
-        jb_string(b, c->worst_at);
-        jb_printf(b, "}%s\n", i + 1 < r->nchecks ? "," : "");
-    }
-    jb_printf(b, "  ]\n}\n");
-}
-
-/* Writes b to path through a temporary beside it and a rename; no file is left on failure. */
-static mf_status write_file_atomic(const jbuf *b, const char *path, mf_ltc_bake_report *r)
-{
-    if (b->failed) {
-        set_msg(r, "%s: out of memory", path);
-        return MF_ERR_ALLOC;
-    }
-    char tmp[MF_LTC_BAKE_PATH_LEN + 32];
-    snprintf(tmp, sizeof tmp, "%s.tmp%ld", path, (long)getpid());
-    FILE *f = fopen(tmp, "wb");
-    int ok = f != NULL;
-    if (ok && b->len)
-        ok = fwrite(b->data, 1, b->len, f) == b->len;
-    if (f) {
-        ok = ok && fflush(f) == 0 && fsync(fileno(f)) == 0;
-        ok = (fclose(f) == 0) && ok;
-    }
-    if (!ok || rename(tmp, path) != 0) {
-        set_msg(r, "%s: write failed: %s", path, strerror(errno));
-        remove(tmp);
-        return MF_ERR_IO;
-    }
-    return MF_OK;
+    mf_buf_puts(b, "{\n  \"tool\": ");
+    mf_json_string(b, o->tool ? o->tool : "mf_ltc_bake");
+    mf_buf_puts(b, ",\n  \"version\": ");
+    mf_json_string(b, o->version ? o->version : "");
+    mf_buf_puts(b, ",\n  \"brdf\": ");
+    mf_json_string(b, o->model->name);
+    mf_buf_puts(b, ",\n  \"passed\": ");
+    mf_json_bool(b, r->gate_passed);
+    mf_buf_puts(b, ",\n  \"fit\": {\"worst_residual\": ");
+    mf_json_number(b, r->fit.worst_residual);
+    mf_buf_printf(b, ", \"max_iterations\": %d, \"total_iterations\": %ld, \"not_converged\": %d},\n  \"checks\": ",
+                  r->fit.max_iterations, r->fit.total_iterations, r->fit.not_converged);
+    mf_json_checks(b, r->checks, r->nchecks);
+    mf_buf_puts(b, "\n}\n");
 }
 
 /* ---- export ---------------------------------------------------------------------------------- */
@@ -243,12 +117,14 @@ static mf_status export_all(const mf_ltc_bake_options *o, const mf_table *t, mf_
     ++r->nfiles;
     if ((st = add_file(r, o->out_dir, "_gate.json", &path)) != MF_OK)
         return st;
-    jbuf b = {0};
+    mf_buf b = {0};
     gate_json(&b, o, r);
-    st = write_file_atomic(&b, path, r);
-    free(b.data);
-    if (st != MF_OK)
+    st = mf_io_write_buf_atomic(path, &b, msg, sizeof msg);
+    mf_buf_free(&b);
+    if (st != MF_OK) {
+        set_msg(r, "%s", msg);
         return st;
+    }
     ++r->nfiles;
     return MF_OK;
 }
@@ -272,9 +148,11 @@ mf_status mf_ltc_bake(const mf_ltc_bake_options *o, mf_ltc_bake_report *r)
         set_msg(r, "%s: path too long", o->out_dir);
         return MF_ERR_DOMAIN;
     }
-    if (make_dir(o->out_dir) != 0) {
-        set_msg(r, "%s: cannot create the output directory: %s", o->out_dir, strerror(errno));
-        return MF_ERR_IO;
+    char msg[1024] = "";
+    mf_status st = mf_io_make_dirs(o->out_dir, msg, sizeof msg);
+    if (st != MF_OK) {
+        set_msg(r, "%s", msg);
+        return st;
     }
     mf_ltcfit_options fo = o->fit;
     fo.checkpoint = r->checkpoint;
@@ -286,9 +164,8 @@ mf_status mf_ltc_bake(const mf_ltc_bake_options *o, mf_ltc_bake_report *r)
         remove(r->checkpoint); /* a fresh fit never mixes with an old checkpoint */
 
     mf_table t;
-    char msg[1024] = "";
     double t0 = now_seconds();
-    mf_status st = mf_ltcfit_table(o->model, &fo, &t, &r->fit, msg, sizeof msg);
+    st = mf_ltcfit_table(o->model, &fo, &t, &r->fit, msg, sizeof msg);
     r->fit_seconds = now_seconds() - t0;
     if (st != MF_OK) {
         set_msg(r, "%s%s%s", mf_status_str(st), msg[0] ? ": " : "", msg);

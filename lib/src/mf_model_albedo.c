@@ -30,8 +30,9 @@ static const double gl8_w[8] = {0.1012285362903763, 0.2223810344533745, 0.313706
 
 #define CHUNK 64 /* points per batch of mf_model_sample_weights (stack buffers) */
 
-/* Q(panels): the albedo and the Schlick moment, summed in the order (panel i, node i, panel j,
- * node j) with one accumulator each.  0 on success, -1 for a non-finite sum. */
+/* Q(panels): the albedo and (fres not NULL) the Schlick moment, summed in the order (panel i,
+ * node i, panel j, node j) with one accumulator each.  0 on success, -1 for a non-finite sum.
+ * Without fres the moment is not computed (the albedo's bits are the same either way). */
 static int rule(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, int panels, double *alb, double *fres)
 {
     double u[2 * CHUNK], qw[CHUNK], pdf[CHUNK], w[CHUNK];
@@ -55,16 +56,19 @@ static int rule(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, int
                     if (!(pdf[q] > 0.0) || !(dir[q].z > 0.0))
                         continue;
                     double v = w[q];
+                    sa += qw[q] * v;
+                    if (!fres)
+                        continue;
                     mf_vec3 h = mf_vec3_normalize(mf_vec3_add(wo, dir[q]));
                     double x = 1.0 - fmin(1.0, fmax(0.0, mf_vec3_dot(wo, h)));
                     double x5 = x * x * x * x * x;
-                    sa += qw[q] * v;
                     sf += qw[q] * v * x5;
                 }
             }
         }
     *alb = sa;
-    *fres = sf;
+    if (fres)
+        *fres = sf;
     return isfinite(sa) && isfinite(sf) ? 0 : -1;
 }
 
@@ -78,8 +82,8 @@ mf_status mf_model_albedo_fresnel(const mf_brdf_model *m, const mf_brdf_params *
     if (!m || !m->eval_cos || !p || !albedo || n < 16 || n > 1024 || n % 16 != 0 || !mf_vec3_isfinite(wo) ||
         !(wo.z > 0.0))
         return MF_ERR_DOMAIN;
-    double a1, f1, a2, f2;
-    if (rule(m, p, wo, n / 8, &a1, &f1) != 0 || rule(m, p, wo, n / 16, &a2, &f2) != 0)
+    double a1, f1 = 0.0, a2, f2 = 0.0;
+    if (rule(m, p, wo, n / 8, &a1, fresnel ? &f1 : NULL) != 0 || rule(m, p, wo, n / 16, &a2, fresnel ? &f2 : NULL) != 0)
         return MF_ERR_DOMAIN;
     albedo->val = a1;
     albedo->err = fabs(a1 - a2);

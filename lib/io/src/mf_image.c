@@ -96,54 +96,83 @@ mf_status mf_image_write(const char *path, const mf_image *img, int half_float, 
     return mf_image_write_ex(path, img, &opt, msg, msg_size);
 }
 
-mf_status mf_image_write_ex(const char *path, const mf_image *img, const mf_image_write_options *options, char *msg,
-                            size_t msg_size)
+/* Argument checks of a write; the options copied into *opt (zeroed if options is NULL). */
+static mf_status write_args(const char *path, const mf_image *img, const mf_image_write_options *options,
+                            mf_image_write_options *opt, char *msg, size_t msg_size)
 {
-    mf_io_msg_clear(msg, msg_size);
-    mf_image_write_options opt;
-    memset(&opt, 0, sizeof opt);
+    memset(opt, 0, sizeof *opt);
     if (options)
-        opt = *options;
-    const int use_half_bits = opt.half_float && opt.half_bits != NULL;
+        *opt = *options;
+    const int use_half_bits = opt->half_float && opt->half_bits != NULL;
     if (!path || !*path || !img || (!img->pixels && !use_half_bits) || img->width < 1 || img->height < 1 ||
         img->channels < 1 || (size_t)img->width > SIZE_MAX / sizeof(float) / (size_t)img->height / (size_t)img->channels) {
         mf_io_msg(msg, msg_size, path, "invalid argument (NULL or empty path, NULL image or pixels, or size < 1)");
         return MF_ERR_DOMAIN;
     }
-    if (opt.channel_names)
+    if (opt->channel_names)
         for (int c = 0; c < img->channels; ++c)
-            if (!opt.channel_names[c] || !opt.channel_names[c][0]) {
+            if (!opt->channel_names[c] || !opt->channel_names[c][0]) {
                 mf_io_msg(msg, msg_size, path, "invalid argument (NULL or empty channel name)");
                 return MF_ERR_DOMAIN;
             }
-    if (opt.nattribs < 0 || (opt.nattribs > 0 && (!opt.attrib_names || !opt.attrib_values))) {
+    if (opt->nattribs < 0 || (opt->nattribs > 0 && (!opt->attrib_names || !opt->attrib_values))) {
         mf_io_msg(msg, msg_size, path, "invalid argument (attribute arrays)");
         return MF_ERR_DOMAIN;
     }
-    for (int a = 0; a < opt.nattribs; ++a)
-        if (!opt.attrib_names[a] || !opt.attrib_names[a][0] || !opt.attrib_values[a]) {
+    for (int a = 0; a < opt->nattribs; ++a)
+        if (!opt->attrib_names[a] || !opt->attrib_names[a][0] || !opt->attrib_values[a]) {
             mf_io_msg(msg, msg_size, path, "invalid argument (NULL or empty attribute name, or NULL value)");
             return MF_ERR_DOMAIN;
         }
     const mf_image_backend *b = LOAD_BACKEND();
     if (!b || !b->write)
         return no_backend(path, "writing", msg, msg_size);
-    mf_io_atomic a;
-    mf_status st = mf_io_atomic_begin(&a, path, msg, msg_size);
+    return MF_OK;
+}
+
+mf_status mf_image_write_into(mf_io_atomic *a, const mf_image *img, const mf_image_write_options *options, char *msg,
+                              size_t msg_size)
+{
+    mf_io_msg_clear(msg, msg_size);
+    if (!a || !a->tmp_path || a->finished) {
+        mf_io_msg(msg, msg_size, a ? a->path : NULL, "invalid argument (no open temporary file)");
+        mf_io_atomic_abort(a);
+        return MF_ERR_DOMAIN;
+    }
+    mf_image_write_options opt;
+    mf_status st = write_args(a->path, img, options, &opt, msg, msg_size);
+    if (st != MF_OK) {
+        mf_io_atomic_abort(a);
+        return st;
+    }
+    /* the backend writes the temporary by name */
+    if (a->file) {
+        int closed = fclose(a->file);
+        a->file = NULL;
+        if (closed != 0) {
+            mf_io_msg(msg, msg_size, a->path, "cannot close temporary file %s", a->tmp_path);
+            mf_io_atomic_abort(a);
+            return MF_ERR_IO;
+        }
+    }
+    st = LOAD_BACKEND()->write(a->path, a->tmp_path, img, &opt, msg, msg_size);
+    if (st != MF_OK)
+        mf_io_atomic_abort(a);
+    return st;
+}
+
+mf_status mf_image_write_ex(const char *path, const mf_image *img, const mf_image_write_options *options, char *msg,
+                            size_t msg_size)
+{
+    mf_io_msg_clear(msg, msg_size);
+    mf_image_write_options opt;
+    mf_status st = write_args(path, img, options, &opt, msg, msg_size);
     if (st != MF_OK)
         return st;
-    /* the backend writes the temporary by name */
-    int closed = fclose(a.file);
-    a.file = NULL;
-    if (closed != 0) {
-        mf_io_msg(msg, msg_size, path, "cannot close temporary file %s", a.tmp_path);
-        mf_io_atomic_abort(&a);
-        return MF_ERR_IO;
-    }
-    st = b->write(path, a.tmp_path, img, &opt, msg, msg_size);
-    if (st != MF_OK) {
-        mf_io_atomic_abort(&a);
+    mf_io_atomic a;
+    if ((st = mf_io_atomic_begin(&a, path, msg, msg_size)) != MF_OK)
         return st;
-    }
+    if ((st = mf_image_write_into(&a, img, &opt, msg, msg_size)) != MF_OK)
+        return st;
     return mf_io_atomic_commit(&a, msg, msg_size);
 }

@@ -2,6 +2,7 @@
 #if defined(__unix__) || defined(__APPLE__)
 #define _POSIX_C_SOURCE 200809L
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 #define MF_IO_POSIX 1
 #endif
@@ -204,6 +205,48 @@ mf_status mf_io_read_file(const char *path, const char *msg_path, unsigned char 
     return MF_OK;
 }
 
+/* ---- directories -------------------------------------------------------------------------- */
+
+mf_status mf_io_make_dirs(const char *dir, char *msg, size_t msg_size)
+{
+#ifdef MF_IO_POSIX
+    size_t n = dir ? strlen(dir) : 0;
+    if (n == 0) {
+        mf_io_msg(msg, msg_size, dir, "invalid argument (NULL or empty directory)");
+        return MF_ERR_DOMAIN;
+    }
+    char *path = malloc(n + 1);
+    if (!path) {
+        mf_io_msg(msg, msg_size, dir, "out of memory");
+        return MF_ERR_ALLOC;
+    }
+    memcpy(path, dir, n + 1);
+    int err = 0;
+    for (size_t i = 1; i <= n && !err; ++i)
+        if (path[i] == '/' || path[i] == '\0') {
+            char c = path[i];
+            path[i] = '\0';
+            if (mkdir(path, 0777) != 0 && errno != EEXIST)
+                err = errno;
+            path[i] = c;
+        }
+    free(path);
+    struct stat st;
+    if (!err && stat(dir, &st) != 0)
+        err = errno;
+    if (!err && !S_ISDIR(st.st_mode))
+        err = ENOTDIR;
+    if (err) {
+        mf_io_msg(msg, msg_size, dir, "cannot create the directory: %s", strerror(err));
+        return MF_ERR_IO;
+    }
+    return MF_OK;
+#else
+    mf_io_msg(msg, msg_size, dir, "creating directories needs POSIX");
+    return MF_ERR_UNSUPPORTED;
+#endif
+}
+
 /* ---- the atomic write ---------------------------------------------------------------------- */
 
 static void atomic_release(mf_io_atomic *a)
@@ -323,6 +366,39 @@ mf_status mf_io_atomic_commit(mf_io_atomic *a, char *msg, size_t msg_size)
         return MF_ERR_IO;
     }
     atomic_release(a);
+    return MF_OK;
+}
+
+void mf_io_atomic_abort_all(mf_io_atomic *a, size_t n)
+{
+    for (size_t i = 0; a && i < n; ++i)
+        mf_io_atomic_abort(&a[i]);
+}
+
+mf_status mf_io_atomic_commit_all(mf_io_atomic *a, size_t n, char *msg, size_t msg_size)
+{
+    for (size_t i = 0; i < n; ++i) {
+        mf_status st = mf_io_atomic_finish(&a[i], msg, msg_size);
+        if (st != MF_OK) {
+            mf_io_atomic_abort_all(a, n);
+            return st;
+        }
+    }
+    for (size_t i = 0; i < n; ++i) {
+        if (rename(a[i].tmp_path, a[i].path) != 0) {
+            int err = errno;
+            mf_io_msg(msg, msg_size, a[i].path, "cannot rename %s to it: %s", a[i].tmp_path, strerror(err));
+            for (size_t k = 0; k < i; ++k)
+                remove(a[k].path);
+            mf_io_atomic_abort_all(a, n);
+            return MF_ERR_IO;
+        }
+        /* renamed: nothing left to remove on a later failure but the target itself */
+        free(a[i].tmp_path);
+        a[i].tmp_path = NULL;
+    }
+    for (size_t i = 0; i < n; ++i)
+        atomic_release(&a[i]);
     return MF_OK;
 }
 

@@ -60,6 +60,27 @@ void mf_json_float(mf_buf *b, float v)
 
 void mf_json_bool(mf_buf *b, int v) { mf_buf_puts(b, v ? "true" : "false"); }
 
+void mf_json_checks(mf_buf *b, const mf_check *c, int n)
+{
+    mf_buf_puts(b, "[\n");
+    for (int i = 0; i < n; ++i) {
+        mf_buf_puts(b, "    {\"name\": ");
+        mf_json_string(b, c[i].name);
+        mf_buf_puts(b, ", \"what\": ");
+        mf_json_string(b, c[i].what);
+        mf_buf_puts(b, ", \"worst\": ");
+        mf_json_number(b, c[i].worst);
+        mf_buf_puts(b, ", \"bound\": ");
+        mf_json_number(b, c[i].bound);
+        mf_buf_puts(b, ", \"passed\": ");
+        mf_json_bool(b, c[i].passed);
+        mf_buf_printf(b, ", \"cases\": %ld, \"worst_at\": ", c[i].cases);
+        mf_json_string(b, c[i].worst_at);
+        mf_buf_puts(b, i + 1 < n ? "},\n" : "}\n");
+    }
+    mf_buf_puts(b, "  ]");
+}
+
 int mf_json_nonfinite(const char *s, double *out)
 {
     if (!s)

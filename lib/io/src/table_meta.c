@@ -237,41 +237,34 @@ mf_status io_write_with_sidecar(const char *path, const mf_buf *data, const mf_t
     mf_buf_printf(&sp, "%s.json", path);
     mf_buf_put(&sp, "", 1);
     mf_status st = MF_OK;
-    mf_io_atomic as, ad;
-    memset(&as, 0, sizeof as);
-    memset(&ad, 0, sizeof ad);
+    mf_io_atomic at[2]; /* the sidecar, the data */
+    memset(at, 0, sizeof at);
     if (side.failed || sp.failed) {
         mf_io_msg(msg, msg_size, path, "out of memory");
         st = MF_ERR_ALLOC;
     }
-    /* both temporaries written and synced before either replaces its target, so a full disk
-     * leaves neither file */
     if (st == MF_OK)
-        st = mf_io_atomic_begin(&as, sp.data, msg, msg_size);
+        st = mf_io_atomic_begin(&at[0], sp.data, msg, msg_size);
     if (st == MF_OK)
-        st = mf_io_atomic_begin(&ad, path, msg, msg_size);
+        st = mf_io_atomic_begin(&at[1], path, msg, msg_size);
     const mf_io_atomic *bad = NULL;
     errno = 0;
-    if (st == MF_OK && side.len && fwrite(side.data, 1, side.len, as.file) != side.len)
-        bad = &as;
-    else if (st == MF_OK && data->len && fwrite(data->data, 1, data->len, ad.file) != data->len)
-        bad = &ad;
+    if (st == MF_OK && side.len && fwrite(side.data, 1, side.len, at[0].file) != side.len)
+        bad = &at[0];
+    else if (st == MF_OK && data->len && fwrite(data->data, 1, data->len, at[1].file) != data->len)
+        bad = &at[1];
     if (bad) {
         int err = errno;
         mf_io_msg(msg, msg_size, bad->path, "cannot write temporary file %s: %s", bad->tmp_path,
                   err ? strerror(err) : "write error");
         st = MF_ERR_IO;
     }
+    /* both temporaries written and synced before either replaces its target, so a full disk
+     * leaves neither file */
     if (st == MF_OK)
-        st = mf_io_atomic_finish(&as, msg, msg_size);
-    if (st == MF_OK)
-        st = mf_io_atomic_finish(&ad, msg, msg_size);
-    if (st == MF_OK)
-        st = mf_io_atomic_commit(&as, msg, msg_size);
-    if (st == MF_OK)
-        st = mf_io_atomic_commit(&ad, msg, msg_size);
-    mf_io_atomic_abort(&as);
-    mf_io_atomic_abort(&ad);
+        st = mf_io_atomic_commit_all(at, 2, msg, msg_size);
+    else
+        mf_io_atomic_abort_all(at, 2);
     mf_buf_free(&side);
     mf_buf_free(&sp);
     return st;

@@ -34,6 +34,7 @@
 #include <stdint.h>
 
 #include <mfkit/mf_core.h>
+#include <mfkit/io/mf_io.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -151,6 +152,15 @@ typedef struct mf_image_write_options {
  */
 mf_status mf_image_write_ex(const char *path, const mf_image *img, const mf_image_write_options *opt, char *msg,
                             size_t msg_size) MF_WARN_UNUSED;
+
+/*
+ * mf_image_write_ex into the temporary of an atomic write begun on the target path
+ * (mf_io_atomic_begin; the format is that of a->path's extension), without the rename: for
+ * several files committed together (mf_io_atomic_commit_all).  On failure a is aborted (its
+ * temporary removed); on success commit or abort it.
+ */
+mf_status mf_image_write_into(mf_io_atomic *a, const mf_image *img, const mf_image_write_options *opt, char *msg,
+                              size_t msg_size) MF_WARN_UNUSED;
 
 /* Free the pixels of an image filled by mf_image_read and zero it.  NULL and zeroed images are
  * accepted (no-op); calling it twice is safe. */

@@ -77,6 +77,13 @@ void mf_io_msg_clear(char *msg, size_t msg_size);
 mf_status mf_io_read_file(const char *path, const char *msg_path, unsigned char **data, size_t *len, int *missing,
                           char *msg, size_t msg_size) MF_WARN_UNUSED;
 
+/* ---- directories -------------------------------------------------------------------------- */
+
+/* mkdir -p: creates dir and its missing parents (mode 0777 less the umask).  MF_OK if dir is
+ * (now) a directory; MF_ERR_IO with "dir: cannot create the directory: reason" (a path that
+ * exists as a file: "Not a directory"); MF_ERR_UNSUPPORTED where POSIX is missing. */
+mf_status mf_io_make_dirs(const char *dir, char *msg, size_t msg_size) MF_WARN_UNUSED;
+
 /* ---- the atomic write ---------------------------------------------------------------------- */
 
 /* Writes len bytes to path atomically (see above). */
@@ -111,6 +118,19 @@ mf_status mf_io_atomic_begin(mf_io_atomic *a, const char *path, char *msg, size_
 mf_status mf_io_atomic_finish(mf_io_atomic *a, char *msg, size_t msg_size) MF_WARN_UNUSED;
 mf_status mf_io_atomic_commit(mf_io_atomic *a, char *msg, size_t msg_size) MF_WARN_UNUSED;
 void mf_io_atomic_abort(mf_io_atomic *a);
+
+/*
+ * Several files committed together (all or nothing), e.g. a data file and its sidecar, or every
+ * level of a MIP chain: begin and write each, then
+ *   mf_io_atomic_commit_all  finishes every temporary (flush, fsync, close) before any rename, so
+ *                            a full disk or a write error leaves no target changed; then renames
+ *                            them in order.  If a rename fails (the directory removed or made
+ *                            read-only midway), the targets already renamed are removed, so that
+ *                            no mix of files from two runs is left.  Always releases every a[i].
+ *   mf_io_atomic_abort_all   mf_io_atomic_abort of each (zeroed or released entries accepted).
+ */
+mf_status mf_io_atomic_commit_all(mf_io_atomic *a, size_t n, char *msg, size_t msg_size) MF_WARN_UNUSED;
+void mf_io_atomic_abort_all(mf_io_atomic *a, size_t n);
 
 #ifdef __cplusplus
 }

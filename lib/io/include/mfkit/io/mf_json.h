@@ -15,6 +15,7 @@
 #define MF_JSON_H
 
 #include <mfkit/io/mf_io.h>
+#include <mfkit/mf_check.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -29,6 +30,14 @@ void mf_json_number(mf_buf *b, double v);
 void mf_json_float(mf_buf *b, float v);
 /* true / false. */
 void mf_json_bool(mf_buf *b, int v);
+/* A report of n checks (mf_check.h), indented as the value of an object member at the top level:
+ *   [
+ *       {"name": ..., "what": ..., "worst": ..., "bound": ..., "passed": ..., "cases": ..., "worst_at": ...},
+ *       ...
+ *     ]
+ * (four spaces before each check, two before the closing bracket; numbers as mf_json_number).
+ * The one format of the check reports: mfkit validate --json and the LTC bake's gate report. */
+void mf_json_checks(mf_buf *b, const mf_check *c, int n);
 /* Non-zero, with *out set, if s is one of the strings mf_json_number writes for a non-finite value. */
 int mf_json_nonfinite(const char *s, double *out);
 
