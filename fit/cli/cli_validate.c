@@ -10,10 +10,8 @@
 #include "cli_util.h"
 
 #include "mfkit/mfkit.h"
-#ifdef MFKIT_HAVE_CXX_DEPS
-#include "mfkit/mf_ltc_reference.h"
+#include "mfkit/io/mf_ltc_reference.h"
 #include "mfkit/io/mf_table_io.h"
-#endif
 
 #include <stdlib.h>
 #include <string.h>
@@ -86,10 +84,6 @@ static int validate_table(const char *path, const char *brdf, int quick, uint64_
                           int quiet)
 {
     const char *cmd = "validate";
-#ifndef MFKIT_HAVE_CXX_DEPS
-    (void)path, (void)brdf, (void)quick, (void)seed, (void)json, (void)json_file, (void)quiet;
-    return cli_error(cmd, "reading table files needs a build with MFKIT_WITH_CXX_DEPS=ON");
-#else
     mf_table t;
     char msg[1024];
     mf_status st;
@@ -193,7 +187,6 @@ static int validate_table(const char *path, const char *brdf, int quick, uint64_
     cli_buf_free(&jb);
     cli_buf_free(&tb);
     return rc;
-#endif
 }
 
 int cli_validate(int argc, char **argv)

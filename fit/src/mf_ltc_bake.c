@@ -2,7 +2,7 @@
  * mf_ltc_bake.c -- fit -> gate -> export of an isotropic LTC table (see mf_ltc_bake.h).
  */
 #define _POSIX_C_SOURCE 200809L
-#include "mfkit/mf_ltc_bake.h"
+#include "mfkit/fit/mf_ltc_bake.h"
 #include "mfkit/io/mf_table_io.h"
 
 #include <errno.h>

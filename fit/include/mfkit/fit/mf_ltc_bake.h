@@ -16,7 +16,7 @@
 #define MF_LTC_BAKE_H
 
 #include "mfkit/mf_ltc_gate.h"
-#include "mfkit/mf_ltcfit.h"
+#include "mfkit/fit/mf_ltcfit.h"
 #include "mfkit/mf_model.h"
 #include "mfkit/mf_validate.h"
 
