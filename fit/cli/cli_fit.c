@@ -420,6 +420,11 @@ int cli_fit(int argc, char **argv)
         fprintf(stderr, "exported %s/%s.* %s\n", bo.out_dir, r.stem,
                 r.gate_passed ? "(validated)" : "(NOT validated: --force)");
     }
+#ifndef MFKIT_CLI_HAVE_IMAGE
+    if (st == MF_OK)
+        fprintf(stderr, "mfkit fit ltc: %s/%s.exr and %s_half.exr not written: EXR is unsupported (configured with "
+                        "MFKIT_WITH_OIIO=OFF)\n", bo.out_dir, r.stem, r.stem);
+#endif
     mf_ltc_bake_report_free(&r);
     return rc;
 }

@@ -117,12 +117,13 @@ static void usage(FILE *f)
 #ifdef MFKIT_CLI_FRONT
 /* Runs mfkit-full with the same argv (stdin, stdout, stderr and the exit status pass through
  * exec unchanged), or says in one line why it cannot; returns only on failure. */
-static int run_full(const char *cmd, unsigned needs, int argc, char **argv)
+static int run_full(const cli_entry *e, unsigned needs, int argc, char **argv)
 {
+    const char *cmd = e->name;
     if ((needs & CLI_NEEDS_SOLVER) && !MFKIT_CLI_WITH_CERES)
         return cli_error(cmd, "needs the Ceres build (configured with MFKIT_WITH_CERES=OFF)");
     if ((needs & CLI_NEEDS_IMAGE) && !MFKIT_CLI_WITH_OIIO) {
-        for (int i = 2; i < argc; ++i)
+        for (int i = 2; e->needs == needs_exr_args && i < argc; ++i) /* name the EXR file */
             if (argv[i][0] != '-' && mf_table_format_from_path(argv[i]) == MF_TABLE_FORMAT_EXR)
                 return cli_error(cmd, "%s: EXR needs the OpenImageIO build (configured with MFKIT_WITH_OIIO=OFF)",
                                  argv[i]);
@@ -170,7 +171,7 @@ int main(int argc, char **argv)
 #ifdef MFKIT_CLI_FRONT
         unsigned needs = k_commands[i].needs(argc - 1, argv + 1);
         if (needs != CLI_NEEDS_CORE)
-            return run_full(c, needs, argc, argv);
+            return run_full(&k_commands[i], needs, argc, argv);
 #endif
         return k_commands[i].run(argc - 1, argv + 1);
     }
