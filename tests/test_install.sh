@@ -42,6 +42,15 @@ if cmake -S "$src/tests/consumer" -B "$work/consumer" "${cargs[@]}" > "$work/log
 else
   cat "$work/log"; ok false "the consumer project does not build against the installed package"
 fi
+# a C-only project (no CXX) against the same package: the core and table I/O need no C++
+if [ "$with_ceres" = 1 ]; then
+  if cmake -S "$src/tests/consumer" -B "$work/consumer_c" -DCMAKE_PREFIX_PATH="$p" > "$work/log" 2>&1 &&
+     cmake --build "$work/consumer_c" >> "$work/log" 2>&1; then
+    ok '"$work/consumer_c/consumer"' "consumer (find_package, C only)"
+  else
+    cat "$work/log"; ok false "a C-only project does not build against the installed package"
+  fi
+fi
 # consumers with pkg-config
 ok 'cc -std=c11 "$src/tests/consumer/consumer.c" -o "$work/consumer_pc" $(pkg-config --cflags --libs mfkit-io) && "$work/consumer_pc"' \
   "consumer (pkg-config mfkit-io)"
