@@ -7,7 +7,7 @@
  *
  * For every TABLE (an mfkit table: .json/.exr/.dds/.npy; or the reference CSV layout, e.g.
  * tests/data/reference/ltc_code_ggx_64.csv) and, with --fit, for a table fitted now by
- * mf_ltcfit_table (fit/include/mfkit/mf_ltcfit.h), it prints:
+ * mf_ltcfit_table (fit/include/mfkit/fit/mf_ltcfit.h), it prints:
  *   - the polygon-shading error against Monte Carlo over V random views BETWEEN the texels
  *     ((r, u) uniform in [0, 1]^2), with the bilinear lookup a shader does (mf_table_lookup of
  *     the 4 minv fields and the magnitude, then mf_ltc_table_unpack), P random quads and
@@ -27,10 +27,10 @@
 #define _POSIX_C_SOURCE 200809L
 #include "study_header.h"
 #include "mfkit/mfkit.h"
-#include "mfkit/mf_ltc_reference.h"
-#include "mfkit/mf_ltcfit.h"
+#include "mfkit/io/mf_ltc_reference.h"
+#include "mfkit/fit/mf_ltcfit.h"
 #include "mfkit/io/mf_table_io.h"
-#include "mfkit/mf_image_oiio.h"
+#include "mfkit/fit/mf_image_oiio.h"
 
 #include <stdio.h>
 #include <stdlib.h>

@@ -55,10 +55,10 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "mfkit/mfkit.h"
-#include "mfkit/mf_ltc_reference.h"
+#include "mfkit/io/mf_ltc_reference.h"
 #include "mfkit/io/mf_io.h"
 #include "mfkit/io/mf_table_io.h"
-#include "mfkit/mf_image_oiio.h"
+#include "mfkit/fit/mf_image_oiio.h"
 
 #include "study_header.h"
 

@@ -14,7 +14,7 @@
 #include <unistd.h>
 
 #include <mfkit/io/mf_image.h>
-#include <mfkit/mf_image_oiio.h>
+#include <mfkit/fit/mf_image_oiio.h>
 
 #include "mf_test.h"
 

@@ -21,7 +21,7 @@
 #include <mfkit/io/mf_image.h>
 #include <mfkit/io/mf_io.h>
 #include <mfkit/io/mf_table_io.h>
-#include <mfkit/mf_image_oiio.h>
+#include <mfkit/fit/mf_image_oiio.h>
 
 static char g_dir[256];
 

@@ -1,7 +1,7 @@
 /*
  * test_ltc_gate.c -- the LTC gate (mf_ltc_gate.h): a table with the exact answer passes every
  * check; deliberately corrupted copies fail the check made for that defect; the reader of the
- * reference CSV (mf_ltc_reference.h, builds with the C++ dependencies) reads the 64 x 64 table.
+ * reference CSV (mf_ltc_reference.h, in mfkit_io) reads the 64 x 64 table.
  *
  * The exact table: Lambert (f cos = cos / pi) is the clamped cosine itself, so its LTC is the
  * identity (minv = [1, 0, 0, 1]) with magnitude 1 and fresnel = integral of cos/pi (1 - wo.wh)^5,
@@ -14,7 +14,7 @@
 
 #include "mfkit/mfkit.h"
 #ifdef MFKIT_HAVE_FIT
-#include "mfkit/mf_ltc_reference.h"
+#include "mfkit/io/mf_ltc_reference.h"
 #endif
 
 #include <string.h>

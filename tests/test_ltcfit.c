@@ -7,7 +7,7 @@
 #include "mf_test.h"
 
 #include "mfkit/mfkit.h"
-#include "mfkit/mf_ltcfit.h"
+#include "mfkit/fit/mf_ltcfit.h"
 
 #include <string.h>
 #include <unistd.h>

@@ -41,7 +41,7 @@
 
 #include <mfkit/io/mf_image.h>
 #include <mfkit/mfkit.h>
-#include <mfkit/mf_image_oiio.h>
+#include <mfkit/fit/mf_image_oiio.h>
 
 #include "mf_test.h"
 

@@ -1,7 +1,7 @@
 #!/bin/bash
 # test_plots: the accuracy studies (tiny grids) and analysis/plot.py end to end (issue 6).
 #   test_plots.sh SOURCE_DIR STUDY_SMITH STUDY_FURNACE STUDY_PROXY STUDY_LEADR_GRID
-# MFKIT_STUDY_LTC_TEXELS (environment; unset without the C++ dependencies) is run on the reference
+# MFKIT_STUDY_LTC_TEXELS (environment; unset without OpenImageIO) is run on the reference
 # table tests/data/reference/ltc_code_ggx_64.csv (vendored: if it is missing, the test fails).
 # MFKIT_STUDY_SH_IRRADIANCE and MFKIT_STUDY_HALF (environment, set by tests/CMakeLists.txt; the
 # latter only with the C++ dependencies) name study_sh_irradiance and study_half.
@@ -35,7 +35,7 @@ ref=$src/tests/data/reference/ltc_code_ggx_64.csv
 [ -f "$ref" ] || fail "the vendored reference table $ref is missing"
 texels=${MFKIT_STUDY_LTC_TEXELS:-}
 if [ -z "$texels" ]; then
-    echo "test_plots: MFKIT_STUDY_LTC_TEXELS not set (study_ltc_texels needs MFKIT_WITH_CXX_DEPS=ON): its figures are not checked"
+    echo "test_plots: MFKIT_STUDY_LTC_TEXELS not set (study_ltc_texels needs MFKIT_WITH_OIIO=ON): its figures are not checked"
 else
     lt=$tmp/data/ltc_texels.csv
     "$texels" --help | grep -q '^usage: study_ltc_texels' || fail "study_ltc_texels --help"
@@ -82,7 +82,7 @@ sh_figs="sh_irradiance_error sh_irradiance_curves"
 half_figs=
 half_ref=$ref
 if [ -z "${MFKIT_STUDY_HALF:-}" ]; then
-    echo "test_plots: study_half not built (MFKIT_WITH_CXX_DEPS=OFF): its figures are not checked"
+    echo "test_plots: study_half not built (MFKIT_WITH_OIIO=OFF): its figures are not checked"
 else
     hc=$tmp/data/half_error.csv
     "$MFKIT_STUDY_HALF" --help | grep -q '^usage: study_half' || fail "study_half --help"

@@ -13,7 +13,7 @@
 
 #include <mfkit/mf_filter.h>
 #include <mfkit/mf_proxy.h>
-#include <mfkit/mf_proxyfit.h>
+#include <mfkit/fit/mf_proxyfit.h>
 #include <mfkit/io/mf_table_io.h>
 
 #include "mf_test.h"

@@ -6,7 +6,7 @@
 #include <math.h>
 #include <string.h>
 
-#include <mfkit/mf_solver.h>
+#include <mfkit/fit/mf_solver.h>
 
 #include "mf_test.h"
 

@@ -25,7 +25,7 @@
 #include <mfkit/mf_rng.h>
 #include <mfkit/mf_table.h>
 #include <mfkit/io/mf_table_io.h>
-#include <mfkit/mf_image_oiio.h>
+#include <mfkit/fit/mf_image_oiio.h>
 
 #include "mf_test.h"
 

@@ -26,7 +26,7 @@
 
 #include <mfkit/io/mf_image.h>
 #include <mfkit/io/mf_table_io.h>
-#include <mfkit/mf_image_oiio.h>
+#include <mfkit/fit/mf_image_oiio.h>
 #include <mfkit/mf_rng.h>
 #include <mfkit/mf_table.h>
 

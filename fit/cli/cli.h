@@ -5,9 +5,9 @@
 #include <stdio.h>
 
 int cli_eval(int argc, char **argv);     /* argv[0] = "eval" */
-int cli_validate(int argc, char **argv); /* argv[0] = "validate" */
-int cli_table(int argc, char **argv);    /* argv[0] = "table"; an error without OpenImageIO */
-int cli_fit(int argc, char **argv);      /* argv[0] = "fit"; an error without Ceres/OpenImageIO */
+int cli_validate(int argc, char **argv); /* argv[0] = "validate"; an EXR table needs the image backend */
+int cli_table(int argc, char **argv);    /* argv[0] = "table"; EXR needs the image backend */
+int cli_fit(int argc, char **argv);      /* argv[0] = "fit"; usage and --list only without Ceres */
 int cli_maps(int argc, char **argv);     /* argv[0] = "maps"; an error without OpenImageIO */
 int cli_sh(int argc, char **argv);       /* argv[0] = "sh"; an error without OpenImageIO */
 

@@ -21,9 +21,9 @@
 #include <time.h>
 #include <unistd.h>
 
-#ifdef MFKIT_HAVE_CXX_DEPS
-#include "mfkit/mf_ltc_bake.h"
-#include "mfkit/mf_proxyfit.h"
+#ifdef MFKIT_CLI_HAVE_SOLVER
+#include "mfkit/fit/mf_ltc_bake.h"
+#include "mfkit/fit/mf_proxyfit.h"
 #include "mfkit/io/mf_table_io.h"
 #endif
 
@@ -151,17 +151,32 @@ static const cli_command k_proxy_cmd = {
 
 static void proxy_usage(FILE *f) { cli_opt_usage(&k_proxy_cmd, f); }
 
-#ifndef MFKIT_HAVE_CXX_DEPS
+#ifndef MFKIT_CLI_HAVE_SOLVER
+/* Without the solver (the front end, or mfkit-full of a build without Ceres): the usage texts and
+ * `fit ltc --list`, as the full version prints them; everything else needs Ceres. */
 int cli_fit(int argc, char **argv)
 {
-    for (int i = 2; argc >= 2 && !strcmp(argv[1], "ltc") && i < argc; ++i)
-        if (!strcmp(argv[i], "--list"))
-            return list_models();
-    if (argc >= 2 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))) {
+    if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
+        usage(argc < 2 ? stderr : stdout);
+        return argc < 2 ? CLI_EXIT_USAGE : 0;
+    }
+    int help = 0, list = 0;
+    for (int i = 2; i < argc; ++i) {
+        help |= !strcmp(argv[i], "--help") || !strcmp(argv[i], "-h");
+        list |= !strcmp(argv[i], "--list");
+    }
+    int ltc = !strcmp(argv[1], "ltc"), proxy = !strcmp(argv[1], "ggx-proxy");
+    if (ltc && help) {
         usage(stdout);
         return 0;
     }
-    return cli_error("fit", "not available: mfkit was built without Ceres and OpenImageIO");
+    if (ltc && list)
+        return list_models();
+    if (proxy && help) {
+        proxy_usage(stdout);
+        return 0;
+    }
+    return cli_error("fit", "needs the Ceres build (configured with MFKIT_WITH_CERES=OFF)");
 }
 #else
 
@@ -376,6 +391,11 @@ int cli_fit(int argc, char **argv)
         fprintf(stderr, "exported %s/%s.* %s\n", bo.out_dir, r.stem,
                 r.gate_passed ? "(validated)" : "(NOT validated: --force)");
     }
+#ifndef MFKIT_CLI_HAVE_IMAGE
+    if (st == MF_OK)
+        fprintf(stderr, "mfkit fit ltc: %s/%s.exr and %s_half.exr not written: EXR is unsupported (configured with "
+                        "MFKIT_WITH_OIIO=OFF)\n", bo.out_dir, r.stem, r.stem);
+#endif
     mf_ltc_bake_report_free(&r);
     return rc;
 }

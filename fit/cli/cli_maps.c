@@ -70,7 +70,7 @@ static const cli_command k_maps_cmd = {
 
 static void usage(FILE *f) { cli_opt_usage(&k_maps_cmd, f); }
 
-#ifndef MFKIT_HAVE_CXX_DEPS
+#ifndef MFKIT_CLI_HAVE_IMAGE
 
 int cli_maps(int argc, char **argv)
 {
@@ -79,7 +79,7 @@ int cli_maps(int argc, char **argv)
             usage(stdout);
             return 0;
         }
-    return cli_error(k_cmd, "built without OpenImageIO (MFKIT_WITH_CXX_DEPS=OFF): image files are not available");
+    return cli_error(k_cmd, "needs the OpenImageIO build (configured with MFKIT_WITH_OIIO=OFF)");
 }
 
 #else

@@ -46,7 +46,7 @@ static const cli_command k_sh_cmd = {
 
 static void usage(FILE *f) { cli_opt_usage(&k_sh_cmd, f); }
 
-#ifndef MFKIT_HAVE_CXX_DEPS
+#ifndef MFKIT_CLI_HAVE_IMAGE
 
 int cli_sh(int argc, char **argv)
 {
@@ -55,7 +55,7 @@ int cli_sh(int argc, char **argv)
             usage(stdout);
             return 0;
         }
-    return cli_error(k_cmd, "built without OpenImageIO (MFKIT_WITH_CXX_DEPS=OFF): image files are not available");
+    return cli_error(k_cmd, "needs the OpenImageIO build (configured with MFKIT_WITH_OIIO=OFF)");
 }
 
 #else

@@ -10,17 +10,6 @@
 
 #include <string.h>
 
-#ifndef MFKIT_HAVE_CXX_DEPS
-
-int cli_table(int argc, char **argv)
-{
-    (void)argc;
-    (void)argv;
-    return cli_error("table", "built without OpenImageIO (MFKIT_WITH_CXX_DEPS=OFF): table files are not available");
-}
-
-#else
-
 #include "mfkit/mf_table.h"
 #include "mfkit/mf_table_kind.h"
 #include "mfkit/io/mf_table_io.h"
@@ -318,4 +307,3 @@ int cli_table(int argc, char **argv)
     return cli_error(k_cmd, "unknown subcommand '%s' (convert, info)", sub);
 }
 
-#endif /* MFKIT_HAVE_CXX_DEPS */

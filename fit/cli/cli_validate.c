@@ -12,10 +12,8 @@
 #include "cli_util.h"
 
 #include "mfkit/mfkit.h"
-#ifdef MFKIT_HAVE_CXX_DEPS
-#include "mfkit/mf_ltc_reference.h"
+#include "mfkit/io/mf_ltc_reference.h"
 #include "mfkit/io/mf_table_io.h"
-#endif
 
 #include <stdlib.h>
 #include <string.h>
@@ -85,7 +83,6 @@ static void report_json(cli_buf *b, const mf_check *c, int n, int all_passed)
     cli_buf_printf(b, "\n}\n");
 }
 
-#ifdef MFKIT_HAVE_CXX_DEPS
 /* The gate of a table kind other than the LTC table's (model-free: GGX proxy, moment maps, ...). */
 static int validate_kind(const char *path, const mf_table *t, const mf_table_kind *kind, double storage_u,
                          const char *brdf, int quick, uint64_t seed, int json, const char *json_file, int quiet)
@@ -139,17 +136,12 @@ static int validate_kind(const char *path, const mf_table *t, const mf_table_kin
     cli_buf_free(&tb);
     return rc;
 }
-#endif
 
 /* The gate of the table's kind on a table file: the LTC gate for LTC tables. */
 static int validate_table(const char *path, const char *brdf, int quick, uint64_t seed, int json, const char *json_file,
                           int quiet)
 {
     const char *cmd = "validate";
-#ifndef MFKIT_HAVE_CXX_DEPS
-    (void)path, (void)brdf, (void)quick, (void)seed, (void)json, (void)json_file, (void)quiet;
-    return cli_error(cmd, "reading table files needs a build with MFKIT_WITH_CXX_DEPS=ON");
-#else
     mf_table t;
     char msg[1024];
     mf_status st;
@@ -270,7 +262,6 @@ static int validate_table(const char *path, const char *brdf, int quick, uint64_
     cli_buf_free(&jb);
     cli_buf_free(&tb);
     return rc;
-#endif
 }
 
 int cli_validate(int argc, char **argv)

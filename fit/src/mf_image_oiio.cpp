@@ -3,7 +3,7 @@
 // No exception crosses the C boundary; every error becomes a status and a "path: reason" message.
 // The dispatcher checks the arguments and owns the atomic write (temporary file, fsync, rename).
 
-#include "mfkit/mf_image_oiio.h"
+#include "mfkit/fit/mf_image_oiio.h"
 
 #include <OpenImageIO/imageio.h>
 

@@ -2,7 +2,8 @@
  * mf_ltc_bake.c -- fit -> gate -> export of an isotropic LTC table (see mf_ltc_bake.h).
  */
 #define _POSIX_C_SOURCE 200809L
-#include "mfkit/mf_ltc_bake.h"
+#include "mfkit/fit/mf_ltc_bake.h"
+#include "mfkit/io/mf_image.h"
 #include "mfkit/io/mf_io.h"
 #include "mfkit/io/mf_json.h"
 #include "mfkit/io/mf_table_io.h"
@@ -90,6 +91,10 @@ static mf_status export_all(const mf_ltc_bake_options *o, const mf_table *t, mf_
     for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i) {
         if ((st = add_file(r, o->out_dir, files[i].suffix, &path)) != MF_OK)
             return st;
+        /* EXR goes through the image API: without a backend (a build without OpenImageIO) the EXR
+         * files are left out, and report->files lists what was written. */
+        if (mf_table_format_from_path(path) == MF_TABLE_FORMAT_EXR && !mf_image_get_backend())
+            continue;
         mf_table_write_options wo;
         mf_table_write_options_default(&wo);
         wo.half_float = files[i].half;

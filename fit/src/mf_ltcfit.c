@@ -1,13 +1,13 @@
 /* mf_ltcfit.c -- LTC table fitting (mf_ltcfit.h; the objective is described there and in
  * docs/tables.md). */
 #define _POSIX_C_SOURCE 200809L
-#include "mfkit/mf_ltcfit.h"
+#include "mfkit/fit/mf_ltcfit.h"
 
 #include "mfkit/mf_brdf.h"
 #include "mfkit/mf_polygon.h"
 #include "mfkit/mf_rng.h"
 #include "mfkit/mf_sample.h"
-#include "mfkit/mf_solver.h"
+#include "mfkit/fit/mf_solver.h"
 #include "mfkit/io/mf_io.h"
 #include "mfkit/io/mf_json.h"
 

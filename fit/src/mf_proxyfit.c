@@ -2,7 +2,7 @@
  * mf_proxyfit.c -- tabulate the exact GGX proxy roughness and fit mf_proxy.h's form with Ceres
  * (see mf_proxyfit.h; derivation in docs/math.md, "GGX proxy: fitted form").
  */
-#include "mfkit/mf_proxyfit.h"
+#include "mfkit/fit/mf_proxyfit.h"
 #include "mfkit/mf_filter.h"
 #include "mfkit/io/mf_io.h"
 #include "mfkit/io/mf_json.h"

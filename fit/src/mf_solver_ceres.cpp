@@ -13,7 +13,7 @@
 // until the active set no longer changes.  Parameters with
 // lower == upper (which Ceres rejects as infeasible) are held fixed throughout.
 
-#include "mfkit/mf_solver.h"
+#include "mfkit/fit/mf_solver.h"
 
 #include <ceres/ceres.h>
 #include <glog/logging.h>

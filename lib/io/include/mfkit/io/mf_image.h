@@ -3,7 +3,7 @@
  *
  * Backends.  mfkit_io itself reads and writes no image format: a program installs a backend
  * once, before its first image call, with mf_image_set_backend.  The OpenImageIO backend (target
- * mfkit_image_oiio, header mfkit/mf_image_oiio.h) is installed by
+ * mfkit_image_oiio, header mfkit/fit/mf_image_oiio.h) is installed by
  *
  *     mf_image_set_backend(mf_image_oiio_backend());
  *

@@ -10,13 +10,15 @@
  * sidecars of mf_table_io.h), <p>_fit.json (mf_ltcfit_write_sidecar) and <p>_gate.json (the
  * gate report: tool, version, brdf, passed, the fit summary and the checks; no timing and no
  * timestamp, so two runs with the same options give the same bytes).  Every file is written
- * atomically; the checkpoint <p>.checkpoint is removed after a successful export.
+ * atomically; the checkpoint <p>.checkpoint is removed after a successful export.  The EXR files
+ * need an image backend (mfkit/io/mf_image.h): without one they are left out and report->files
+ * lists the others.
  */
 #ifndef MF_LTC_BAKE_H
 #define MF_LTC_BAKE_H
 
 #include "mfkit/mf_ltc_gate.h"
-#include "mfkit/mf_ltcfit.h"
+#include "mfkit/fit/mf_ltcfit.h"
 #include "mfkit/mf_model.h"
 #include "mfkit/mf_validate.h"
 

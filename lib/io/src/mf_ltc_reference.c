@@ -1,5 +1,5 @@
 /* mf_ltc_reference.c -- the reference LTC table's CSV as an mfkit LTC table (mf_ltc_reference.h). */
-#include "mfkit/mf_ltc_reference.h"
+#include "mfkit/io/mf_ltc_reference.h"
 
 #include "mfkit/mf_ltc_table.h"
 

@@ -35,7 +35,7 @@
 
 #include <mfkit/mf_core.h>
 #include <mfkit/mf_proxy.h>
-#include <mfkit/mf_solver.h>
+#include <mfkit/fit/mf_solver.h>
 #include <mfkit/mf_table.h>
 
 #ifdef __cplusplus
