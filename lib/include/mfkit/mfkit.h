@@ -10,6 +10,7 @@
 #include "mfkit/mf_fresnel.h"
 #include "mfkit/mf_brdf.h"
 #include "mfkit/mf_albedo.h"
+#include "mfkit/mf_energy.h"
 #include "mfkit/mf_sample.h"
 #include "mfkit/mf_polygon.h"
 #include "mfkit/mf_ltc.h"
