@@ -4,7 +4,8 @@
 
 #include <stdio.h>
 
-int cli_eval(int argc, char **argv);     /* argv[0] = "eval" */
+int cli_eval(int argc, char **argv);
+int cli_energy(int argc, char **argv);   /* argv[0] = "energy" */     /* argv[0] = "eval" */
 int cli_validate(int argc, char **argv); /* argv[0] = "validate" */
 int cli_table(int argc, char **argv);    /* argv[0] = "table"; an error without OpenImageIO */
 int cli_fit(int argc, char **argv);      /* argv[0] = "fit"; an error without Ceres/OpenImageIO */

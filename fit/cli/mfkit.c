@@ -24,6 +24,8 @@ static const cli_entry k_commands[] = {
      "eval FUNCTION   evaluate a core function on CSV rows from stdin (NDFs, Smith, BRDFs, albedo,\n"
      "                  polygons and LTCs, GGX rectangle and proxy, filtering, SH, LEADR; the list:\n"
      "                  mfkit eval --help)"},
+    {"energy", cli_energy, CLI_NEEDS_CORE,
+     "energy KIND --out DIR  DFG (dfg) or Kulla-Conty (kulla-conty) energy tables, gated and exported"},
     {"validate", cli_validate, CLI_NEEDS_CORE,
      "validate [TABLE]\n"
      "                  run the property checks of the core math, or the LTC gate on a table file"},
