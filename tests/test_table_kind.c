@@ -12,7 +12,7 @@
 static void test_registry(void)
 {
     int n = mf_table_kind_count();
-    CHECK(n == 3);
+    CHECK(n == 5);
     CHECK(mf_table_kind_at(-1) == NULL && mf_table_kind_at(n) == NULL);
     CHECK(mf_table_kind_find("no_such_kind") == NULL && mf_table_kind_find(NULL) == NULL);
     for (int i = 0; i < n; ++i) {

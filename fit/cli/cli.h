@@ -5,6 +5,7 @@
 #include <stdio.h>
 
 int cli_eval(int argc, char **argv);     /* argv[0] = "eval" */
+int cli_energy(int argc, char **argv);   /* argv[0] = "energy"; EXR only with the image backend */
 int cli_validate(int argc, char **argv); /* argv[0] = "validate"; an EXR table needs the image backend */
 int cli_table(int argc, char **argv);    /* argv[0] = "table"; EXR needs the image backend */
 int cli_fit(int argc, char **argv);      /* argv[0] = "fit"; usage and --list only without Ceres */

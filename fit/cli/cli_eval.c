@@ -27,6 +27,7 @@ typedef struct {
     mf_fresnel_type fresnel;
     mf_g2_form g2;
     long points;
+    int points_set;
     mf_polygon_sided sided;
     long grid;                      /* leadr: N of the N x N grid */
     double lambda;                  /* leadr: extent of the grid in standard deviations */
@@ -116,8 +117,10 @@ static void fn_albedo(const eval_opts *o, const double *in, double *out)
     double c = in[1];
     mf_microfacet m = {mf_ndf_make(o->ndf, in[0], in[0]), o->g2, {MF_FRESNEL_NONE, 0.0, 0.0, 0.0}};
     mf_result r;
+    /* --points N: the old n x n product rule; by default the rule split at the horizon of wi
+     * (mf_albedo.h), whose albedo_err bounds the error */
     if (!(c > 0.0 && c <= 1.0) || mf_brdf_microfacet_albedo(&m, mf_vec3_make(sqrt(1.0 - c * c), 0.0, c),
-                                                            (int)o->points, &r) != MF_OK) {
+                                                            o->points_set ? (int)o->points : 0, &r) != MF_OK) {
         out[0] = out[1] = NAN;
         return;
     }
@@ -300,7 +303,8 @@ static const cli_opt k_eval_opts[E_NOPTS] = {
     {.name = "--g2", .kind = CLI_OPT_ENUM, .choices = k_g2_names, .mask = OPT_G2, .def = "joint",
      .help = "masking-shadowing of brdf and albedo"},
     {.name = "--points", .metavar = "N", .kind = CLI_OPT_INT, .lo = 16, .hi = 2048, .multiple = 8, .mask = OPT_POINTS,
-     .def = "256", .help = "albedo only: quadrature points per axis, a multiple of 8 in [16, 2048]"},
+     .help = "albedo only: use the old N x N product rule (a multiple of 8 in [16, 2048]) instead of the default "
+             "rule split at the horizon of wi, whose albedo_err bounds its error"},
     {.name = "--sided", .kind = CLI_OPT_ENUM, .choices = k_sided_names, .mask = OPT_SIDED, .def = "two",
      .help = "polygon functions: two counts the polygon from either side; one only when it faces the shading "
              "point (vertices clockwise seen from it)"},
@@ -379,7 +383,7 @@ int cli_eval(int argc, char **argv)
     if (!e)
         return cli_error(cmd, "missing FUNCTION (see 'mfkit eval --help')");
 
-    eval_opts o = {MF_NDF_GGX, 0, MF_FRESNEL_NONE, MF_G2_JOINT, 256, MF_POLYGON_TWO_SIDED,
+    eval_opts o = {MF_NDF_GGX, 0, MF_FRESNEL_NONE, MF_G2_JOINT, 256, 0, MF_POLYGON_TWO_SIDED,
                    5, 1.8, MF_LEADR_GRID_END_POINTS};
     static const mf_ndf_type ndfs[] = {MF_NDF_GGX, MF_NDF_BECKMANN};
     static const mf_fresnel_type fresnels[] = {MF_FRESNEL_NONE, MF_FRESNEL_SCHLICK};
@@ -393,7 +397,7 @@ int cli_eval(int argc, char **argv)
     if (v[E_G2].set)
         o.g2 = g2s[v[E_G2].i];
     if (v[E_POINTS].set)
-        o.points = v[E_POINTS].i;
+        o.points = v[E_POINTS].i, o.points_set = 1;
     if (v[E_SIDED].set)
         o.sided = sideds[v[E_SIDED].i];
     if (v[E_GRID].set)

@@ -80,11 +80,20 @@ static unsigned needs_image(int argc, char **argv)
     return has_arg(argc, argv, "--help", "-h") ? CLI_NEEDS_CORE : CLI_NEEDS_IMAGE;
 }
 
+/* energy: its tables are plain C, and it writes EXR too where the build has the image backend */
+static unsigned needs_image_if_built(int argc, char **argv)
+{
+    return MFKIT_CLI_WITH_OIIO && !has_arg(argc, argv, "--help", "-h") ? CLI_NEEDS_IMAGE : CLI_NEEDS_CORE;
+}
+
 static const cli_entry k_commands[] = {
     {"eval", cli_eval, needs_core,
      "eval FUNCTION   evaluate a core function on CSV rows from stdin (NDFs, Smith, BRDFs, albedo,\n"
      "                  polygons and LTCs, GGX rectangle and proxy, filtering, SH, LEADR; the list:\n"
      "                  mfkit eval --help)"},
+    {"energy", cli_energy, needs_image_if_built,
+     "energy KIND --out DIR\n"
+     "                  DFG (dfg) or Kulla-Conty (kulla-conty) energy tables, gated and exported"},
     {"validate", cli_validate, needs_exr_args,
      "validate [TABLE]\n"
      "                  run the property checks of the core math, or the LTC gate on a table file"},

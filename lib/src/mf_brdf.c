@@ -1,5 +1,6 @@
 /* mf_brdf.c -- microfacet, LEADR and Lambert BRDFs and their albedo (see mf_brdf.h). */
 #include "mfkit/mf_brdf.h"
+#include "mfkit/mf_albedo.h"
 #include "mfkit/mf_quad.h"
 #include "mfkit/mf_sample.h"
 
@@ -156,6 +157,8 @@ mf_status mf_brdf_microfacet_albedo(const mf_microfacet *m, mf_vec3 wo, int n, m
     out->val = out->err = NAN;
     if (!m || !mf_ndf_valid(m->ndf) || !mf_vec3_isfinite(wo) || !(wo.z > 0.0) || isnan(mf_fresnel_eval(m->fresnel, 1.0)))
         return MF_ERR_DOMAIN;
+    if (n == 0) /* the panels split at the horizon of wi (mf_albedo.h) */
+        return mf_albedo_microfacet(m, wo, out);
     albedo_ctx c = {m, wo, mf_smith_g1(m->ndf, wo)};
     return albedo_rule(microfacet_albedo_integrand, &c, n, out);
 }

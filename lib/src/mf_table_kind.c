@@ -1,6 +1,7 @@
 /* mf_table_kind.c -- the registry of table kinds (see mf_table_kind.h). */
 #include "mfkit/mf_table_kind.h"
 
+#include "mfkit/mf_energy.h"
 #include "mfkit/mf_filter.h"
 #include "mfkit/mf_ltc_gate.h"
 #include "mfkit/mf_ltc_table.h"
@@ -234,6 +235,34 @@ static int moment_layout_ok(const mf_table *t, char *why, size_t why_size)
     return layout_by_declaration(kind_named("moment_map"), t, why, why_size);
 }
 
+/* ---- the energy tables (mf_energy.h) ------------------------------------------------------- */
+
+static int dfg_layout_ok(const mf_table *t, char *why, size_t why_size)
+{
+    return layout_by_declaration(kind_named("dfg"), t, why, why_size);
+}
+
+static int kc_layout_ok(const mf_table *t, char *why, size_t why_size)
+{
+    return layout_by_declaration(kind_named("kulla_conty"), t, why, why_size);
+}
+
+static mf_status dfg_gate(const mf_table *t, const mf_brdf_model *model, const void *options, mf_check *checks, int cap,
+                          int *count)
+{
+    (void)model;
+    (void)options;
+    return mf_energy_dfg_gate(t, checks, cap, count);
+}
+
+static mf_status kc_gate(const mf_table *t, const mf_brdf_model *model, const void *options, mf_check *checks, int cap,
+                         int *count)
+{
+    (void)model;
+    (void)options;
+    return mf_energy_kulla_conty_gate(t, checks, cap, count);
+}
+
 /* ---- the registry ---------------------------------------------------------------------------- */
 
 static const mf_table_kind_axis k_ltc_axes[2] = {
@@ -250,6 +279,19 @@ static const mf_table_kind_axis k_moment_axes[2] = {
     {"v", "tex_v", MF_AXIS_IDENTITY, -INFINITY, 0, 1.0, 0.0},
 };
 
+static const mf_table_kind_axis k_dfg_axes[2] = {
+    {"mu", "cos_theta_o", MF_AXIS_IDENTITY, -INFINITY, MF_DFG_DEFAULT_SIZE, 0.5 / MF_DFG_DEFAULT_SIZE,
+     1.0 - 0.5 / MF_DFG_DEFAULT_SIZE},
+    {"r", "alpha", MF_AXIS_SQUARE, MF_ENERGY_ALPHA_MIN, MF_DFG_DEFAULT_SIZE, 0.5 / MF_DFG_DEFAULT_SIZE,
+     1.0 - 0.5 / MF_DFG_DEFAULT_SIZE},
+};
+static const mf_table_kind_axis k_kc_axes[2] = {
+    {"mu", "cos_theta_o", MF_AXIS_IDENTITY, -INFINITY, MF_KULLA_CONTY_DEFAULT_SIZE, 0.5 / MF_KULLA_CONTY_DEFAULT_SIZE,
+     1.0 - 0.5 / MF_KULLA_CONTY_DEFAULT_SIZE},
+    {"r", "alpha", MF_AXIS_SQUARE, MF_ENERGY_ALPHA_MIN, MF_KULLA_CONTY_DEFAULT_SIZE, 0.5 / MF_KULLA_CONTY_DEFAULT_SIZE,
+     1.0 - 0.5 / MF_KULLA_CONTY_DEFAULT_SIZE},
+};
+
 static const mf_table_kind k_kinds[] = {
     {"ltc_isotropic", "isotropic LTC table: inverse-matrix fields, magnitude, fresnel, sphere over (r, u)", 2,
      k_ltc_axes, MF_LTC_NFIELDS, mf_ltc_table_fields, MF_LTC_F_MAGNITUDE + 1, ltc_layout_ok,
@@ -260,6 +302,11 @@ static const mf_table_kind k_kinds[] = {
     {"moment_map", "one MIP level of a LEAN/LEADR moment map: E[s], E[s s^T] of the slopes per texel", 2, k_moment_axes,
      MF_MOMENT_TABLE_NFIELDS, mf_moment_table_fields, MF_MOMENT_TABLE_NFIELDS, moment_layout_ok, k_moment_checks, 2,
      moment_gate},
+    {"dfg", "split-sum DFG: Schlick scale and bias of the microfacet albedo over (cos theta_o, sqrt alpha)", 2,
+     k_dfg_axes, MF_DFG_NFIELDS, mf_dfg_table_fields, MF_DFG_NFIELDS, dfg_layout_ok, mf_energy_dfg_checks, 3, dfg_gate},
+    {"kulla_conty", "Kulla-Conty energy compensation: E(mu, alpha), E_avg(alpha) with F = 1", 2, k_kc_axes,
+     MF_KULLA_CONTY_NFIELDS, mf_kulla_conty_table_fields, MF_KULLA_CONTY_NFIELDS, kc_layout_ok,
+     mf_energy_kulla_conty_checks, 2, kc_gate},
 };
 #define N_KINDS ((int)(sizeof k_kinds / sizeof k_kinds[0]))
 

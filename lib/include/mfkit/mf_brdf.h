@@ -11,7 +11,7 @@
  *  Lambert      f = rho / pi.
  *
  * Directional albedo  rho(wo) = integral over the hemisphere of f(wo, wi) wi.z dwi,
- * by deterministic quadrature with an error estimate (see mf_brdf_microfacet_albedo).
+ * by deterministic quadrature with an error bound (mf_albedo.h; mf_brdf_microfacet_albedo).
  */
 #ifndef MF_BRDF_H
 #define MF_BRDF_H
@@ -54,6 +54,10 @@ double mf_brdf_lambert(double rho, mf_vec3 wo, mf_vec3 wi);
  * the integrand has kinks where wi crosses the horizon, so convergence is algebraic and not
  * monotone and a single difference can underestimate; the two-level estimate is an estimate of the
  * error of the coarser rules, so conservative for Q(n) (checked against Monte Carlo in tests/).
+ * n = 0 selects the accurate rule of mf_albedo.h instead (panels split at the horizon of wi,
+ * |error| <= err, err <= 1e-8 over alpha 1e-4..1, theta_o <= 89.99 deg; docs/math.md): new
+ * code should call mf_albedo_microfacet.  The n x n rule stays for the callers whose results
+ * must not change (mf_validate's checks).
  * MF_ERR_DOMAIN for invalid parameters or wo.z <= 0. */
 mf_status mf_brdf_microfacet_albedo(const mf_microfacet *m, mf_vec3 wo, int n, mf_result *out) MF_WARN_UNUSED;
 /* Directional albedo of the LEADR specular model (integral over wi.z > 0 of

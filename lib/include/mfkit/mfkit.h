@@ -9,6 +9,8 @@
 #include "mfkit/mf_smith.h"
 #include "mfkit/mf_fresnel.h"
 #include "mfkit/mf_brdf.h"
+#include "mfkit/mf_albedo.h"
+#include "mfkit/mf_energy.h"
 #include "mfkit/mf_sample.h"
 #include "mfkit/mf_polygon.h"
 #include "mfkit/mf_ltc.h"

@@ -1,0 +1,122 @@
+/*
+ * cli_energy.c -- `mfkit energy KIND --out DIR`: the energy tables of mf_energy.h (kinds dfg,
+ * kulla-conty), computed with the accurate albedo, gated, and exported as DIR/KIND.{json,npy,h,
+ * dds,exr} (.exr only in the build with the image bridge).  Needs only the core and table I/O.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "cli.h"
+#include "cli_opt.h"
+#include "cli_util.h"
+
+#include "mfkit/io/mf_table_io.h"
+#include "mfkit/mfkit.h"
+
+#include <errno.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+static const char *const k_kinds[] = {"dfg", "kulla-conty", NULL};
+static const char *const k_ndf[] = {"ggx", "beckmann", NULL};
+static const char *const k_g2[] = {"joint", "separable", NULL};
+
+enum { O_OUT, O_SIZE, O_NDF, O_G2, O_NO_GATE, O_QUIET, O_N };
+static const cli_opt k_opts[O_N] = {
+    {.name = "--out", .metavar = "DIR", .kind = CLI_OPT_STRING, .required = 1,
+     .help = "directory of the files KIND.json .npy .h .dds (and .exr with the image bridge); created if missing"},
+    {.name = "--size", .metavar = "N", .kind = CLI_OPT_INT, .lo = 2, .hi = 1024,
+     .help = "texels per axis (default: dfg 128, kulla-conty 32)"},
+    {.name = "--ndf", .kind = CLI_OPT_ENUM, .choices = k_ndf, .def = "ggx", .help = "the NDF"},
+    {.name = "--g2", .kind = CLI_OPT_ENUM, .choices = k_g2, .def = "joint", .help = "masking-shadowing"},
+    {.name = "--no-gate", .kind = CLI_OPT_FLAG, .help = "skip the gate (the files are written unchecked)"},
+    {.name = "--quiet", .kind = CLI_OPT_FLAG, .help = "no progress on a terminal"},
+};
+static const cli_command k_cmd = {
+    .name = "energy",
+    .synopsis = "KIND",
+    .min_pos = 1,
+    .max_pos = 1,
+    .description = "Computes an energy table (KIND: dfg = split-sum Schlick scale and bias, kulla-conty = E and\n"
+                   "E_avg for multiple-scattering compensation) over (cos theta_o, sqrt(alpha)) at texel centres,\n"
+                   "runs its gate and writes it.\n",
+    .opts = k_opts,
+    .nopts = O_N,
+    .epilog = "exit status: 0 success, 1 the gate failed (nothing written), 2 usage error, 3 I/O error\n",
+};
+
+static void progress(void *user, long done, long total)
+{
+    if (*(int *)user && (done == total || done % 64 == 0))
+        fprintf(stderr, "\r  %ld / %ld texels", done, total), fflush(stderr);
+    if (*(int *)user && done == total)
+        fprintf(stderr, "\n");
+}
+
+int cli_energy(int argc, char **argv)
+{
+    cli_val v[O_N];
+    const char *pos[1];
+    int npos;
+    int rc = cli_opt_parse(&k_cmd, argc - 1, argv + 1, ~0u, NULL, v, pos, &npos);
+    if (rc == CLI_PARSE_HELP) {
+        cli_opt_usage(&k_cmd, stdout);
+        return 0;
+    }
+    if (rc)
+        return rc;
+    int kind = -1;
+    for (int i = 0; k_kinds[i]; ++i)
+        if (!strcmp(pos[0], k_kinds[i]))
+            kind = i;
+    if (kind < 0)
+        return cli_error("energy", "unknown KIND '%s' (dfg, kulla-conty)", pos[0]);
+    const char *dir = v[O_OUT].s;
+    int n = v[O_SIZE].set ? (int)v[O_SIZE].i : (kind == 0 ? MF_DFG_DEFAULT_SIZE : MF_KULLA_CONTY_DEFAULT_SIZE);
+    mf_ndf_type ndf = v[O_NDF].set && v[O_NDF].i == 1 ? MF_NDF_BECKMANN : MF_NDF_GGX;
+    mf_g2_form g2 = v[O_G2].set && v[O_G2].i == 1 ? MF_G2_SEPARABLE : MF_G2_JOINT;
+    struct stat sb;
+    if (stat(dir, &sb) == 0 && !S_ISDIR(sb.st_mode))
+        return cli_error("energy", "--out: %s: not a directory", dir);
+
+    int show = !v[O_QUIET].set && isatty(fileno(stderr));
+    mf_table t;
+    mf_status st = kind == 0 ? mf_energy_dfg_table(&t, ndf, g2, n, n, progress, &show)
+                             : mf_energy_kulla_conty_table(&t, ndf, g2, n, n, progress, &show);
+    if (st != MF_OK)
+        return cli_error("energy", "%s: the table could not be computed (%s)", pos[0], mf_status_str(st));
+    if (!v[O_NO_GATE].set) {
+        mf_check ch[8];
+        int nc = 0;
+        if (show)
+            fprintf(stderr, "  gate ...\n");
+        st = mf_table_kind_gate(&t, NULL, NULL, ch, 8, &nc);
+        for (int i = 0; i < nc; ++i)
+            printf("%-14s %s  worst %.3g (bound %g) at %s\n", ch[i].name, ch[i].passed ? "pass" : "FAIL", ch[i].worst,
+                   ch[i].bound, ch[i].worst_at);
+        if (st != MF_OK) {
+            mf_table_free(&t);
+            return st == MF_ERR_CHECK_FAILED ? (cli_error("energy", "%s: the gate failed; nothing written", pos[0]), 1)
+                                             : cli_error("energy", "%s: the gate could not run", pos[0]);
+        }
+    }
+    if (stat(dir, &sb) != 0 && mkdir(dir, 0777) != 0) {
+        mf_table_free(&t);
+        return cli_error("energy", "--out: %s: %s", dir, strerror(errno)), 3;
+    }
+    static const char *const exts[] = {"json", "npy", "h", "dds", "exr"};
+    const char *stem = kind == 0 ? "dfg" : "kulla_conty";
+    for (int e = 0; e < 5; ++e) {
+        char path[4096], msg[512];
+        snprintf(path, sizeof path, "%s/%s.%s", dir, stem, exts[e]);
+        st = mf_table_write(path, &t, NULL, NULL, msg, sizeof msg);
+        if (st == MF_ERR_UNSUPPORTED && e == 4)
+            continue; /* EXR needs the image bridge */
+        if (st != MF_OK) {
+            mf_table_free(&t);
+            return cli_error("energy", "%s: %s", path, msg), 3;
+        }
+        printf("%s\n", path);
+    }
+    mf_table_free(&t);
+    return 0;
+}

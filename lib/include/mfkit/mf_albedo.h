@@ -1,0 +1,71 @@
+/*
+ * mf_albedo.h -- the directional albedo of the microfacet reflection BRDF to 1e-9, fast.
+ *
+ *   rho(wo) = integral over wi.z > 0 of f(wo, wi) wi.z dwi,   f = F D G2 / (4 wo.z wi.z)
+ *   [Walter 2007, Eq. 20],
+ *
+ * for a centred GGX or Beckmann NDF (anisotropic allowed), joint or separable G2, and any
+ * Fresnel descriptor whose value is an analytic function of wo.wm (none, Schlick, conductor;
+ * the dielectric's total internal reflection is a kink the rule does not split at).
+ *
+ * Method (docs/math.md, "BRDFs and albedo").  With dwi = 4 (wo.wm) dwm [Walter 2007, Eq. 14]
+ * and D(wm) wm.z dwm = P22(s) ds (s the slope of wm, wm ~ (s, 1)):
+ *   rho = integral F G2 P22(s) (wo.z + s . wo_xy) / wo.z ds,
+ * over the slopes whose reflection wi = 2 (wo.wm) wm - wo is above the horizon.  That set is the
+ * DISK |s - wo_xy / wo.z| < 1 / wo.z (wi.z > 0 <=> wo.z |s|^2 - 2 s.wo_xy - wo.z < 0), so the
+ * horizon of wi, where the integrand has its kink, is a curve known in closed form.  In the
+ * stretched slopes p = (s_x / alpha_x, s_y / alpha_y), polar (r, phi) around the lobe's centre,
+ * the ray of direction phi leaves the disk at r_max(phi) = 1 / (sqrt(k^2 + q) - k) with
+ * k = (S e) . wo_xy / wo.z, q = |S e|^2, S = diag(alpha_x, alpha_y); for GGX r = tan t
+ * (t in [0, atan r_max], measure sin t cos t dt dphi / pi), for Beckmann r itself (measure
+ * exp(-r^2) r dr dphi / pi, cut at r = 7).  Inside the disk the integrand is analytic up to the
+ * boundary (G2 -> 0 linearly in wi.z there, and is analytic in wi.z), so Gauss-Legendre panels
+ * converge exponentially.  Two near-singularities remain and are resolved by panels graded
+ * geometrically (ratio 1/5) towards them: the layer of width ~alpha in wi.z where G1(wi) turns
+ * over, at the end of each ray; and, for views beyond ~45 deg, the directions phi where k
+ * changes sign (the ray's exit jumps between the near and the far side of the disk) over
+ * |k| ~ sqrt(q), a width ~ cot(theta_o) in phi.  An isotropic NDF is integrated over half the
+ * circle (symmetry about the view's azimuth); at normal incidence over one direction.
+ *
+ * The value is the rule with 12 points per panel and the error estimate is |Q12 - Q8| (the same
+ * panels with 8 points), plus 64 ulp of the result for rounding: the panels make Q8 converge
+ * exponentially, so Q12 is far more accurate than Q8 and |Q12 - Q8| bounds its error.
+ * Verified against an independent nested adaptive Gauss-Kronrod quadrature in the spherical
+ * coordinates of wi (tests/test_energy.c; the measured figures in docs/math.md).
+ *
+ * Pure C11; no allocation, no state: safe from any number of threads.
+ */
+#ifndef MF_ALBEDO_H
+#define MF_ALBEDO_H
+
+#include "mfkit/mf_brdf.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* The albedo of m (its NDF, G2 and Fresnel) for the view wo (unit, wo.z > 0).
+ * MF_ERR_DOMAIN for an invalid NDF, a non-finite or non-unit wo, wo.z <= 0, or a Fresnel
+ * descriptor outside its domain (out = NaN). */
+mf_status mf_albedo_microfacet(const mf_microfacet *m, mf_vec3 wo, mf_result *out) MF_WARN_UNUSED;
+
+/* The two Schlick moments of the albedo with F = 1 (the split-sum DFG terms, [Karis 2013]):
+ *   scale = integral f1 (1 - (1 - wo.wm)^5) wi.z dwi,   bias = integral f1 (1 - wo.wm)^5 wi.z dwi,
+ * so that F0 scale + bias is the albedo with Schlick's Fresnel of F0.  One pass computes both;
+ * each has its own error bound.  Same domain as mf_albedo_microfacet (m->fresnel is ignored). */
+mf_status mf_albedo_microfacet_schlick(const mf_microfacet *m, mf_vec3 wo, mf_result *scale,
+                                       mf_result *bias) MF_WARN_UNUSED;
+
+/* The independent reference of the tests: nested adaptive Gauss-Kronrod (mf_quad_adaptive) over
+ * the spherical coordinates of wi (theta_i with a break at the mirror direction's theta and at
+ * +-8 alpha around it, phi_i over [0, pi] for an isotropic NDF with wo in the xz plane), of
+ * mf_brdf_microfacet(m, wo, wi) wi.z sin(theta_i).  tol is the absolute tolerance of the outer
+ * integral (the inner ones get tol / 4).  Slow (about 0.1 to 2 s): for tests and studies only.
+ * Isotropic NDFs and wo.y = 0 only; MF_ERR_DOMAIN otherwise; MF_ERR_NO_CONVERGENCE if an
+ * adaptive rule ran out of intervals. */
+mf_status mf_albedo_microfacet_reference(const mf_microfacet *m, mf_vec3 wo, double tol, mf_result *out) MF_WARN_UNUSED;
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* MF_ALBEDO_H */
