@@ -196,6 +196,7 @@ typedef struct {
     const mf_table *t;
     mf_ndf_type ndf;
     mf_g2_form g2;
+    double u; /* storage unit roundoff: each stored value may be off by u |value| beyond its bound */
 } gate_ctx;
 
 static int gate_setup(const mf_table *t, const char *kind, gate_ctx *g)
@@ -238,8 +239,8 @@ static void dfg_range(void *vctx, mf_check *c)
     for (int j = 0; j < g->t->axes[1].size; ++j)
         for (int i = 0; i < g->t->axes[0].size; ++i) {
             const double *r = rec(g->t, i, j);
-            double e = r[2] + r[3];
-            double v = fmax(fmax(0.0, -r[0] - r[2]), fmax(-r[1] - r[3], r[0] + r[1] - 1.0 - e));
+            double bs = r[2] + g->u * fabs(r[0]), bb = r[3] + g->u * fabs(r[1]);
+            double v = fmax(fmax(0.0, -r[0] - bs), fmax(-r[1] - bb, r[0] + r[1] - 1.0 - bs - bb));
             mf_check_recordf(c, v, "texel (%d, %d)", i, j);
         }
 }
@@ -271,8 +272,9 @@ static void dfg_reference(void *vctx, mf_check *c)
                 mf_check_fail(c, "the reference quadrature failed");
                 continue;
             }
-            double v1 = fabs(r[0] + r[1] - q1.val) / (r[2] + r[3] + REF_SLACK + (s1 != MF_OK ? q1.err : 0.0));
-            double v0 = fabs(r[1] - q0.val) / (r[3] + REF_SLACK + (s0 != MF_OK ? q0.err : 0.0));
+            double bs = r[2] + g->u * fabs(r[0]), bb = r[3] + g->u * fabs(r[1]);
+            double v1 = fabs(r[0] + r[1] - q1.val) / (bs + bb + REF_SLACK + (s1 != MF_OK ? q1.err : 0.0));
+            double v0 = fabs(r[1] - q0.val) / (bb + REF_SLACK + (s0 != MF_OK ? q0.err : 0.0));
             mf_check_recordf(c, fmax(v0, v1), "texel (%d, %d): alpha %.6g, mu %.6g", i, j, alpha, mu);
         }
 }
@@ -306,7 +308,8 @@ static void kc_furnace(void *vctx, mf_check *c)
             double total = e + (1.0 - e) * (1.0 - avg) / (1.0 - ea);
             /* first-order propagation of the bounds of E, E_avg, E_avg' (and of the 16-point rule:
              * its difference from the table's 12-point one is within r[3] by construction) */
-            double bound = r[1] + (1.0 - e) * (avg_b + r[3] + 1e-12) / (1.0 - ea) * (1.0 + (1.0 - avg) / (1.0 - ea));
+            double be = r[1] + g->u * fabs(e), bea = r[3] + g->u * fabs(ea);
+            double bound = be + (1.0 - e) * (avg_b + bea + 1e-12) / (1.0 - ea) * (1.0 + (1.0 - avg) / (1.0 - ea));
             /* E_avg >= 1 leaves no energy to compensate: the lobe is undefined, a failure */
             double v = (ea < 1.0 && bound >= 0.0) ? fabs(total - 1.0) / (bound + 1e-13) : INFINITY;
             mf_check_recordf(c, v, "texel (%d, %d): alpha %.6g, 1 - total %.3g", i,
@@ -331,22 +334,24 @@ const mf_check_def mf_energy_kulla_conty_checks[] = {
 };
 const int mf_energy_kulla_conty_nchecks = 2;
 
-mf_status mf_energy_dfg_gate(const mf_table *t, mf_check *checks, int cap, int *count)
+mf_status mf_energy_dfg_gate(const mf_table *t, double storage_u, mf_check *checks, int cap, int *count)
 {
     if (count)
         *count = 0;
     gate_ctx g;
     if (gate_setup(t, "dfg", &g) != 0)
         return MF_ERR_DOMAIN;
+    g.u = storage_u > 0.0 ? storage_u : 0.0;
     return mf_check_run_defs(mf_energy_dfg_checks, mf_energy_dfg_nchecks, &g, 0, checks, cap, count);
 }
 
-mf_status mf_energy_kulla_conty_gate(const mf_table *t, mf_check *checks, int cap, int *count)
+mf_status mf_energy_kulla_conty_gate(const mf_table *t, double storage_u, mf_check *checks, int cap, int *count)
 {
     if (count)
         *count = 0;
     gate_ctx g;
     if (gate_setup(t, "kulla_conty", &g) != 0)
         return MF_ERR_DOMAIN;
+    g.u = storage_u > 0.0 ? storage_u : 0.0;
     return mf_check_run_defs(mf_energy_kulla_conty_checks, mf_energy_kulla_conty_nchecks, &g, 0, checks, cap, count);
 }

@@ -251,16 +251,16 @@ static mf_status dfg_gate(const mf_table *t, const mf_brdf_model *model, const v
                           int *count)
 {
     (void)model;
-    (void)options;
-    return mf_energy_dfg_gate(t, checks, cap, count);
+    const mf_table_storage_options *o = options;
+    return mf_energy_dfg_gate(t, o ? o->unit_roundoff : 0.0, checks, cap, count);
 }
 
 static mf_status kc_gate(const mf_table *t, const mf_brdf_model *model, const void *options, mf_check *checks, int cap,
                          int *count)
 {
     (void)model;
-    (void)options;
-    return mf_energy_kulla_conty_gate(t, checks, cap, count);
+    const mf_table_storage_options *o = options;
+    return mf_energy_kulla_conty_gate(t, o ? o->unit_roundoff : 0.0, checks, cap, count);
 }
 
 /* ---- the registry ---------------------------------------------------------------------------- */

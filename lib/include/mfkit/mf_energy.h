@@ -75,9 +75,13 @@ extern const char *const mf_dfg_table_fields[MF_DFG_NFIELDS];
 #define MF_KULLA_CONTY_NFIELDS 4
 extern const char *const mf_kulla_conty_table_fields[MF_KULLA_CONTY_NFIELDS];
 
-/* The gates' runners (registered as the kinds' gates). */
-mf_status mf_energy_dfg_gate(const mf_table *t, mf_check *checks, int cap, int *count) MF_WARN_UNUSED;
-mf_status mf_energy_kulla_conty_gate(const mf_table *t, mf_check *checks, int cap, int *count) MF_WARN_UNUSED;
+/* The gates' runners (registered as the kinds' gates).  storage_u: the unit roundoff of the storage
+ * the table's values came through (mf_table_storage_roundoff: 2^-24 for a float32 file; 0 for a
+ * table computed in memory): every stored value's bound is widened by storage_u |value|, since a
+ * file keeps each value rounded but its error bound as computed. */
+mf_status mf_energy_dfg_gate(const mf_table *t, double storage_u, mf_check *checks, int cap, int *count) MF_WARN_UNUSED;
+mf_status mf_energy_kulla_conty_gate(const mf_table *t, double storage_u, mf_check *checks, int cap,
+                                     int *count) MF_WARN_UNUSED;
 /* The gates' check tables (for the registry). */
 extern const mf_check_def mf_energy_dfg_checks[];
 extern const int mf_energy_dfg_nchecks;

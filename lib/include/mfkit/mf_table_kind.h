@@ -87,7 +87,7 @@ const mf_table_kind *mf_table_kind_of(const mf_table *t, char *why, size_t why_s
 /* Records kind k in t's metadata ("kind" = k->name).  MF_ERR_DOMAIN if the metadata is full. */
 mf_status mf_table_kind_tag(mf_table *t, const mf_table_kind *k) MF_WARN_UNUSED;
 
-/* Options of the model-free gates of the ggx_proxy and moment_map kinds.  Their checks compare
+/* Options of the model-free gates (ggx_proxy, moment_map, dfg, kulla_conty).  Their checks compare
  * stored values with exact ones, so their bounds add the rounding of the storage the values came
  * through: unit_roundoff u = 2^-53 for a table computed in memory (the default: NULL options),
  * 2^-24 for a float32 file, 2^-11 for a half-float file (mf_table_storage_roundoff).  The added
