@@ -2,6 +2,7 @@
 #include "mfkit/mf_table_kind.h"
 
 #include "mfkit/mf_filter.h"
+#include "mfkit/mf_ltc_aniso_table.h"
 #include "mfkit/mf_ltc_gate.h"
 #include "mfkit/mf_ltc_table.h"
 #include "mfkit/mf_proxy.h"
@@ -211,6 +212,12 @@ static int moment_layout_ok(const mf_table *t, char *why, size_t why_size)
     return layout_by_declaration(kind_named("moment_map"), t, why, why_size);
 }
 
+static mf_status ltca_gate(const mf_table *t, const mf_brdf_model *model, const void *options, mf_check *checks,
+                           int cap, int *count)
+{
+    return mf_ltc_aniso_gate_run(t, model, (const mf_ltc_aniso_gate_options *)options, checks, cap, count);
+}
+
 /* ---- the registry ---------------------------------------------------------------------------- */
 
 static const mf_table_kind_axis k_ltc_axes[2] = {
@@ -227,6 +234,15 @@ static const mf_table_kind_axis k_moment_axes[2] = {
     {"v", "tex_v", MF_AXIS_IDENTITY, -INFINITY, 0, 1.0, 0.0},
 };
 
+/* the published axes [Kt et al. 2022]: alpha = max(i/7, 1e-4), theta = i/7 0.9999 pi/2, phi = i/7 pi/2
+ * (the (alpha, lambda) parameterisation has axes "a", "lambda" instead of "ax", "ay") */
+static const mf_table_kind_axis k_ltca_axes[4] = {
+    {"ax", "alpha_x", MF_AXIS_IDENTITY, MF_LTC_ANISO_ALPHA_MIN, 8, 0.0, 1.0},
+    {"ay", "alpha_y", MF_AXIS_IDENTITY, MF_LTC_ANISO_ALPHA_MIN, 8, 0.0, 1.0},
+    {"theta", "theta_o", MF_AXIS_IDENTITY, -INFINITY, 8, 0.0, MF_LTC_ANISO_THETA_MAX},
+    {"phi", "phi_o", MF_AXIS_IDENTITY, -INFINITY, 8, 0.0, 0.5 * MF_PI},
+};
+
 static const mf_table_kind k_kinds[] = {
     {"ltc_isotropic", "isotropic LTC table: inverse-matrix fields, magnitude, fresnel, sphere over (r, u)", 2,
      k_ltc_axes, MF_LTC_NFIELDS, mf_ltc_table_fields, MF_LTC_F_MAGNITUDE + 1, ltc_layout_ok,
@@ -237,6 +253,9 @@ static const mf_table_kind k_kinds[] = {
     {"moment_map", "one MIP level of a LEAN/LEADR moment map: E[s], E[s s^T] of the slopes per texel", 2, k_moment_axes,
      MF_MOMENT_TABLE_NFIELDS, mf_moment_table_fields, MF_MOMENT_TABLE_NFIELDS, moment_layout_ok, k_moment_checks, 2,
      moment_gate},
+    {"ltc_anisotropic", "anisotropic LTC table: forward and inverse 3x3 matrices, magnitude, fresnel over (alpha_x, "
+     "alpha_y, theta, phi)", 4, k_ltca_axes, MF_LTCA_NFIELDS, mf_ltc_aniso_table_fields, MF_LTCA_NFIELDS - 1,
+     mf_ltc_aniso_layout_ok, mf_ltc_aniso_gate_check_table, MF_LTC_ANISO_GATE_MAX_CHECKS, ltca_gate},
 };
 #define N_KINDS ((int)(sizeof k_kinds / sizeof k_kinds[0]))
 
