@@ -170,6 +170,14 @@ int main(int argc, char **argv)
     double t1 = now();
     printf("fit 8^4, %d threads: %.2f s wall; worst residual %.4g, not converged %d of %zu, max iterations %d\n",
            threads, t1 - t0, r.worst_residual, r.not_converged, mf_table_texels(&t), r.max_iterations);
+    /* the full gate on the fitted table (the smoothness checks are reported here, not in ctest) */
+    mf_check ch[MF_LTC_ANISO_GATE_MAX_CHECKS];
+    int nch = 0;
+    mf_status gs = mf_ltc_aniso_gate_run(&t, ggx, NULL, ch, MF_LTC_ANISO_GATE_MAX_CHECKS, &nch);
+    printf("gate: %s\n", gs == MF_OK ? "PASS" : "FAIL");
+    for (int i = 0; i < nch; ++i)
+        printf("  %-20s %s worst %.4g bound %.4g at %s\n", ch[i].name, ch[i].passed ? "ok  " : "FAIL", ch[i].worst,
+               ch[i].bound, ch[i].worst_at);
     enum { Q = 12 };
     errs em = {malloc(sizeof(double) * points * Q), malloc(sizeof(double) * points * Q), 0};
     errs et = {malloc(sizeof(double) * points * Q), malloc(sizeof(double) * points * Q), 0};

@@ -20,6 +20,8 @@
 #define MF_LTCFIT_DUAL_N NP
 #include "mf_ltcfit_shared.h"
 
+#define DIAG_LIGHTS 4
+
 /* Parameters p = (a, b, c, d, e, f, g) of M' = [[a, 0, b], [c, d, e], [f, g, 1]]. */
 enum { PA = 0, PB, PC, PD, PE, PF, PG };
 
@@ -103,6 +105,118 @@ static void cos_sin_phi(double phi, int sym, double *c, double *s)
     }
 }
 
+/* The shape of the lobe about its mean m, in the tangent frame (t1, t2) of m (the frame rotated
+ * by -phi, where the view lies in the xz plane): the weighted second moments
+ * S = sum w p p^T / sum w of the projections p = (w'.t1, w'.t2) of the directions w' (the mean's
+ * own projection is 0), and L = (2 S)^(1/2) with its eigenvalues clamped to [1e-4, 1.2]
+ * (row-major).  For an isotropic lobe L = w I with w the isotropic fitter's RMS width
+ * (|w - m|^2 = p.p for narrow lobes), so the two families agree there; for an elongated lobe
+ * the lights follow both principal widths.  The matrix square root is a continuous function of
+ * S (no eigenvector choice leaks out), and under the mirror symmetries S_12 is 0 exactly. */
+static void lobe_shape(const workspace *ws, double sum, double cp, double sp, mf_vec3 t1, mf_vec3 t2, int sym,
+                       double lw[4])
+{
+    double s11 = 0.0, s12 = 0.0, s22 = 0.0;
+    for (int j = 0; j < ws->n; ++j)
+        if (ws->w[j] > 0.0) {
+            mf_vec3 d = ws->dir[j];
+            mf_vec3 r = mf_vec3_make(cp * d.x + sp * d.y, -sp * d.x + cp * d.y, d.z);
+            double p1 = mf_vec3_dot(r, t1), p2 = mf_vec3_dot(r, t2);
+            s11 += ws->w[j] * p1 * p1;
+            s12 += ws->w[j] * p1 * p2;
+            s22 += ws->w[j] * p2 * p2;
+        }
+    if (!(sum > 0.0)) {
+        lw[0] = lw[3] = 0.5;
+        lw[1] = lw[2] = 0.0;
+        return;
+    }
+    s11 *= 2.0 / sum, s12 *= 2.0 / sum, s22 *= 2.0 / sum;
+    if (sym)
+        s12 = 0.0;
+    /* eigen-decomposition of [[s11, s12], [s12, s22]]: l1 >= l2, unit eigenvector (c, s) of l1 */
+    double h = 0.5 * (s11 - s22), q = sqrt(h * h + s12 * s12), mean = 0.5 * (s11 + s22);
+    double l1 = mean + q, l2 = mean - q;
+    double c = 1.0, s = 0.0;
+    if (q > 0.0) {
+        /* the angle of the major axis: 2 ang = atan2(s12, h) */
+        double ang = 0.5 * atan2(s12, h);
+        c = cos(ang), s = sin(ang);
+    }
+    double r1 = fmin(fmax(sqrt(fmax(l1, 0.0)), 1e-4), 1.2), r2 = fmin(fmax(sqrt(fmax(l2, 0.0)), 1e-4), 1.2);
+    lw[0] = r1 * c * c + r2 * s * s;
+    lw[1] = lw[2] = (r1 - r2) * c * s;
+    lw[3] = r1 * s * s + r2 * c * c;
+}
+
+/* A convex n-gon: the regular n-gon of radius rho about o (phase phi0) in the tangent plane of m,
+ * mapped by L (lw, row-major) and then gnomonically (p -> normalize(m + p.x t1 + p.y t2), which
+ * keeps straight lines straight: the light is a convex spherical polygon in the hemisphere about
+ * m), front-facing. */
+static light make_light_shaped(mf_vec3 m, mf_vec3 t1, mf_vec3 t2, const double lw[4], double ox, double oy,
+                               int n, double rho, double phi0)
+{
+    light l;
+    mf_vec3 v[MF_POLYGON_MAX_VERTICES];
+    for (int i = 0; i < n; ++i) {
+        double phi = phi0 + 2.0 * MF_PI * i / n;
+        double x = ox + rho * cos(phi), y = oy + rho * sin(phi);
+        double px = lw[0] * x + lw[1] * y, py = lw[2] * x + lw[3] * y;
+        v[i] = mf_vec3_normalize(mf_vec3_add(m, mf_vec3_add(mf_vec3_scale(t1, px), mf_vec3_scale(t2, py))));
+    }
+    mf_vec3 c = mf_vec3_normalize(
+        mf_vec3_add(m, mf_vec3_add(mf_vec3_scale(t1, lw[0] * ox + lw[1] * oy), mf_vec3_scale(t2, lw[2] * ox + lw[3] * oy))));
+    if (mf_vec3_dot(c, mf_vec3_cross(v[0], v[1])) < 0.0)
+        for (int i = 0; i < n / 2; ++i) {
+            mf_vec3 tmp = v[i];
+            v[i] = v[n - 1 - i];
+            v[n - 1 - i] = tmp;
+        }
+    l.poly = mf_polygon_make(n, v);
+    double cr = 1.0;
+    for (int i = 0; i < n; ++i) {
+        l.edge_n[i] = mf_vec3_cross(v[i], v[(i + 1) % n]);
+        cr = fmin(cr, mf_vec3_dot(c, v[i]));
+    }
+    /* the cap about c through the farthest vertex holds the (convex) polygon while it is less
+     * than a hemisphere; otherwise no pre-test */
+    l.centre = c;
+    l.cos_radius = cr > 1e-6 ? cr - 1e-9 : -2.0;
+    l.factor = 1.0;
+    return l;
+}
+
+/* The anisotropic light family (the isotropic fitter's make_lights_basis with every lobe-sized
+ * light shaped by L): centre n-gons, n-gons offset along +-t1, +-t2 (in units of L) and along the
+ * four diagonals, then the lobe-independent lights (horizon, low, large caps) of the isotropic
+ * family. */
+static int make_lights_shaped(mf_vec3 m, mf_vec3 t1, mf_vec3 t2, const double lw[4], light *out)
+{
+    int k = 0;
+    static const double centre_sizes[5] = {0.25, 0.5, 1.0, 2.0, 4.0};
+    static const int shapes[3] = {4, 3, 8};
+    for (int s = 0; s < 5; ++s)
+        for (int h = 0; h < 3; ++h)
+            out[k++] = make_light_shaped(m, t1, t2, lw, 0.0, 0.0, shapes[h], centre_sizes[s], 0.3 * h + 0.1 * s);
+    static const double offs[2] = {1.0, 2.5};
+    static const double off_sizes[2] = {0.5, 1.5};
+    static const double dx[4] = {1.0, -1.0, 0.0, 0.0}, dy[4] = {0.0, 0.0, 1.0, -1.0};
+    for (int o = 0; o < 2; ++o)
+        for (int j = 0; j < 4; ++j)
+            for (int s = 0; s < 2; ++s)
+                out[k++] = make_light_shaped(m, t1, t2, lw, offs[o] * dx[j], offs[o] * dy[j], s ? 4 : 3,
+                                             off_sizes[s], 0.5 * j + 0.2 * o);
+    for (int j = 0; j < DIAG_LIGHTS; ++j) {
+        double a = 0.25 * MF_PI + 0.5 * MF_PI * j;
+        out[k++] = make_light_shaped(m, t1, t2, lw, 1.5 * cos(a), 1.5 * sin(a), 4, 0.8, 0.3 * j);
+    }
+    light tmp[LIGHTS_MAX];
+    int n = make_lights_basis(m, t1, t2, 1.0, tmp);
+    for (int i = 31; i < n; ++i) /* the 15 + 16 lobe-sized lights come first */
+        out[k++] = tmp[i];
+    return k;
+}
+
 /* Samples, magnitude, lobe statistics, lights and their targets of one entry (the isotropic
  * fitter's texel_prepare with the model's anisotropic sampler and a 3-D lobe frame). */
 static mf_status atexel_prepare(const mf_brdf_model *m, mf_brdf_params prm, double theta, double phi, int sym,
@@ -147,21 +261,15 @@ static mf_status atexel_prepare(const mf_brdf_model *m, mf_brdf_params prm, doub
     if (sym & SYM_X)
         md.x = 0.0;
     md = mf_vec3_normalize(md);
-    double ang2 = 0.0;
-    for (int j = 0; j < ws->n; ++j)
-        if (ws->w[j] > 0.0) {
-            mf_vec3 dv = mf_vec3_sub(ws->dir[j], md);
-            ang2 += ws->w[j] * mf_vec3_dot(dv, dv);
-        }
-    double width = sum > 0.0 ? sqrt(ang2 / sum) : 0.5;
-    width = fmin(fmax(width, 1e-4), 1.2);
     t->lobe = md;
     min_rotation(md, t->r);
     /* the light family in the frame rotated by -phi about z (the view in its xz plane), then back */
     mf_vec3 mv = mf_vec3_make(cp * md.x + sp * md.y, -sp * md.x + cp * md.y, md.z);
     mf_vec3 t1 = mf_vec3_normalize(mf_vec3_cross(mf_vec3_make(0.0, 1.0, 0.0), mv));
     mf_vec3 t2 = mf_vec3_cross(mv, t1);
-    t->k = make_lights_basis(mv, t1, t2, width, t->lights);
+    double lw[4];
+    lobe_shape(ws, sum, cp, sp, t1, t2, sym, lw);
+    t->k = make_lights_shaped(mv, t1, t2, lw, t->lights);
     for (int k = 0; k < t->k; ++k)
         rotate_light(&t->lights[k], cp, sp);
     int live = 0;
@@ -340,6 +448,61 @@ static void control_variate(atexel *t, workspace *ws, const double *p0)
     }
 }
 
+/* ---- the sliver barrier ----------------------------------------------------------------------- */
+
+/* The lobe's minor angular width at its peak: the LTC maps the cosine's peak z to the direction
+ * of c2 = M' z, and the tangent directions x, y to c0, c1; the Jacobian of that map onto the
+ * tangent plane of c2 is J = P [c0 c1] / |c2| with P the projection orthogonal to c2.  Its
+ * singular values s1 >= s2 are the lobe's principal widths relative to the cosine's:
+ *   s1 s2 = det M' / |c2|^3,   s1^2 + s2^2 = (|P c0|^2 + |P c1|^2) / |c2|^2,
+ *   s2^2 = 2 (s1 s2)^2 / (F + sqrt(F^2 - 4 (s1 s2)^2)),  F = s1^2 + s2^2
+ * (the second root in the stable form).  The light integrals do not see widths far below the
+ * smallest test light, so without a bound the solver drives the minor width of the alpha = 1e-4
+ * lobes towards 0 by a shear that makes c1 parallel to c2 (det M' -> 0): measured at
+ * (alpha_x, alpha_y) = (0.143, 1e-4), theta 51.4 deg, phi 90 deg: d - e g = 2.6e-4 - 2.6e-4,
+ * M^-1 entries 3e15, the gate's octant sum off by 2.9e-3, and 100 solver steps without
+ * convergence along the flat direction. */
+#define WIDTH_MIN 5e-5
+#define WIDTH_BARRIER 1.0
+
+static dual minor_width2_dual(const double *p)
+{
+    dual c[3][3]; /* c[j] = column j of M' */
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            c[j][i] = dconst(0.0);
+    const int at[7][2] = {{0, 0}, {0, 2}, {1, 0}, {1, 1}, {1, 2}, {2, 0}, {2, 1}}; /* PA..PG: (row, col) */
+    for (int q = 0; q < NP; ++q) {
+        c[at[q][1]][at[q][0]] = dconst(p[q]);
+        c[at[q][1]][at[q][0]].d[q] = 1.0;
+    }
+    c[2][2] = dconst(1.0);
+    dvec3 c0 = {c[0][0], c[0][1], c[0][2]}, c1 = {c[1][0], c[1][1], c[1][2]}, c2 = {c[2][0], c[2][1], c[2][2]};
+    dual n2 = ddot(c2, c2);
+    dual det = ddot(c0, dcross(c1, c2));
+    dual a0 = ddot(c0, c2), a1 = ddot(c1, c2);
+    dual p0 = dsub(ddot(c0, c0), ddiv(dmul(a0, a0), n2)), p1 = dsub(ddot(c1, c1), ddiv(dmul(a1, a1), n2));
+    dual f = ddiv(dadd(p0, p1), n2);
+    dual area2 = ddiv(dmul(det, det), dmul(n2, dmul(n2, n2)));
+    dual disc = dsub(dmul(f, f), dscale(area2, 4.0));
+    if (disc.v < 0.0)
+        disc = dconst(0.0);
+    return ddiv(dscale(area2, 2.0), dadd(f, dsqrt(disc)));
+}
+
+/* The barrier residual WIDTH_BARRIER log(WIDTH_MIN / s2) where s2 < WIDTH_MIN, else 0. */
+static dual width_barrier(const double *p)
+{
+    dual w2 = minor_width2_dual(p);
+    if (!(w2.v < WIDTH_MIN * WIDTH_MIN))
+        return dconst(0.0);
+    dual r;
+    r.v = 0.5 * WIDTH_BARRIER * log(WIDTH_MIN * WIDTH_MIN / fmax(w2.v, 1e-300));
+    for (int i = 0; i < NP; ++i)
+        r.d[i] = -0.5 * WIDTH_BARRIER * w2.d[i] / fmax(w2.v, 1e-300);
+    return r;
+}
+
 /* ---- the least-squares problem ---------------------------------------------------------------- */
 
 /* Proximal residuals towards the warm start: the scales a, d relative, the shears absolute. */
@@ -366,6 +529,11 @@ static int residual_fn(void *user, const double *p, double *res, double *jac)
             for (int j = 0; j < NP; ++j)
                 jac[NP * (t->k + i) + j] = j == i ? w : 0.0;
     }
+    dual b = width_barrier(p);
+    res[t->k + NP] = b.v;
+    if (jac)
+        for (int j = 0; j < NP; ++j)
+            jac[NP * (t->k + NP) + j] = b.d[j];
     return 0;
 }
 
@@ -387,7 +555,8 @@ static double cost_at(const atexel *t, const double *p)
         double r = w * (p[i] - t->prox_at[i]);
         c += r * r;
     }
-    return c;
+    double b = width_barrier(p).v;
+    return c + b * b;
 }
 
 /* The closed-form start: the cosine scaled by (s, s) about the lobe's mean, s on the log grid
@@ -475,7 +644,7 @@ static mf_status fit_entry(const mf_brdf_model *model, mf_brdf_params prm, doubl
     so.gradient_tolerance = 1e-14;
     so.parameter_tolerance = 1e-10;
     mf_solver_summary sum;
-    st = mf_solver_least_squares(NP, t->k + NP, residual_fn, t, p, lower, upper, &so, &sum);
+    st = mf_solver_least_squares(NP, t->k + NP + 1, residual_fn, t, p, lower, upper, &so, &sum);
     if (st != MF_OK && st != MF_ERR_NO_CONVERGENCE) {
         free(t);
         return st;

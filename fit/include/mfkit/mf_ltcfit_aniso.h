@@ -18,7 +18,12 @@
  * (the warm start's LTC), proximal residuals towards the warm start, exact Jacobians by dual
  * numbers, Ceres Levenberg-Marquardt (mf_solver.h).  The light family is built about the lobe's
  * mean direction m in the frame rotated about z so that the view lies in its xz plane (the
- * isotropic fitter's frame, where its lights are defined), then rotated back.
+ * isotropic fitter's frame, where its lights are defined), then rotated back; its lobe-sized
+ * lights are shaped by the lobe's second moments in the tangent plane of m (L = (2 S)^(1/2)), so
+ * they resolve both principal widths of an elongated lobe (one RMS width did not: at
+ * alpha_x = 0.05, alpha_y = 1 every light was wider than the minor axis).  A barrier residual
+ * keeps the LTC's minor angular width at its peak >= 5e-5 rad (the alpha = 1e-4 slivers: below
+ * the lights' resolution the solver drove det M' to 0; see mf_ltcfit_aniso.c).
  *
  * The matrix.  An LTC M is defined up to a positive scale and a rotation R_z about z on the
  * right (the cosine is invariant under it) [Kt et al. 2022, Sec. 4.2]: 9 - 2 = 7 free
