@@ -236,12 +236,12 @@ static void test_default_table(void)
     int n = 0;
     mf_status gs = mf_ltc_aniso_gate_run(&t, NULL, NULL, ch, MF_LTC_ANISO_GATE_MAX_CHECKS, &n);
     CHECK(gs == MF_OK || gs == MF_ERR_CHECK_FAILED);
-    /* The default table does not yet pass the gate's smoothness checks (ltca_smooth_jump and
-     * ltca_smooth_spike fail at the alpha = 1e-4 sliver rows, theta 89.99 deg): they are reported
-     * by analysis/bench_ltc_aniso with the full gate, not asserted here; the other model-free
-     * checks are. */
+    /* The default table does not yet pass the gate's ltca_smooth_spike (1.19 > 1 at alpha_y =
+     * 1e-4, the sliver row, where the fits do not converge): it is reported by
+     * analysis/bench_ltc_aniso with the full gate, not asserted here; the other model-free checks
+     * are. */
     for (int i = 0; i < n; ++i) {
-        int reported_only = !strcmp(ch[i].name, "ltca_smooth_jump") || !strcmp(ch[i].name, "ltca_smooth_spike");
+        int reported_only = !strcmp(ch[i].name, "ltca_smooth_spike");
         if (!ch[i].passed)
             printf("gate %s%s: worst %g bound %g at %s\n", ch[i].name, reported_only ? " (reported only)" : "",
                    ch[i].worst, ch[i].bound, ch[i].worst_at);

@@ -589,6 +589,26 @@ static double closed_form_start(const atexel *t, double *p)
     return best;
 }
 
+/* The stored gauge of the view-frame M (the lobe is M R_z for every rotation R_z about z): the
+ * R_z that makes the upper-left 2x2 block of M R_z symmetric with a positive trace (its polar
+ * factor: the rotation closest to the identity), beta = atan2(m01 - m10, m00 + m11).  Neighbouring
+ * entries then differ by the change of the lobe, not by a gauge rotation that the lobe-frame
+ * chart (M' with M'_01 = 0 about the lobe's mean) carries along: interpolating the matrices
+ * interpolates the lobes.  At phi = 0, pi/2 and theta = 0, m01 = m10 = 0 and beta = 0 exactly
+ * (the zero patterns stay exact). */
+static mf_mat3 polar_gauge(mf_mat3 m)
+{
+    double beta = atan2(m.m[0][1] - m.m[1][0], m.m[0][0] + m.m[1][1]);
+    double c = cos(beta), s = sin(beta);
+    mf_mat3 r;
+    for (int i = 0; i < 3; ++i) {
+        r.m[i][0] = m.m[i][0] * c + m.m[i][1] * s;
+        r.m[i][1] = -m.m[i][0] * s + m.m[i][1] * c;
+        r.m[i][2] = m.m[i][2];
+    }
+    return r;
+}
+
 static mf_status fit_entry(const mf_brdf_model *model, mf_brdf_params prm, double theta, double phi, int sym,
                            const double *lobe_start, const mf_ltcfit_aniso_options *o, const uint32_t scr[2],
                            workspace *ws, mf_ltcfit_aniso_entry *out)
@@ -649,7 +669,7 @@ static mf_status fit_entry(const mf_brdf_model *model, mf_brdf_params prm, doubl
         free(t);
         return st;
     }
-    mf_mat3 mv = view_matrix(t, p);
+    mf_mat3 mv = polar_gauge(view_matrix(t, p));
     double nz = sqrt(mv.m[0][2] * mv.m[0][2] + mv.m[1][2] * mv.m[1][2] + mv.m[2][2] * mv.m[2][2]);
     for (int i = 0; i < 9; ++i)
         out->m[i] = mv.m[i / 3][i % 3] / nz;
