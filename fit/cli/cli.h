@@ -9,6 +9,7 @@ int cli_energy(int argc, char **argv);   /* argv[0] = "energy"; EXR only with th
 int cli_validate(int argc, char **argv); /* argv[0] = "validate"; an EXR table needs the image backend */
 int cli_table(int argc, char **argv);    /* argv[0] = "table"; EXR needs the image backend */
 int cli_fit(int argc, char **argv);      /* argv[0] = "fit"; usage and --list only without Ceres */
+int cli_fit_aniso(int argc, char **argv); /* argv[0] = "fit", argv[1] = "ltc-aniso" (cli_fit dispatches) */
 int cli_maps(int argc, char **argv);     /* argv[0] = "maps"; an error without OpenImageIO */
 int cli_sh(int argc, char **argv);       /* argv[0] = "sh"; an error without OpenImageIO */
 

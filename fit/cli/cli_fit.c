@@ -288,6 +288,8 @@ int cli_fit(int argc, char **argv)
     }
     if (!strcmp(argv[1], "ggx-proxy"))
         return fit_ggx_proxy(argc, argv);
+    if (!strcmp(argv[1], "ltc-aniso"))
+        return cli_fit_aniso(argc, argv);
     if (strcmp(argv[1], "ltc"))
         return cli_error("fit", "unknown table kind '%s' ('ltc' or 'ggx-proxy')", argv[1]);
     brdf_help();

@@ -49,14 +49,14 @@ mf_vec3 mf_ltc_gate_view(double cos_theta)
 
 /* One sample of the model's sampler (cosine hemisphere without one): wi and the weight
  * f cos / pdf (0 for a discarded sample). */
-static double model_weight(const mf_brdf_model *m, double alpha, mf_vec3 wo, const double u[2], mf_vec3 *wi)
+static double model_weight_p(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, const double u[2],
+                             mf_vec3 *wi)
 {
     double pdf;
-    mf_brdf_params p = mf_brdf_params_iso(alpha);
-    *wi = mf_model_sample(m, &p, wo, u, &pdf);
+    *wi = mf_model_sample(m, p, wo, u, &pdf);
     if (!(pdf > 0.0) || !mf_vec3_isfinite(*wi) || wi->z <= 0.0)
         return 0.0;
-    return m->eval_cos(m, &p, wo, *wi) / pdf;
+    return m->eval_cos(m, p, wo, *wi) / pdf;
 }
 
 /* The model's albedo by the fitter's rule (mf_model_albedo, GATE_QUAD_N points per axis). */
@@ -84,6 +84,13 @@ static void make_front_facing(mf_polygon *p)
 void mf_ltc_gate_random_polygons(const mf_brdf_model *model, double alpha, mf_vec3 wo, uint64_t seed,
                                  uint64_t stream, int n, mf_polygon *out)
 {
+    mf_brdf_params p = mf_brdf_params_iso(alpha);
+    mf_ltc_gate_random_polygons_params(model, &p, wo, seed, stream, n, out);
+}
+
+void mf_ltc_gate_random_polygons_params(const mf_brdf_model *model, const mf_brdf_params *prm, mf_vec3 wo,
+                                        uint64_t seed, uint64_t stream, int n, mf_polygon *out)
+{
     mf_pcg32 rng;
     mf_pcg32_seed(&rng, seed, stream);
     for (int i = 0; i < n; ++i) {
@@ -96,7 +103,7 @@ void mf_ltc_gate_random_polygons(const mf_brdf_model *model, double alpha, mf_ve
         if (kind == 0 && model) {
             double u[2] = {r[0], r[1]};
             mf_vec3 wi;
-            if (model_weight(model, alpha, wo, u, &wi) > 0.0)
+            if (model_weight_p(model, prm, wo, u, &wi) > 0.0)
                 c = wi;
         }
         if (!mf_vec3_isfinite(c) || kind == 2) {
@@ -146,6 +153,14 @@ mf_status mf_ltc_gate_polygon_mc(const mf_brdf_model *model, double alpha, mf_ve
                                  int n, int nsamples, uint64_t seed, uint64_t stream, double *val, double *se,
                                  mf_result *albedo)
 {
+    mf_brdf_params prm = mf_brdf_params_iso(alpha);
+    return mf_ltc_gate_polygon_mc_params(model, &prm, wo, p, n, nsamples, seed, stream, val, se, albedo);
+}
+
+mf_status mf_ltc_gate_polygon_mc_params(const mf_brdf_model *model, const mf_brdf_params *prm, mf_vec3 wo,
+                                        const mf_polygon *p, int n, int nsamples, uint64_t seed, uint64_t stream,
+                                        double *val, double *se, mf_result *albedo)
+{
     if (!model || n < 0 || nsamples < 2 || (n > 0 && (!p || !val || !se)))
         return MF_ERR_DOMAIN;
     mf_vec3 *edge = malloc(sizeof *edge * (size_t)(n > 0 ? n : 1) * MF_POLYGON_MAX_VERTICES);
@@ -169,12 +184,11 @@ mf_status mf_ltc_gate_polygon_mc(const mf_brdf_model *model, double alpha, mf_ve
     enum { MC_BATCH = 64 };
     double u[2 * MC_BATCH], pdf[MC_BATCH], wt[MC_BATCH];
     mf_vec3 dir[MC_BATCH];
-    const mf_brdf_params prm = mf_brdf_params_iso(alpha);
     for (int s0 = 0; s0 < nsamples && st == MF_OK; s0 += MC_BATCH) {
         int k = nsamples - s0 < MC_BATCH ? nsamples - s0 : MC_BATCH;
         for (int q = 0; q < 2 * k; ++q)
             u[q] = mf_pcg32_next_double(&rng);
-        mf_model_sample_weights(model, &prm, wo, k, u, dir, pdf, wt);
+        mf_model_sample_weights(model, prm, wo, k, u, dir, pdf, wt);
         for (int q = 0; q < k; ++q) {
             double w = wt[q];
             if (!isfinite(w)) {

@@ -3,6 +3,7 @@
 
 #include "mfkit/mf_energy.h"
 #include "mfkit/mf_filter.h"
+#include "mfkit/mf_ltc_aniso_table.h"
 #include "mfkit/mf_ltc_gate.h"
 #include "mfkit/mf_ltc_table.h"
 #include "mfkit/mf_proxy.h"
@@ -263,6 +264,16 @@ static mf_status kc_gate(const mf_table *t, const mf_brdf_model *model, const vo
     return mf_energy_kulla_conty_gate(t, o ? o->unit_roundoff : 0.0, checks, cap, count);
 }
 
+/* Through the registry the options are a generic mf_table_storage_options (what `mfkit validate`
+ * passes to every kind), so the anisotropic gate runs with its defaults here; callers that want
+ * its own options call mf_ltc_aniso_gate_run. */
+static mf_status ltca_gate(const mf_table *t, const mf_brdf_model *model, const void *options, mf_check *checks,
+                           int cap, int *count)
+{
+    (void)options;
+    return mf_ltc_aniso_gate_run(t, model, NULL, checks, cap, count);
+}
+
 /* ---- the registry ---------------------------------------------------------------------------- */
 
 static const mf_table_kind_axis k_ltc_axes[2] = {
@@ -291,6 +302,14 @@ static const mf_table_kind_axis k_kc_axes[2] = {
     {"r", "alpha", MF_AXIS_SQUARE, MF_ENERGY_ALPHA_MIN, MF_KULLA_CONTY_DEFAULT_SIZE, 0.5 / MF_KULLA_CONTY_DEFAULT_SIZE,
      1.0 - 0.5 / MF_KULLA_CONTY_DEFAULT_SIZE},
 };
+/* the published axes [Kt et al. 2022]: alpha = max(i/7, 1e-4), theta = i/7 0.9999 pi/2, phi = i/7 pi/2
+ * (the (alpha, lambda) parameterisation has axes "a", "lambda" instead of "ax", "ay") */
+static const mf_table_kind_axis k_ltca_axes[4] = {
+    {"ax", "alpha_x", MF_AXIS_IDENTITY, MF_LTC_ANISO_ALPHA_MIN, 8, 0.0, 1.0},
+    {"ay", "alpha_y", MF_AXIS_IDENTITY, MF_LTC_ANISO_ALPHA_MIN, 8, 0.0, 1.0},
+    {"theta", "theta_o", MF_AXIS_IDENTITY, -INFINITY, 8, 0.0, MF_LTC_ANISO_THETA_MAX},
+    {"phi", "phi_o", MF_AXIS_IDENTITY, -INFINITY, 8, 0.0, 0.5 * MF_PI},
+};
 
 static const mf_table_kind k_kinds[] = {
     {"ltc_isotropic", "isotropic LTC table: inverse-matrix fields, magnitude, fresnel, sphere over (r, u)", 2,
@@ -307,6 +326,9 @@ static const mf_table_kind k_kinds[] = {
     {"kulla_conty", "Kulla-Conty energy compensation: E(mu, alpha), E_avg(alpha) with F = 1", 2, k_kc_axes,
      MF_KULLA_CONTY_NFIELDS, mf_kulla_conty_table_fields, MF_KULLA_CONTY_NFIELDS, kc_layout_ok,
      mf_energy_kulla_conty_checks, 2, kc_gate},
+    {"ltc_anisotropic", "anisotropic LTC table: forward and inverse 3x3 matrices, magnitude, fresnel over (alpha_x, "
+     "alpha_y, theta, phi)", 4, k_ltca_axes, MF_LTCA_NFIELDS, mf_ltc_aniso_table_fields, MF_LTCA_NFIELDS - 1,
+     mf_ltc_aniso_layout_ok, mf_ltc_aniso_gate_check_table, MF_LTC_ANISO_GATE_MAX_CHECKS, ltca_gate},
 };
 #define N_KINDS ((int)(sizeof k_kinds / sizeof k_kinds[0]))
 

@@ -121,6 +121,14 @@ mf_status mf_ltc_gate_polygon_mc(const mf_brdf_model *model, double alpha, mf_ve
                                  int n, int nsamples, uint64_t seed, uint64_t stream, double *val, double *se,
                                  mf_result *albedo) MF_WARN_UNUSED;
 
+/* The same two with a full parameter record (anisotropic models: mf_ltc_aniso_table.h's gate);
+ * the functions above are these with mf_brdf_params_iso(alpha). */
+void mf_ltc_gate_random_polygons_params(const mf_brdf_model *model, const mf_brdf_params *p, mf_vec3 wo,
+                                        uint64_t seed, uint64_t stream, int n, mf_polygon *out);
+mf_status mf_ltc_gate_polygon_mc_params(const mf_brdf_model *model, const mf_brdf_params *prm, mf_vec3 wo,
+                                        const mf_polygon *p, int n, int nsamples, uint64_t seed, uint64_t stream,
+                                        double *val, double *se, mf_result *albedo) MF_WARN_UNUSED;
+
 #ifdef __cplusplus
 }
 #endif

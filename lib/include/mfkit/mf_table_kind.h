@@ -18,6 +18,9 @@
  *   moment_map     one MIP level of a LEAN/LEADR moment map (mf_maps.h,
  *                  mf_map_moments_to_table); the Toksvig and bump-roughness quantities are
  *                  functions of these five moments (mf_moments.h)
+ *   dfg            split-sum DFG scale and bias (mf_energy.h, `mfkit energy dfg`)
+ *   kulla_conty    Kulla-Conty E and E_avg (mf_energy.h, `mfkit energy kulla-conty`)
+ *   ltc_anisotropic  the 4-D anisotropic LTC table (mf_ltc_aniso_table.h, `mfkit fit ltc-aniso`)
  *
  * Adding a kind (e.g. a 4-D anisotropic LTC table):
  *   1. its layout header and source (like mf_ltc_table.h/.c): the axes and fields, a create

@@ -1,0 +1,142 @@
+/*
+ * mf_ltcfit_aniso.h -- fit 4-D anisotropic LTC tables (mf_ltc_aniso_table.h) to an anisotropic
+ * BRDF model (mf_model.h, e.g. "ggx" with alpha_x != alpha_y).
+ *
+ * The table.  Axes (alpha_x, alpha_y, theta, phi) [Kt, Heitz, Dupuy, Narayanan 2022, Sec. 5]:
+ * alpha = max(i / (n - 1), 1e-4), theta = i / (n - 1) 0.9999 pi / 2, phi = i / (n - 1) pi / 2;
+ * the view is wo = (sin theta cos phi, sin theta sin phi, cos theta) in the frame whose x axis is
+ * the alpha_x direction.  Optionally the first two axes are (alpha, lambda): alpha_x = max(a, 1e-4),
+ * alpha_y = max(a lambda, 1e-4), a = i / (n - 1), lambda = j / (n - 1) (the authors'
+ * reparameterisation).  Azimuths outside [0, pi/2] follow from the mirror symmetries of the
+ * model (x -> -x: phi -> pi - phi; y -> -y: phi -> -phi): with S_x = diag(-1, 1, 1),
+ * S_y = diag(1, -1, 1), the LTC at the mirrored view is S M S (mf_ltc_aniso_table.h).
+ *
+ * The objective is the isotropic fitter's (mf_ltcfit.h): per entry, the weighted differences of
+ * magnitude * E_LTC(P_k; M) and the BRDF's light integrals I_k over the same family of K test
+ * lights, with the exact magnitude (the model's albedo, mf_model_albedo), the same scrambled
+ * Sobol directions mapped through the model's (anisotropic) sampler, the control variate
+ * (the warm start's LTC), proximal residuals towards the warm start, exact Jacobians by dual
+ * numbers, Ceres Levenberg-Marquardt (mf_solver.h).  The light family is built about the lobe's
+ * mean direction m in the frame rotated about z so that the view lies in its xz plane (the
+ * isotropic fitter's frame, where its lights are defined), then rotated back; its lobe-sized
+ * lights are shaped by the lobe's second moments in the tangent plane of m (L = (2 S)^(1/2)), so
+ * they resolve both principal widths of an elongated lobe (one RMS width did not: at
+ * alpha_x = 0.05, alpha_y = 1 every light was wider than the minor axis).  A barrier residual
+ * keeps the LTC's minor angular width at its peak >= 5e-5 rad (the alpha = 1e-4 slivers: below
+ * the lights' resolution the solver drove det M' to 0; see mf_ltcfit_aniso.c).
+ *
+ * The matrix.  An LTC M is defined up to a positive scale and a rotation R_z about z on the
+ * right (the cosine is invariant under it) [Kt et al. 2022, Sec. 4.2]: 9 - 2 = 7 free
+ * parameters.  The solver works in the lobe frame: M = R_m M', R_m the minimal rotation taking z
+ * to m (about the axis z x m), and
+ *     M' = [[a, 0, b], [c, d, e], [f, g, 1]],     a >= 1e-7, d >= 1e-7, det M' > 0.
+ * The zero M'_01 and the sign a > 0 fix the rotation R_z (the rotation that makes row 0 of
+ * M' [.., 0, ..] with a positive first entry is unique whenever (M'_00, M'_01) != 0, i.e. for
+ * every lobe that is not flat along x), M'_22 = 1 fixes the scale, and det > 0 excludes the
+ * x/y flips (M diag(1, -1, 1) gives the same lobe density but reverses the orientation of every
+ * transformed polygon, so a renderer's edge sum changes sign).  So every lobe has ONE
+ * representation: the canonical form is the chart itself, continuous wherever the lobe and its
+ * mean direction are, and neighbouring entries whose lobes are close have close matrices (no
+ * post-fit alignment search is needed; tests/test_ltcfit_aniso.c sweeps each axis densely).
+ * The isotropic family [[a, 0, b], [0, c, 0], [d, 0, 1]] is the subset c = e = g = 0.
+ *
+ * Degenerate configurations, enforced exactly (parameters held at 0 by equal bounds, the mean
+ * direction projected):
+ *   phi = 0 (view in the xz plane): the model is symmetric under y -> -y, so the lobe is, and
+ *     S_y M S_y = M: view-frame M = [[*, 0, *], [0, *, 0], [*, 0, *]]; m.y = 0, R_m is a
+ *     rotation about y, and M' has c = e = g = 0.
+ *   phi = pi/2 (view in the yz plane): symmetric under x -> -x, S_x M S_x = M:
+ *     M = [[*, 0, 0], [0, *, *], [0, *, *]]; m.x = 0, R_m is a rotation about x, and M' has
+ *     b = c = f = 0.
+ *   theta = 0 (view along the normal): both symmetries: M = diag(*, *, *) (b = c = e = f = g = 0,
+ *     m = z, R_m = I), and the view, hence the fit, does not depend on phi: it is fitted once
+ *     (at phi = 0) and copied to every phi, bit for bit.
+ *
+ * Warm starts.  Each (alpha_x, alpha_y) pair is one job: theta = 0 from a closed-form start (the
+ * best cosine scaled by (s_x, s_y), log grids), then for every phi a chain along theta, each
+ * entry starting from the previous entry's lobe-frame parameters (when their cost is not above
+ * the closed-form start's).  Jobs are independent and handed to `threads` pthreads: the result
+ * does not depend on the thread count, bit for bit.  No checkpoint/resume (an 8^4 table takes
+ * seconds; see analysis/bench_ltc_aniso.c).
+ *
+ * Stored per entry (mf_ltc_aniso_table.h): the view-frame forward M divided by the norm of its
+ * last column (the published layout), its inverse (the matrix a shader applies to the polygon),
+ * the magnitude (albedo by mf_model_albedo_fresnel), the Fresnel moment and the fit residual.
+ */
+#ifndef MF_LTCFIT_ANISO_H
+#define MF_LTCFIT_ANISO_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include <mfkit/mf_core.h>
+#include <mfkit/mf_ltc_aniso_table.h>
+#include <mfkit/mf_model.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define MF_LTCFIT_ANISO_NPARAMS 7
+
+typedef struct mf_ltcfit_aniso_options {
+    int n[4];                   /* axis sizes, >= 2 each, <= 256 (default 8 each) */
+    int param;                  /* MF_LTC_ANISO_PARAM_ALPHA_XY (default) or MF_LTC_ANISO_PARAM_ALPHA_LAMBDA */
+    int threads;                /* worker threads, 1..256 (default 1) */
+    uint64_t seed;              /* scramble of the Sobol points (default 1) */
+    int samples;                /* directions per entry, a power of two in [64, 1 << 20] (default 4096) */
+    int max_iterations;         /* per solve (default 100) */
+    const volatile int *cancel; /* may be NULL; non-zero: stop after the jobs in progress */
+    void (*progress)(void *user, int done, int total); /* may be NULL; called under a lock */
+    void *progress_user;
+} mf_ltcfit_aniso_options;
+
+void mf_ltcfit_aniso_options_default(mf_ltcfit_aniso_options *o);
+
+typedef struct mf_ltcfit_aniso_entry {
+    double m[9];         /* view-frame forward M, row-major, divided by the norm of its last column */
+    double lobe[MF_LTCFIT_ANISO_NPARAMS]; /* the lobe-frame parameters (a, b, c, d, e, f, g) */
+    double lobe_dir[3];  /* the lobe's mean direction m (view frame) */
+    double residual;     /* RMS of the K weighted light residuals at the solution */
+    int iterations;      /* solver steps */
+    int converged;       /* the solver met a tolerance */
+    double magnitude, magnitude_err, fresnel;
+} mf_ltcfit_aniso_entry;
+
+typedef struct mf_ltcfit_aniso_result {
+    int n[4];
+    mf_ltcfit_aniso_entry *entries; /* table order (axis 0 fastest); owned: mf_ltcfit_aniso_result_free */
+    int interrupted;                /* cancelled: the table is not filled */
+    double worst_residual;
+    int worst_index;
+    int max_iterations;
+    long total_iterations;
+    int not_converged;
+} mf_ltcfit_aniso_result;
+
+/* Fits every entry of a new table *table (mf_ltc_aniso_table_create with the options' sizes and
+ * parameterisation), fills its fields and metadata.  MF_ERR_DOMAIN (bad options; the model must
+ * have a sampler-compatible eval_cos), MF_ERR_ALLOC, MF_ERR_INTERNAL.  On cancel: MF_OK with
+ * result->interrupted and the table freed. */
+mf_status mf_ltcfit_aniso_table(const mf_brdf_model *model, const mf_ltcfit_aniso_options *o, mf_table *table,
+                                mf_ltcfit_aniso_result *result, char *msg, size_t msg_size) MF_WARN_UNUSED;
+void mf_ltcfit_aniso_result_free(mf_ltcfit_aniso_result *r);
+
+/* Fits one entry at (alpha_x, alpha_y > 0, theta in [0, pi/2), phi in [0, 2 pi)) from the
+ * lobe-frame parameters lobe_start (NULL: the closed-form start) with the options' seed, samples
+ * and max_iterations.  The degenerate patterns apply when theta == 0, phi == 0 or phi == pi/2
+ * exactly (MF_PI / 2).  For tests and studies (e.g. a fit made exactly at an off-grid point). */
+mf_status mf_ltcfit_aniso_entry_fit(const mf_brdf_model *model, double alpha_x, double alpha_y, double theta,
+                                    double phi, const double *lobe_start, const mf_ltcfit_aniso_options *o,
+                                    mf_ltcfit_aniso_entry *out) MF_WARN_UNUSED;
+
+/* Writes the published layout: a little-endian float32 .npy of shape (n0, n1, n2, n3, 3, 3),
+ * C order (the LAST table axis fastest, unlike mf_table's storage), the forward M of each entry
+ * divided by the norm of its last column.  Atomic.  MF_ERR_DOMAIN (not an anisotropic LTC
+ * table), MF_ERR_IO with msg. */
+mf_status mf_ltcfit_aniso_write_kt_npy(const char *path, const mf_table *t, char *msg, size_t msg_size) MF_WARN_UNUSED;
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* MF_LTCFIT_ANISO_H */

@@ -1,0 +1,985 @@
+/* mf_ltcfit_aniso.c -- anisotropic LTC table fitting (mf_ltcfit_aniso.h; the objective is the
+ * isotropic fitter's, mf_ltcfit.h, with the pieces shared through mf_ltcfit_shared.h). */
+#define _POSIX_C_SOURCE 200809L
+#include "mfkit/fit/mf_ltcfit_aniso.h"
+
+#include "mfkit/mf_brdf.h"
+#include "mfkit/mf_ltc.h"
+#include "mfkit/mf_polygon.h"
+#include "mfkit/mf_rng.h"
+#include "mfkit/mf_sample.h"
+#include "mfkit/fit/mf_solver.h"
+#include "mfkit/io/mf_io.h"
+
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define NP MF_LTCFIT_ANISO_NPARAMS
+#define MF_LTCFIT_DUAL_N NP
+#include "mf_ltcfit_shared.h"
+
+#define DIAG_LIGHTS 4
+
+/* Parameters p = (a, b, c, d, e, f, g) of M' = [[a, 0, b], [c, d, e], [f, g, 1]]. */
+enum { PA = 0, PB, PC, PD, PE, PF, PG };
+
+/* Symmetry flags of an entry (mf_ltcfit_aniso.h, "Degenerate configurations"). */
+enum { SYM_Y = 1, /* phi = 0: mirror y -> -y */ SYM_X = 2 /* phi = pi/2: mirror x -> -x */ };
+
+void mf_ltcfit_aniso_options_default(mf_ltcfit_aniso_options *o)
+{
+    memset(o, 0, sizeof *o);
+    for (int k = 0; k < 4; ++k)
+        o->n[k] = 8;
+    o->param = MF_LTC_ANISO_PARAM_ALPHA_XY;
+    o->threads = 1;
+    o->seed = 1;
+    o->samples = 4096;
+    o->max_iterations = 100;
+}
+
+typedef struct {
+    int k;
+    light lights[LIGHTS_MAX];
+    double target[LIGHTS_MAX];
+    double inv_weight[LIGHTS_MAX];
+    int live;
+    double prox;
+    double prox_at[NP];
+    double scale, invn;
+    double magnitude, magnitude_err, fresnel;
+    mf_vec3 lobe;    /* mean direction m of f cos (view frame) */
+    double r[9];     /* R_m, row-major: the minimal rotation taking z to m (lobe -> view frame) */
+    int sym;         /* SYM_* flags */
+    int fixed[NP];   /* parameters held at 0 */
+} atexel;
+
+/* The minimal rotation taking z to the unit m (about the axis z x m; m != -z):
+ * R = I + [k]x + [k]x^2 / (1 + m.z), k = z x m = (-m.y, m.x, 0). */
+static void min_rotation(mf_vec3 m, double r[9])
+{
+    double h = 1.0 / (1.0 + m.z);
+    r[0] = 1.0 - m.x * m.x * h;
+    r[1] = -m.x * m.y * h;
+    r[2] = m.x;
+    r[3] = -m.x * m.y * h;
+    r[4] = 1.0 - m.y * m.y * h;
+    r[5] = m.y;
+    r[6] = -m.x;
+    r[7] = -m.y;
+    r[8] = m.z;
+}
+
+static mf_vec3 rot_t(const double r[9], mf_vec3 v) /* R^T v */
+{
+    return mf_vec3_make(r[0] * v.x + r[3] * v.y + r[6] * v.z, r[1] * v.x + r[4] * v.y + r[7] * v.z,
+                        r[2] * v.x + r[5] * v.y + r[8] * v.z);
+}
+
+/* Rotates a light (built in the view-aligned frame) by R_z(phi) (cos c, sin s). */
+static void rotate_light(light *l, double c, double s)
+{
+    for (int i = 0; i < l->poly.n; ++i) {
+        mf_vec3 v = l->poly.v[i];
+        l->poly.v[i] = mf_vec3_make(c * v.x - s * v.y, s * v.x + c * v.y, v.z);
+    }
+    mf_vec3 v = l->centre;
+    l->centre = mf_vec3_make(c * v.x - s * v.y, s * v.x + c * v.y, v.z);
+    for (int i = 0; i < l->poly.n; ++i)
+        l->edge_n[i] = mf_vec3_cross(l->poly.v[i], l->poly.v[(i + 1) % l->poly.n]);
+}
+
+static void cos_sin_phi(double phi, int sym, double *c, double *s)
+{
+    if (sym & SYM_Y) {
+        *c = 1.0;
+        *s = 0.0;
+    } else if (sym & SYM_X) {
+        *c = 0.0;
+        *s = 1.0;
+    } else {
+        *c = cos(phi);
+        *s = sin(phi);
+    }
+}
+
+/* The shape of the lobe about its mean m, in the tangent frame (t1, t2) of m (the frame rotated
+ * by -phi, where the view lies in the xz plane): the weighted second moments
+ * S = sum w p p^T / sum w of the projections p = (w'.t1, w'.t2) of the directions w' (the mean's
+ * own projection is 0), and L = (2 S)^(1/2) with its eigenvalues clamped to [1e-4, 1.2]
+ * (row-major).  For an isotropic lobe L = w I with w the isotropic fitter's RMS width
+ * (|w - m|^2 = p.p for narrow lobes), so the two families agree there; for an elongated lobe
+ * the lights follow both principal widths.  The matrix square root is a continuous function of
+ * S (no eigenvector choice leaks out), and under the mirror symmetries S_12 is 0 exactly. */
+static void lobe_shape(const workspace *ws, double sum, double cp, double sp, mf_vec3 t1, mf_vec3 t2, int sym,
+                       double lw[4])
+{
+    double s11 = 0.0, s12 = 0.0, s22 = 0.0;
+    for (int j = 0; j < ws->n; ++j)
+        if (ws->w[j] > 0.0) {
+            mf_vec3 d = ws->dir[j];
+            mf_vec3 r = mf_vec3_make(cp * d.x + sp * d.y, -sp * d.x + cp * d.y, d.z);
+            double p1 = mf_vec3_dot(r, t1), p2 = mf_vec3_dot(r, t2);
+            s11 += ws->w[j] * p1 * p1;
+            s12 += ws->w[j] * p1 * p2;
+            s22 += ws->w[j] * p2 * p2;
+        }
+    if (!(sum > 0.0)) {
+        lw[0] = lw[3] = 0.5;
+        lw[1] = lw[2] = 0.0;
+        return;
+    }
+    s11 *= 2.0 / sum, s12 *= 2.0 / sum, s22 *= 2.0 / sum;
+    if (sym)
+        s12 = 0.0;
+    /* eigen-decomposition of [[s11, s12], [s12, s22]]: l1 >= l2, unit eigenvector (c, s) of l1 */
+    double h = 0.5 * (s11 - s22), q = sqrt(h * h + s12 * s12), mean = 0.5 * (s11 + s22);
+    double l1 = mean + q, l2 = mean - q;
+    double c = 1.0, s = 0.0;
+    if (q > 0.0) {
+        /* the angle of the major axis: 2 ang = atan2(s12, h) */
+        double ang = 0.5 * atan2(s12, h);
+        c = cos(ang), s = sin(ang);
+    }
+    double r1 = fmin(fmax(sqrt(fmax(l1, 0.0)), 1e-4), 1.2), r2 = fmin(fmax(sqrt(fmax(l2, 0.0)), 1e-4), 1.2);
+    lw[0] = r1 * c * c + r2 * s * s;
+    lw[1] = lw[2] = (r1 - r2) * c * s;
+    lw[3] = r1 * s * s + r2 * c * c;
+}
+
+/* A convex n-gon: the regular n-gon of radius rho about o (phase phi0) in the tangent plane of m,
+ * mapped by L (lw, row-major) and then gnomonically (p -> normalize(m + p.x t1 + p.y t2), which
+ * keeps straight lines straight: the light is a convex spherical polygon in the hemisphere about
+ * m), front-facing. */
+static light make_light_shaped(mf_vec3 m, mf_vec3 t1, mf_vec3 t2, const double lw[4], double ox, double oy,
+                               int n, double rho, double phi0)
+{
+    light l;
+    mf_vec3 v[MF_POLYGON_MAX_VERTICES];
+    for (int i = 0; i < n; ++i) {
+        double phi = phi0 + 2.0 * MF_PI * i / n;
+        double x = ox + rho * cos(phi), y = oy + rho * sin(phi);
+        double px = lw[0] * x + lw[1] * y, py = lw[2] * x + lw[3] * y;
+        v[i] = mf_vec3_normalize(mf_vec3_add(m, mf_vec3_add(mf_vec3_scale(t1, px), mf_vec3_scale(t2, py))));
+    }
+    mf_vec3 c = mf_vec3_normalize(
+        mf_vec3_add(m, mf_vec3_add(mf_vec3_scale(t1, lw[0] * ox + lw[1] * oy), mf_vec3_scale(t2, lw[2] * ox + lw[3] * oy))));
+    if (mf_vec3_dot(c, mf_vec3_cross(v[0], v[1])) < 0.0)
+        for (int i = 0; i < n / 2; ++i) {
+            mf_vec3 tmp = v[i];
+            v[i] = v[n - 1 - i];
+            v[n - 1 - i] = tmp;
+        }
+    l.poly = mf_polygon_make(n, v);
+    double cr = 1.0;
+    for (int i = 0; i < n; ++i) {
+        l.edge_n[i] = mf_vec3_cross(v[i], v[(i + 1) % n]);
+        cr = fmin(cr, mf_vec3_dot(c, v[i]));
+    }
+    /* the cap about c through the farthest vertex holds the (convex) polygon while it is less
+     * than a hemisphere; otherwise no pre-test */
+    l.centre = c;
+    l.cos_radius = cr > 1e-6 ? cr - 1e-9 : -2.0;
+    l.factor = 1.0;
+    return l;
+}
+
+/* The anisotropic light family (the isotropic fitter's make_lights_basis with every lobe-sized
+ * light shaped by L): centre n-gons, n-gons offset along +-t1, +-t2 (in units of L) and along the
+ * four diagonals, then the lobe-independent lights (horizon, low, large caps) of the isotropic
+ * family. */
+static int make_lights_shaped(mf_vec3 m, mf_vec3 t1, mf_vec3 t2, const double lw[4], light *out)
+{
+    int k = 0;
+    static const double centre_sizes[5] = {0.25, 0.5, 1.0, 2.0, 4.0};
+    static const int shapes[3] = {4, 3, 8};
+    for (int s = 0; s < 5; ++s)
+        for (int h = 0; h < 3; ++h)
+            out[k++] = make_light_shaped(m, t1, t2, lw, 0.0, 0.0, shapes[h], centre_sizes[s], 0.3 * h + 0.1 * s);
+    static const double offs[2] = {1.0, 2.5};
+    static const double off_sizes[2] = {0.5, 1.5};
+    static const double dx[4] = {1.0, -1.0, 0.0, 0.0}, dy[4] = {0.0, 0.0, 1.0, -1.0};
+    for (int o = 0; o < 2; ++o)
+        for (int j = 0; j < 4; ++j)
+            for (int s = 0; s < 2; ++s)
+                out[k++] = make_light_shaped(m, t1, t2, lw, offs[o] * dx[j], offs[o] * dy[j], s ? 4 : 3,
+                                             off_sizes[s], 0.5 * j + 0.2 * o);
+    for (int j = 0; j < DIAG_LIGHTS; ++j) {
+        double a = 0.25 * MF_PI + 0.5 * MF_PI * j;
+        out[k++] = make_light_shaped(m, t1, t2, lw, 1.5 * cos(a), 1.5 * sin(a), 4, 0.8, 0.3 * j);
+    }
+    light tmp[LIGHTS_MAX];
+    int n = make_lights_basis(m, t1, t2, 1.0, tmp);
+    for (int i = 31; i < n; ++i) /* the 15 + 16 lobe-sized lights come first */
+        out[k++] = tmp[i];
+    return k;
+}
+
+/* Samples, magnitude, lobe statistics, lights and their targets of one entry (the isotropic
+ * fitter's texel_prepare with the model's anisotropic sampler and a 3-D lobe frame). */
+static mf_status atexel_prepare(const mf_brdf_model *m, mf_brdf_params prm, double theta, double phi, int sym,
+                                const uint32_t scr[2], workspace *ws, atexel *t)
+{
+    double cp, sp;
+    cos_sin_phi(phi, sym, &cp, &sp);
+    double st = theta == 0.0 ? 0.0 : sin(theta), ct = theta == 0.0 ? 1.0 : cos(theta);
+    mf_vec3 wo = mf_vec3_make(st * cp, st * sp, ct);
+    t->sym = sym;
+    ws->n = ct < GRAZING_COS ? GRAZING_FACTOR * ws->base : ws->base;
+    mf_result alb, fres;
+    mf_status status = mf_model_albedo_fresnel(m, &prm, wo, 8 * QUAD_PANELS, &alb, &fres);
+    if (status != MF_OK)
+        return status;
+    t->magnitude = alb.val;
+    t->magnitude_err = alb.err;
+    t->fresnel = fres.val;
+    for (int j = 0; j < ws->n; ++j)
+        mf_sobol2((uint32_t)j, scr[0], scr[1], ws->u + 2 * j);
+    mf_model_sample_weights(m, &prm, wo, ws->n, ws->u, ws->dir, ws->pdf, ws->w);
+    double sum = 0.0;
+    mf_vec3 mean = {0.0, 0.0, 0.0};
+    for (int j = 0; j < ws->n; ++j) {
+        mf_vec3 wi = ws->dir[j];
+        double w = ws->w[j];
+        if (ws->pdf[j] > 0.0 && wi.z > 0.0 && mf_vec3_isfinite(wi)) {
+            if (!isfinite(w))
+                return MF_ERR_DOMAIN;
+        } else {
+            ws->pdf[j] = 0.0;
+        }
+        sum += w;
+        mean = mf_vec3_add(mean, mf_vec3_scale(wi, w));
+    }
+    double scale = sum > 0.0 ? t->magnitude * ws->n / sum : 0.0;
+    double ml = mf_vec3_length(mean);
+    mf_vec3 md = ml > 0.0 ? mf_vec3_scale(mean, 1.0 / ml) : mf_vec3_make(0.0, 0.0, 1.0);
+    /* the mirror symmetries hold the mean in the symmetry plane(s) exactly */
+    if (sym & SYM_Y)
+        md.y = 0.0;
+    if (sym & SYM_X)
+        md.x = 0.0;
+    md = mf_vec3_normalize(md);
+    t->lobe = md;
+    min_rotation(md, t->r);
+    /* the light family in the frame rotated by -phi about z (the view in its xz plane), then back */
+    mf_vec3 mv = mf_vec3_make(cp * md.x + sp * md.y, -sp * md.x + cp * md.y, md.z);
+    mf_vec3 t1 = mf_vec3_normalize(mf_vec3_cross(mf_vec3_make(0.0, 1.0, 0.0), mv));
+    mf_vec3 t2 = mf_vec3_cross(mv, t1);
+    double lw[4];
+    lobe_shape(ws, sum, cp, sp, t1, t2, sym, lw);
+    t->k = make_lights_shaped(mv, t1, t2, lw, t->lights);
+    for (int k = 0; k < t->k; ++k)
+        rotate_light(&t->lights[k], cp, sp);
+    int live = 0;
+    for (int j = 0; j < ws->n; ++j)
+        if (ws->pdf[j] > 0.0) {
+            ws->dir[live] = ws->dir[j];
+            ws->pdf[live] = ws->pdf[j];
+            ws->w[live++] = ws->w[j];
+        }
+    t->live = live;
+    t->prox = 0.0;
+    t->scale = scale;
+    t->invn = scale / ws->n;
+    for (int j = 0; j < live; ++j) {
+        ws->x[j] = ws->dir[j].x;
+        ws->y[j] = ws->dir[j].y;
+        ws->z[j] = ws->dir[j].z;
+    }
+    for (int k = 0; k < t->k; ++k) {
+        light *l = &t->lights[k];
+        l->lobe_poly = l->poly;
+        for (int i = 0; i < l->poly.n; ++i)
+            l->lobe_poly.v[i] = rot_t(t->r, l->poly.v[i]);
+        l->n_upper = 0;
+        for (int i = 0; i < l->poly.n; ++i) {
+            mf_vec3 a = l->poly.v[i], b = l->poly.v[(i + 1) % l->poly.n];
+            if (a.z >= 0.0)
+                l->lobe_upper[l->n_upper++] = rot_t(t->r, a);
+            if ((a.z >= 0.0) != (b.z >= 0.0)) {
+                double f = a.z / (a.z - b.z);
+                l->lobe_upper[l->n_upper++] =
+                    rot_t(t->r, mf_vec3_make(a.x + f * (b.x - a.x), a.y + f * (b.y - a.y), 0.0));
+            }
+        }
+    }
+    for (int i = 0; i < NP; ++i)
+        t->fixed[i] = 0;
+    if (sym & SYM_Y)
+        t->fixed[PC] = t->fixed[PE] = t->fixed[PG] = 1;
+    if (sym & SYM_X)
+        t->fixed[PB] = t->fixed[PC] = t->fixed[PF] = 1;
+    return MF_OK;
+}
+
+/* ---- the LTC integral in the 7-parameter chart ---------------------------------------------- */
+
+/* M' of p (row-major). */
+static void mprime(const double *p, double m[9])
+{
+    m[0] = p[PA], m[1] = 0.0, m[2] = p[PB];
+    m[3] = p[PC], m[4] = p[PD], m[5] = p[PE];
+    m[6] = p[PF], m[7] = p[PG], m[8] = 1.0;
+}
+
+static double det3(const double m[9])
+{
+    return m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) + m[2] * (m[3] * m[7] - m[4] * m[6]);
+}
+
+static int valid(const double *p)
+{
+    double m[9];
+    mprime(p, m);
+    return p[PA] > 0.0 && p[PD] > 0.0 && det3(m) > 0.0;
+}
+
+/* adj(M') = det(M') M'^-1, a positive multiple of the inverse (det > 0), as dual numbers. */
+static void adj_dual(const double *p, dual adj[9])
+{
+    dual m[9];
+    for (int i = 0; i < 9; ++i)
+        m[i] = dconst(0.0);
+    m[0] = dconst(p[PA]), m[0].d[PA] = 1.0;
+    m[2] = dconst(p[PB]), m[2].d[PB] = 1.0;
+    m[3] = dconst(p[PC]), m[3].d[PC] = 1.0;
+    m[4] = dconst(p[PD]), m[4].d[PD] = 1.0;
+    m[5] = dconst(p[PE]), m[5].d[PE] = 1.0;
+    m[6] = dconst(p[PF]), m[6].d[PF] = 1.0;
+    m[7] = dconst(p[PG]), m[7].d[PG] = 1.0;
+    m[8] = dconst(1.0);
+#define C2(a, b, c, d) dsub(dmul(m[a], m[b]), dmul(m[c], m[d]))
+    adj[0] = C2(4, 8, 5, 7);
+    adj[1] = C2(2, 7, 1, 8);
+    adj[2] = C2(1, 5, 2, 4);
+    adj[3] = C2(5, 6, 3, 8);
+    adj[4] = C2(0, 8, 2, 6);
+    adj[5] = C2(2, 3, 0, 5);
+    adj[6] = C2(3, 7, 4, 6);
+    adj[7] = C2(1, 6, 0, 7);
+    adj[8] = C2(0, 4, 1, 3);
+#undef C2
+}
+
+static void adj_value(const double *p, double adj[9])
+{
+    double m[9];
+    mprime(p, m);
+    adj[0] = m[4] * m[8] - m[5] * m[7];
+    adj[1] = m[2] * m[7] - m[1] * m[8];
+    adj[2] = m[1] * m[5] - m[2] * m[4];
+    adj[3] = m[5] * m[6] - m[3] * m[8];
+    adj[4] = m[0] * m[8] - m[2] * m[6];
+    adj[5] = m[2] * m[3] - m[0] * m[5];
+    adj[6] = m[3] * m[7] - m[4] * m[6];
+    adj[7] = m[1] * m[6] - m[0] * m[7];
+    adj[8] = m[0] * m[4] - m[1] * m[3];
+}
+
+static dual integral_dual(const mf_vec3 *v, int n, const dual adj[9])
+{
+    dvec3 q[MF_POLYGON_MAX_VERTICES];
+    for (int i = 0; i < n; ++i) {
+        q[i].x = dadd(dadd(dscale(adj[0], v[i].x), dscale(adj[1], v[i].y)), dscale(adj[2], v[i].z));
+        q[i].y = dadd(dadd(dscale(adj[3], v[i].x), dscale(adj[4], v[i].y)), dscale(adj[5], v[i].z));
+        q[i].z = dadd(dadd(dscale(adj[6], v[i].x), dscale(adj[7], v[i].y)), dscale(adj[8], v[i].z));
+    }
+    return ltc_clip_integrate_dual(q, n);
+}
+
+static double integral_value(const mf_vec3 *v, int n, const double adj[9])
+{
+    mf_vec3 q[MF_POLYGON_MAX_VERTICES + 2];
+    for (int i = 0; i < n; ++i) {
+        q[i].x = adj[0] * v[i].x + adj[1] * v[i].y + adj[2] * v[i].z;
+        q[i].y = adj[3] * v[i].x + adj[4] * v[i].y + adj[5] * v[i].z;
+        q[i].z = adj[6] * v[i].x + adj[7] * v[i].y + adj[8] * v[i].z;
+    }
+    return ltc_clip_integrate_value(q, n);
+}
+
+/* View-frame M = R_m M'. */
+static mf_mat3 view_matrix(const atexel *t, const double *p)
+{
+    double m[9];
+    mprime(p, m);
+    return mf_mat3_mul(mf_ltc_matrix_general(t->r), mf_ltc_matrix_general(m));
+}
+
+/* ---- targets ---------------------------------------------------------------------------------- */
+
+static void targets_raw(atexel *t, const workspace *ws)
+{
+    for (int k = 0; k < t->k; ++k) {
+        t->target[k] = light_sum(&t->lights[k], ws, t->live) * t->invn;
+        t->inv_weight[k] = t->lights[k].factor / (t->target[k] + WEIGHT_FLOOR * t->magnitude + 1e-300);
+    }
+}
+
+/* The isotropic fitter's control variate (mf_ltcfit.c, texel_control_variate) with the LTC of
+ * the warm start p0. */
+static void control_variate(atexel *t, workspace *ws, const double *p0)
+{
+    mf_ltc ltc;
+    int ok = valid(p0) && mf_ltc_init(&ltc, view_matrix(t, p0)) == MF_OK;
+    for (int j = 0; ok && j < t->live; ++j) {
+        ws->cw[j] = t->magnitude * mf_ltc_eval(&ltc, ws->dir[j]) / ws->pdf[j];
+        ok = isfinite(ws->cw[j]);
+    }
+    if (!ok) {
+        targets_raw(t, ws);
+        return;
+    }
+    double adj[9];
+    adj_value(p0, adj);
+    const double n = ws->n;
+    for (int k = 0; k < t->k; ++k) {
+        const light *l = &t->lights[k];
+        double sm[4];
+        light_sums_cv(l, ws, t->live, sm);
+        double my = sm[0] * t->invn, mx = sm[1] / n;
+        double sxx = sm[2] - n * mx * mx, sxy = t->scale * sm[3] - n * mx * my;
+        double beta = sxx > 0.0 ? fmin(fmax(sxy / sxx, 0.0), 1.0) : 0.0;
+        double c = l->n_upper >= 3 ? integral_value(l->lobe_upper, l->n_upper, adj) : 0.0;
+        t->target[k] = my - beta * (mx - t->magnitude * c);
+        t->inv_weight[k] = l->factor / (fmax(t->target[k], 0.0) + WEIGHT_FLOOR * t->magnitude + 1e-300);
+    }
+}
+
+/* ---- the sliver barrier ----------------------------------------------------------------------- */
+
+/* The lobe's minor angular width at its peak: the LTC maps the cosine's peak z to the direction
+ * of c2 = M' z, and the tangent directions x, y to c0, c1; the Jacobian of that map onto the
+ * tangent plane of c2 is J = P [c0 c1] / |c2| with P the projection orthogonal to c2.  Its
+ * singular values s1 >= s2 are the lobe's principal widths relative to the cosine's:
+ *   s1 s2 = det M' / |c2|^3,   s1^2 + s2^2 = (|P c0|^2 + |P c1|^2) / |c2|^2,
+ *   s2^2 = 2 (s1 s2)^2 / (F + sqrt(F^2 - 4 (s1 s2)^2)),  F = s1^2 + s2^2
+ * (the second root in the stable form).  The light integrals do not see widths far below the
+ * smallest test light, so without a bound the solver drives the minor width of the alpha = 1e-4
+ * lobes towards 0 by a shear that makes c1 parallel to c2 (det M' -> 0): measured at
+ * (alpha_x, alpha_y) = (0.143, 1e-4), theta 51.4 deg, phi 90 deg: d - e g = 2.6e-4 - 2.6e-4,
+ * M^-1 entries 3e15, the gate's octant sum off by 2.9e-3, and 100 solver steps without
+ * convergence along the flat direction. */
+#define WIDTH_MIN 5e-5
+#define WIDTH_BARRIER 1.0
+
+static dual minor_width2_dual(const double *p)
+{
+    dual c[3][3]; /* c[j] = column j of M' */
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            c[j][i] = dconst(0.0);
+    const int at[7][2] = {{0, 0}, {0, 2}, {1, 0}, {1, 1}, {1, 2}, {2, 0}, {2, 1}}; /* PA..PG: (row, col) */
+    for (int q = 0; q < NP; ++q) {
+        c[at[q][1]][at[q][0]] = dconst(p[q]);
+        c[at[q][1]][at[q][0]].d[q] = 1.0;
+    }
+    c[2][2] = dconst(1.0);
+    dvec3 c0 = {c[0][0], c[0][1], c[0][2]}, c1 = {c[1][0], c[1][1], c[1][2]}, c2 = {c[2][0], c[2][1], c[2][2]};
+    dual n2 = ddot(c2, c2);
+    dual det = ddot(c0, dcross(c1, c2));
+    dual a0 = ddot(c0, c2), a1 = ddot(c1, c2);
+    dual p0 = dsub(ddot(c0, c0), ddiv(dmul(a0, a0), n2)), p1 = dsub(ddot(c1, c1), ddiv(dmul(a1, a1), n2));
+    dual f = ddiv(dadd(p0, p1), n2);
+    dual area2 = ddiv(dmul(det, det), dmul(n2, dmul(n2, n2)));
+    dual disc = dsub(dmul(f, f), dscale(area2, 4.0));
+    if (disc.v < 0.0)
+        disc = dconst(0.0);
+    return ddiv(dscale(area2, 2.0), dadd(f, dsqrt(disc)));
+}
+
+/* The barrier residual WIDTH_BARRIER log(WIDTH_MIN / s2) where s2 < WIDTH_MIN, else 0. */
+static dual width_barrier(const double *p)
+{
+    dual w2 = minor_width2_dual(p);
+    if (!(w2.v < WIDTH_MIN * WIDTH_MIN))
+        return dconst(0.0);
+    dual r;
+    r.v = 0.5 * WIDTH_BARRIER * log(WIDTH_MIN * WIDTH_MIN / fmax(w2.v, 1e-300));
+    for (int i = 0; i < NP; ++i)
+        r.d[i] = -0.5 * WIDTH_BARRIER * w2.d[i] / fmax(w2.v, 1e-300);
+    return r;
+}
+
+/* ---- the least-squares problem ---------------------------------------------------------------- */
+
+/* Proximal residuals towards the warm start: the scales a, d relative, the shears absolute. */
+static int is_scale(int i) { return i == PA || i == PD; }
+
+static int residual_fn(void *user, const double *p, double *res, double *jac)
+{
+    const atexel *t = user;
+    if (!valid(p))
+        return 1;
+    dual adj[9];
+    adj_dual(p, adj);
+    for (int k = 0; k < t->k; ++k) {
+        dual e = integral_dual(t->lights[k].lobe_poly.v, t->lights[k].lobe_poly.n, adj);
+        res[k] = (t->magnitude * e.v - t->target[k]) * t->inv_weight[k];
+        if (jac)
+            for (int j = 0; j < NP; ++j)
+                jac[NP * k + j] = t->magnitude * e.d[j] * t->inv_weight[k];
+    }
+    for (int i = 0; i < NP; ++i) {
+        double w = t->prox > 0.0 ? (is_scale(i) ? t->prox / t->prox_at[i] : t->prox) : 0.0;
+        res[t->k + i] = w * (p[i] - t->prox_at[i]);
+        if (jac)
+            for (int j = 0; j < NP; ++j)
+                jac[NP * (t->k + i) + j] = j == i ? w : 0.0;
+    }
+    dual b = width_barrier(p);
+    res[t->k + NP] = b.v;
+    if (jac)
+        for (int j = 0; j < NP; ++j)
+            jac[NP * (t->k + NP) + j] = b.d[j];
+    return 0;
+}
+
+static double cost_at(const atexel *t, const double *p)
+{
+    if (!valid(p))
+        return INFINITY;
+    double adj[9];
+    adj_value(p, adj);
+    double c = 0.0;
+    for (int k = 0; k < t->k; ++k) {
+        double r = (t->magnitude * integral_value(t->lights[k].lobe_poly.v, t->lights[k].lobe_poly.n, adj) -
+                    t->target[k]) *
+                   t->inv_weight[k];
+        c += r * r;
+    }
+    for (int i = 0; i < NP && t->prox > 0.0; ++i) {
+        double w = is_scale(i) ? t->prox / t->prox_at[i] : t->prox;
+        double r = w * (p[i] - t->prox_at[i]);
+        c += r * r;
+    }
+    double b = width_barrier(p).v;
+    return c + b * b;
+}
+
+/* The closed-form start: the cosine scaled by (s, s) about the lobe's mean, s on the log grid
+ * 10^(-4.5 + 0.25 i), i = 0..20, then the aspect: (s r, s / r), r = 10^(0.25 j), j = -8..8. */
+static double closed_form_start(const atexel *t, double *p)
+{
+    double best = INFINITY, s_best = 1.0;
+    for (int i = 0; i < NP; ++i)
+        p[i] = 0.0;
+    p[PA] = p[PD] = 1.0;
+    for (int i = 0; i <= 20; ++i) {
+        double s = pow(10.0, -4.5 + 0.25 * i);
+        double q[NP] = {s, 0.0, 0.0, s, 0.0, 0.0, 0.0};
+        double c = cost_at(t, q);
+        if (c < best) {
+            best = c;
+            s_best = s;
+            memcpy(p, q, sizeof q);
+        }
+    }
+    for (int j = -8; j <= 8; ++j) {
+        double r = pow(10.0, 0.25 * j);
+        double q[NP] = {s_best * r, 0.0, 0.0, s_best / r, 0.0, 0.0, 0.0};
+        double c = cost_at(t, q);
+        if (c < best) {
+            best = c;
+            memcpy(p, q, sizeof q);
+        }
+    }
+    return best;
+}
+
+/* The stored gauge of the view-frame M (the lobe is M R_z for every rotation R_z about z): the
+ * R_z that makes the upper-left 2x2 block of M R_z symmetric with a positive trace (its polar
+ * factor: the rotation closest to the identity), beta = atan2(m01 - m10, m00 + m11).  Neighbouring
+ * entries then differ by the change of the lobe, not by a gauge rotation that the lobe-frame
+ * chart (M' with M'_01 = 0 about the lobe's mean) carries along: interpolating the matrices
+ * interpolates the lobes.  At phi = 0, pi/2 and theta = 0, m01 = m10 = 0 and beta = 0 exactly
+ * (the zero patterns stay exact). */
+static mf_mat3 polar_gauge(mf_mat3 m)
+{
+    double beta = atan2(m.m[0][1] - m.m[1][0], m.m[0][0] + m.m[1][1]);
+    double c = cos(beta), s = sin(beta);
+    mf_mat3 r;
+    for (int i = 0; i < 3; ++i) {
+        r.m[i][0] = m.m[i][0] * c + m.m[i][1] * s;
+        r.m[i][1] = -m.m[i][0] * s + m.m[i][1] * c;
+        r.m[i][2] = m.m[i][2];
+    }
+    return r;
+}
+
+static mf_status fit_entry(const mf_brdf_model *model, mf_brdf_params prm, double theta, double phi, int sym,
+                           const double *lobe_start, const mf_ltcfit_aniso_options *o, const uint32_t scr[2],
+                           workspace *ws, mf_ltcfit_aniso_entry *out)
+{
+    atexel *t = malloc(sizeof *t);
+    if (!t)
+        return MF_ERR_ALLOC;
+    memset(out, 0, sizeof *out);
+    mf_status st = atexel_prepare(model, prm, theta, phi, sym, scr, ws, t);
+    if (st != MF_OK) {
+        free(t);
+        return st;
+    }
+    out->magnitude = t->magnitude;
+    out->magnitude_err = t->magnitude_err;
+    out->fresnel = t->fresnel;
+    out->lobe_dir[0] = t->lobe.x;
+    out->lobe_dir[1] = t->lobe.y;
+    out->lobe_dir[2] = t->lobe.z;
+    double p[NP], q[NP];
+    int warm = lobe_start != NULL;
+    if (warm) {
+        memcpy(q, lobe_start, sizeof q);
+        for (int i = 0; i < NP; ++i)
+            if (t->fixed[i])
+                q[i] = 0.0;
+        warm = valid(q);
+    }
+    if (!warm) {
+        targets_raw(t, ws);
+        closed_form_start(t, q);
+    }
+    control_variate(t, ws, q);
+    t->prox = 0.0;
+    if (warm) {
+        t->prox = PROX_WEIGHT;
+        memcpy(t->prox_at, q, sizeof q);
+    }
+    double c0 = closed_form_start(t, p);
+    if (warm && cost_at(t, q) <= c0)
+        memcpy(p, q, sizeof p);
+    double lower[NP], upper[NP];
+    for (int i = 0; i < NP; ++i) {
+        lower[i] = is_scale(i) ? A_MIN : -INFINITY;
+        upper[i] = INFINITY;
+        if (t->fixed[i])
+            lower[i] = upper[i] = p[i] = 0.0;
+    }
+    mf_solver_options so;
+    mf_solver_options_default(&so);
+    so.max_iterations = o->max_iterations;
+    so.function_tolerance = 1e-10;
+    so.gradient_tolerance = 1e-14;
+    so.parameter_tolerance = 1e-10;
+    mf_solver_summary sum;
+    st = mf_solver_least_squares(NP, t->k + NP + 1, residual_fn, t, p, lower, upper, &so, &sum);
+    if (st != MF_OK && st != MF_ERR_NO_CONVERGENCE) {
+        free(t);
+        return st;
+    }
+    mf_mat3 mv = polar_gauge(view_matrix(t, p));
+    double nz = sqrt(mv.m[0][2] * mv.m[0][2] + mv.m[1][2] * mv.m[1][2] + mv.m[2][2] * mv.m[2][2]);
+    for (int i = 0; i < 9; ++i)
+        out->m[i] = mv.m[i / 3][i % 3] / nz;
+    memcpy(out->lobe, p, sizeof p);
+    out->iterations = sum.iterations;
+    out->converged = sum.converged;
+    t->prox = 0.0;
+    out->residual = sqrt(cost_at(t, p) / t->k);
+    free(t);
+    return MF_OK;
+}
+
+static int check_options(const mf_ltcfit_aniso_options *o)
+{
+    if (!o || o->threads < 1 || o->threads > 256 || o->samples < 64 || o->samples > (1 << 20) ||
+        (o->samples & (o->samples - 1)) || o->max_iterations < 1 ||
+        (o->param != MF_LTC_ANISO_PARAM_ALPHA_XY && o->param != MF_LTC_ANISO_PARAM_ALPHA_LAMBDA))
+        return 0;
+    for (int k = 0; k < 4; ++k)
+        if (o->n[k] < 2 || o->n[k] > 256)
+            return 0;
+    return 1;
+}
+
+static int sym_of(double theta, double phi)
+{
+    if (theta == 0.0)
+        return SYM_X | SYM_Y;
+    if (phi == 0.0)
+        return SYM_Y;
+    if (phi == 0.5 * MF_PI)
+        return SYM_X;
+    return 0;
+}
+
+mf_status mf_ltcfit_aniso_entry_fit(const mf_brdf_model *model, double alpha_x, double alpha_y, double theta,
+                                    double phi, const double *lobe_start, const mf_ltcfit_aniso_options *o,
+                                    mf_ltcfit_aniso_entry *out)
+{
+    if (!model || !model->eval_cos || !check_options(o) || !(alpha_x > 0.0) || !(alpha_y > 0.0) ||
+        !(theta >= 0.0 && theta < 0.5 * MF_PI) || !(phi >= 0.0 && phi < 2.0 * MF_PI) || !out)
+        return MF_ERR_DOMAIN;
+    workspace ws;
+    if (!ws_init(&ws, o->samples)) {
+        ws_free(&ws);
+        return MF_ERR_ALLOC;
+    }
+    uint32_t scr[2];
+    sobol_scramble(o->seed, scr);
+    mf_brdf_params prm = {alpha_x, alpha_y};
+    mf_status st = fit_entry(model, prm, theta, phi, sym_of(theta, phi), lobe_start, o, scr, &ws, out);
+    ws_free(&ws);
+    return st;
+}
+
+/* ---- the table: (alpha_x, alpha_y) jobs over threads ------------------------------------------ */
+
+typedef struct {
+    const mf_brdf_model *model;
+    const mf_ltcfit_aniso_options *o;
+    const mf_table *table;
+    mf_ltcfit_aniso_entry *entries;
+    int next_job, jobs, jobs_done;
+    int entries_done, total_entries;
+    mf_status status;
+    char *msg;
+    size_t msg_size;
+    uint32_t scr[2];
+    pthread_mutex_t lock;
+} ajob;
+
+static size_t entry_index(const int n[4], int i0, int i1, int i2, int i3)
+{
+    return (size_t)i0 + (size_t)n[0] * ((size_t)i1 + (size_t)n[1] * ((size_t)i2 + (size_t)n[2] * (size_t)i3));
+}
+
+static void progress(ajob *j, int add)
+{
+    pthread_mutex_lock(&j->lock);
+    j->entries_done += add;
+    if (j->o->progress)
+        j->o->progress(j->o->progress_user, j->entries_done, j->total_entries);
+    pthread_mutex_unlock(&j->lock);
+}
+
+/* One (alpha_x, alpha_y) pair: theta = 0 once (copied to every phi), then one chain along theta
+ * per phi, warm-started from the previous theta. */
+static mf_status fit_pair(ajob *j, workspace *ws, int i0, int i1, mf_ltcfit_aniso_entry *buf)
+{
+    const mf_table *t = j->table;
+    const int *n = j->o->n;
+    int idx[4] = {i0, i1, 0, 0};
+    double ax, ay, th, ph;
+    mf_ltc_aniso_entry_values(t, idx, &ax, &ay, &th, &ph);
+    mf_brdf_params prm = {ax, ay};
+    mf_status st = fit_entry(j->model, prm, 0.0, 0.0, SYM_X | SYM_Y, NULL, j->o, j->scr, ws, &buf[0]);
+    if (st != MF_OK)
+        return st;
+    for (int l = 1; l < n[3]; ++l)
+        buf[(size_t)n[2] * l] = buf[0];
+    progress(j, n[3]);
+    for (int l = 0; l < n[3]; ++l) {
+        for (int k = 1; k < n[2]; ++k) {
+            if (j->o->cancel && *j->o->cancel)
+                return MF_OK;
+            idx[2] = k;
+            idx[3] = l;
+            mf_ltc_aniso_entry_values(t, idx, &ax, &ay, &th, &ph);
+            int sym = l == 0 ? SYM_Y : (l == n[3] - 1 ? SYM_X : 0);
+            st = fit_entry(j->model, prm, th, ph, sym, buf[(size_t)n[2] * l + k - 1].lobe, j->o, j->scr, ws,
+                           &buf[(size_t)n[2] * l + k]);
+            if (st != MF_OK)
+                return st;
+        }
+        progress(j, n[2] - 1);
+    }
+    return MF_OK;
+}
+
+static void *worker(void *arg)
+{
+    ajob *j = arg;
+    workspace ws;
+    const int *n = j->o->n;
+    mf_ltcfit_aniso_entry *buf = malloc(sizeof *buf * (size_t)n[2] * (size_t)n[3]);
+    if (!ws_init(&ws, j->o->samples) || !buf) {
+        ws_free(&ws);
+        free(buf);
+        pthread_mutex_lock(&j->lock);
+        if (j->status == MF_OK)
+            j->status = MF_ERR_ALLOC;
+        pthread_mutex_unlock(&j->lock);
+        return NULL;
+    }
+    for (;;) {
+        int c = -1;
+        pthread_mutex_lock(&j->lock);
+        if (j->status == MF_OK && j->next_job < j->jobs && !(j->o->cancel && *j->o->cancel))
+            c = j->next_job++;
+        pthread_mutex_unlock(&j->lock);
+        if (c < 0)
+            break;
+        int i0 = c % n[0], i1 = c / n[0];
+        mf_status st = fit_pair(j, &ws, i0, i1, buf);
+        pthread_mutex_lock(&j->lock);
+        if (st != MF_OK) {
+            if (j->status == MF_OK) {
+                j->status = st;
+                if (j->msg)
+                    snprintf(j->msg, j->msg_size, "fit of roughness pair (%d, %d) failed: %s", i0, i1,
+                             mf_status_str(st));
+            }
+        } else if (!(j->o->cancel && *j->o->cancel)) {
+            for (int l = 0; l < n[3]; ++l)
+                for (int k = 0; k < n[2]; ++k)
+                    j->entries[entry_index(n, i0, i1, k, l)] = buf[(size_t)n[2] * l + k];
+            ++j->jobs_done;
+        }
+        pthread_mutex_unlock(&j->lock);
+    }
+    free(buf);
+    ws_free(&ws);
+    return NULL;
+}
+
+void mf_ltcfit_aniso_result_free(mf_ltcfit_aniso_result *r)
+{
+    if (r) {
+        free(r->entries);
+        memset(r, 0, sizeof *r);
+    }
+}
+
+mf_status mf_ltcfit_aniso_table(const mf_brdf_model *model, const mf_ltcfit_aniso_options *o, mf_table *table,
+                                mf_ltcfit_aniso_result *result, char *msg, size_t msg_size)
+{
+    if (msg && msg_size)
+        msg[0] = '\0';
+    if (result)
+        memset(result, 0, sizeof *result);
+    if (table)
+        memset(table, 0, sizeof *table);
+    if (!model || !model->eval_cos || !check_options(o) || !table || !result) {
+        if (msg)
+            snprintf(msg, msg_size, "invalid fit options");
+        return MF_ERR_DOMAIN;
+    }
+    mf_status st = mf_ltc_aniso_table_create(table, o->n, o->param);
+    if (st != MF_OK)
+        return st;
+    size_t n = mf_table_texels(table);
+    ajob j;
+    memset(&j, 0, sizeof j);
+    j.model = model;
+    j.o = o;
+    j.table = table;
+    j.entries = calloc(n, sizeof *j.entries);
+    j.jobs = o->n[0] * o->n[1];
+    j.total_entries = (int)n;
+    j.msg = msg;
+    j.msg_size = msg_size;
+    j.status = MF_OK;
+    sobol_scramble(o->seed, j.scr);
+    if (!j.entries) {
+        mf_table_free(table);
+        return MF_ERR_ALLOC;
+    }
+    pthread_mutex_init(&j.lock, NULL);
+    pthread_t th[256];
+    int started = 0;
+    for (int i = 0; i < o->threads; ++i) {
+        if (pthread_create(&th[i], NULL, worker, &j) != 0)
+            break;
+        ++started;
+    }
+    if (started == 0)
+        worker(&j);
+    for (int i = 0; i < started; ++i)
+        pthread_join(th[i], NULL);
+    pthread_mutex_destroy(&j.lock);
+    for (int k = 0; k < 4; ++k)
+        result->n[k] = o->n[k];
+    result->entries = j.entries;
+    if (j.status != MF_OK) {
+        mf_table_free(table);
+        return j.status;
+    }
+    if (j.jobs_done < j.jobs) {
+        result->interrupted = 1;
+        mf_table_free(table);
+        return MF_OK;
+    }
+    result->worst_residual = -1.0;
+    for (size_t i = 0; i < n; ++i) {
+        const mf_ltcfit_aniso_entry *e = &j.entries[i];
+        double *rec = table->data + i * (size_t)table->nfields;
+        mf_mat3 inv;
+        if (mf_mat3_inverse(mf_ltc_matrix_general(e->m), &inv) != MF_OK)
+            for (int a = 0; a < 9; ++a)
+                inv.m[a / 3][a % 3] = NAN;
+        for (int a = 0; a < 9; ++a) {
+            rec[MF_LTCA_F_M00 + a] = e->m[a];
+            rec[MF_LTCA_F_MINV00 + a] = inv.m[a / 3][a % 3];
+        }
+        rec[MF_LTCA_F_MAGNITUDE] = e->magnitude;
+        rec[MF_LTCA_F_FRESNEL] = e->fresnel;
+        rec[MF_LTCA_F_RESIDUAL] = e->residual;
+        if (e->residual > result->worst_residual) {
+            result->worst_residual = e->residual;
+            result->worst_index = (int)i;
+        }
+        if (e->iterations > result->max_iterations)
+            result->max_iterations = e->iterations;
+        result->total_iterations += e->iterations;
+        if (!e->converged)
+            ++result->not_converged;
+    }
+    char buf[64];
+    st = mf_table_set_meta(table, "tool", "mfkit fit ltc-aniso");
+    if (st == MF_OK)
+        st = mf_table_set_meta(table, "brdf", model->name);
+    snprintf(buf, sizeof buf, "%llu", (unsigned long long)o->seed);
+    if (st == MF_OK)
+        st = mf_table_set_meta(table, "seed", buf);
+    snprintf(buf, sizeof buf, "%d", o->samples);
+    if (st == MF_OK)
+        st = mf_table_set_meta(table, "samples", buf);
+    if (st == MF_OK)
+        st = mf_table_set_meta(table, "view", "wo = (sin theta cos phi, sin theta sin phi, cos theta), x = alpha_x axis");
+    if (st != MF_OK) {
+        mf_table_free(table);
+        return st;
+    }
+    return MF_OK;
+}
+
+mf_status mf_ltcfit_aniso_write_kt_npy(const char *path, const mf_table *t, char *msg, size_t msg_size)
+{
+    if (msg && msg_size)
+        msg[0] = '\0';
+    if (!path || !mf_ltc_aniso_layout_ok(t, msg, msg_size))
+        return MF_ERR_DOMAIN;
+    const int *sz = NULL;
+    int n[4];
+    for (int k = 0; k < 4; ++k)
+        n[k] = t->axes[k].size;
+    sz = n;
+    char hdr[160];
+    int hl = snprintf(hdr, sizeof hdr, "{'descr': '<f4', 'fortran_order': False, 'shape': (%d, %d, %d, %d, 3, 3), }",
+                      sz[0], sz[1], sz[2], sz[3]);
+    /* NPY 1.0: magic, version, header length; the header padded with spaces to a multiple of 64
+     * (including the 10 bytes before it) and ended by '\n' */
+    int total = 10 + hl + 1;
+    int pad = (64 - total % 64) % 64;
+    mf_buf b = {0};
+    mf_buf_put(&b, "\x93NUMPY\x01\x00", 8);
+    mf_buf_u16le(&b, (uint16_t)(hl + pad + 1));
+    mf_buf_put(&b, hdr, (size_t)hl);
+    for (int i = 0; i < pad; ++i)
+        mf_buf_put(&b, " ", 1);
+    mf_buf_put(&b, "\n", 1);
+    for (int i0 = 0; i0 < n[0]; ++i0)
+        for (int i1 = 0; i1 < n[1]; ++i1)
+            for (int i2 = 0; i2 < n[2]; ++i2)
+                for (int i3 = 0; i3 < n[3]; ++i3) {
+                    const double *r = t->data + entry_index(n, i0, i1, i2, i3) * (size_t)t->nfields;
+                    for (int a = 0; a < 9; ++a)
+                        mf_buf_f32le(&b, (float)r[MF_LTCA_F_M00 + a]);
+                }
+    mf_status st = mf_io_write_buf_atomic(path, &b, msg, msg_size);
+    mf_buf_free(&b);
+    return st;
+}
