@@ -94,7 +94,10 @@ static const cli_command k_fit_cmd = {
     .epilog = "files (in DIR, <p> = ltc_<brdf>): <p>.exr, <p>_half.exr (all fields), <p>_1.dds and\n"
               "<p>_2.dds (RGBA32F: ltc_1 = minv_00 minv_20 minv_02 minv_22, ltc_2 = magnitude fresnel\n"
               "zero sphere), <p>_1_f16.dds and <p>_2_f16.dds (RGBA16F), <p>.h, <p>.glsl, <p>.hlsl, <p>.json,\n"
-              "<p>.npy, <p>_fit.json (the float64 fit: a b c d, residual, iterations), <p>_gate.json.\n\n"
+              "<p>.npy, <p>_fit.json (the float64 fit: a b c d, residual, iterations), <p>_gate.json; for\n"
+              "engines (docs/tables.md \"Engines\"): <p>_legacy_1.dds, <p>_legacy_2.dds (legacy header),\n"
+              "<p>.ktx2, <p>_f16.ktx2 (2-layer arrays, the latter Zstandard), <p>_1.exr, <p>_2.exr (R, G, B,\n"
+              "A), and for 64 x 64 tables <p>_three.js (three.js) and <p>_eevee.h (Blender EEVEE).\n\n"
               "exit status: 0 exported, 1 a gate check failed, 2 usage error, 3 I/O error, 4 fit failed,\n"
               "130 interrupted\n",
 };

@@ -12,6 +12,7 @@
 #include "cli_util.h"
 
 #include "mfkit/mfkit.h"
+#include "mfkit/io/mf_ltc_export.h"
 #include "mfkit/io/mf_ltc_reference.h"
 #include "mfkit/io/mf_table_io.h"
 
@@ -36,16 +37,18 @@ static const cli_opt k_validate_opts[V_NOPTS] = {
 };
 static const cli_command k_validate_cmd = {
     .name = "validate",
-    .synopsis = "[TABLE]",
+    .synopsis = "[TABLE | TABLE_1 TABLE_2]",
     .min_pos = 0,
-    .max_pos = 1,
+    .max_pos = 2,
     .description =
         "Without TABLE: runs the property checks of the core math over a grid of the whole domain\n"
         "(alpha 1e-4..1, view angles up to 89.99 deg, anisotropy up to 1:100, non-centred means up to\n"
         "slope 2) and prints one row per check: name, worst value, bound, pass/FAIL, cases, where the\n"
         "worst was.\n\n"
         "With TABLE (.exr, .dds, .json, .npy written by mfkit, or a .csv in the layout of the reference\n"
-        "ltc_code table): finds the table's kind (its \"kind\" metadata, else its layout) and runs that\n"
+        "ltc_code table, .ktx2, or the three.js module <p>_three.js; or the two RGBA textures of an LTC\n"
+        "table, TABLE_1 TABLE_2: ltc_1 and ltc_2 as .dds (also the reference code's legacy DDS without\n"
+        "sidecars), .exr or .ktx2): finds the table's kind (its \"kind\" metadata, else its layout) and runs that\n"
         "kind's gate (docs/validation.md).  LTC tables: finite values, energy, normalisation, smoothness\n"
         "and, with the BRDF (--brdf, else the table's \"brdf\" metadata), albedo by quadrature and Monte\n"
         "Carlo and polygon shading against Monte Carlo.  GGX proxy and moment-map tables: their own\n"
@@ -138,8 +141,8 @@ static int validate_kind(const char *path, const mf_table *t, const mf_table_kin
 }
 
 /* The gate of the table's kind on a table file: the LTC gate for LTC tables. */
-static int validate_table(const char *path, const char *brdf, int quick, uint64_t seed, int json, const char *json_file,
-                          int quiet)
+static int validate_table(const char *path, const char *path2, const char *brdf, int quick, uint64_t seed, int json,
+                          const char *json_file, int quiet)
 {
     const char *cmd = "validate";
     mf_table t;
@@ -148,13 +151,23 @@ static int validate_table(const char *path, const char *brdf, int quick, uint64_
     int is_ref = 0;
     mf_table_file_info info = {0};
     mf_table_format fmt = mf_table_format_from_path(path);
-    if (fmt == MF_TABLE_FORMAT_CSV) {
+    size_t plen = strlen(path);
+    char pair_name[2048];
+    if (path2) {
+        /* the two textures of one LTC table */
+        st = mf_ltc_read_pair(path, path2, &t, &info.half_float, msg, sizeof msg);
+        snprintf(pair_name, sizeof pair_name, "%s + %s", path, path2);
+        path = pair_name;
+    } else if (plen > 3 && strcmp(path + plen - 3, ".js") == 0) {
+        st = mf_ltc_read_threejs(path, &t, msg, sizeof msg);
+    } else if (fmt == MF_TABLE_FORMAT_CSV) {
         is_ref = 1;
         st = mf_ltc_reference_read_csv(path, &t, msg, sizeof msg);
     } else if (mf_table_format_readable(fmt)) {
         st = mf_table_read(path, &t, &info, msg, sizeof msg);
     } else {
-        return cli_error(cmd, "%s: not a readable table format (.exr, .dds, .json, .npy, or a reference .csv)", path);
+        return cli_error(cmd, "%s: not a readable table format (.exr, .dds, .json, .npy, .ktx2, a three.js module "
+                              "<p>_three.js, or a reference .csv)", path);
     }
     if (st != MF_OK) {
         cli_error(cmd, "%s", msg[0] ? msg : mf_status_str(st));
@@ -268,7 +281,7 @@ int cli_validate(int argc, char **argv)
 {
     const char *cmd = "validate";
     cli_val v[V_NOPTS];
-    const char *pos[1];
+    const char *pos[2];
     int npos;
     int prc = cli_opt_parse(&k_validate_cmd, argc - 1, argv + 1, ~0u, NULL, v, pos, &npos);
     if (prc == CLI_PARSE_HELP) {
@@ -279,12 +292,12 @@ int cli_validate(int argc, char **argv)
         return prc;
     int json = v[V_JSON].set, quiet = v[V_QUIET].set, quick = v[V_QUICK].set;
     const char *json_file = v[V_JSON_FILE].set ? v[V_JSON_FILE].s : NULL;
-    const char *table_path = npos ? pos[0] : NULL, *brdf = v[V_BRDF].set ? v[V_BRDF].s : NULL;
+    const char *table_path = npos ? pos[0] : NULL, *table2 = npos > 1 ? pos[1] : NULL, *brdf = v[V_BRDF].set ? v[V_BRDF].s : NULL;
     unsigned long long seed = v[V_SEED].set ? v[V_SEED].u : 1;
     if (!table_path && (quick || brdf))
         return cli_error(cmd, "--quick and --brdf need a TABLE argument");
     if (table_path)
-        return validate_table(table_path, brdf, quick, (uint64_t)seed, json, json_file, quiet);
+        return validate_table(table_path, table2, brdf, quick, (uint64_t)seed, json, json_file, quiet);
     int n = mf_validate_core_count();
     mf_check *checks = calloc((size_t)n, sizeof *checks);
     if (!checks)

@@ -6,6 +6,7 @@
 #include "mfkit/io/mf_image.h"
 #include "mfkit/io/mf_io.h"
 #include "mfkit/io/mf_json.h"
+#include "mfkit/io/mf_ltc_export.h"
 #include "mfkit/io/mf_table_io.h"
 
 #include <errno.h>
@@ -76,36 +77,64 @@ static mf_status add_file(mf_ltc_bake_report *r, const char *dir, const char *su
     return MF_OK;
 }
 
+enum { EX_TABLE, EX_THREEJS, EX_EEVEE, EX_RGBA_EXR };
+
 static mf_status export_all(const mf_ltc_bake_options *o, const mf_table *t, mf_ltc_bake_report *r)
 {
+    /* The first eleven are the generic formats (docs/tables.md); the rest the engine layouts
+     * (mf_ltc_export.h, docs/tables.md "Engines"). */
     static const struct {
         const char *suffix;
         int half;
-        int dds_set; /* 0 all fields, 1 ltc_1, 2 ltc_2 */
-    } files[] = {{".exr", 0, 0},       {"_half.exr", 1, 0},   {"_1.dds", 0, 1}, {"_2.dds", 0, 2},
-                 {"_1_f16.dds", 1, 1}, {"_2_f16.dds", 1, 2}, {".h", 0, 0},     {".glsl", 0, 0},
-                 {".hlsl", 0, 0},      {".json", 0, 0},      {".npy", 0, 0}};
+        int dds_set; /* 0 all fields, 1 ltc_1, 2 ltc_2 (DDS channels; EX_RGBA_EXR: which texture) */
+        int kind;
+        int legacy;  /* DDS: legacy header */
+        int zstd;    /* KTX2: Zstandard level */
+    } files[] = {{".exr", 0, 0, EX_TABLE, 0, 0},         {"_half.exr", 1, 0, EX_TABLE, 0, 0},
+                 {"_1.dds", 0, 1, EX_TABLE, 0, 0},       {"_2.dds", 0, 2, EX_TABLE, 0, 0},
+                 {"_1_f16.dds", 1, 1, EX_TABLE, 0, 0},   {"_2_f16.dds", 1, 2, EX_TABLE, 0, 0},
+                 {".h", 0, 0, EX_TABLE, 0, 0},           {".glsl", 0, 0, EX_TABLE, 0, 0},
+                 {".hlsl", 0, 0, EX_TABLE, 0, 0},        {".json", 0, 0, EX_TABLE, 0, 0},
+                 {".npy", 0, 0, EX_TABLE, 0, 0},         {"_legacy_1.dds", 0, 1, EX_TABLE, 1, 0},
+                 {"_legacy_2.dds", 0, 2, EX_TABLE, 1, 0}, {".ktx2", 0, 0, EX_TABLE, 0, 0},
+                 {"_f16.ktx2", 1, 0, EX_TABLE, 0, 19},   {"_1.exr", 0, 1, EX_RGBA_EXR, 0, 0},
+                 {"_2.exr", 0, 2, EX_RGBA_EXR, 0, 0},    {"_three.js", 0, 0, EX_THREEJS, 0, 0},
+                 {"_eevee.h", 0, 0, EX_EEVEE, 0, 0}};
     char msg[1024];
     char *path;
     mf_status st;
+    const int dropin = mf_ltc_table_is_dropin(t);
     for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i) {
+        /* three.js and EEVEE hard-code the 64 x 64 default layout: other tables leave them out */
+        if ((files[i].kind == EX_THREEJS || files[i].kind == EX_EEVEE) && !dropin)
+            continue;
         if ((st = add_file(r, o->out_dir, files[i].suffix, &path)) != MF_OK)
             return st;
         /* EXR goes through the image API: without a backend (a build without OpenImageIO) the EXR
          * files are left out, and report->files lists what was written. */
         if (mf_table_format_from_path(path) == MF_TABLE_FORMAT_EXR && !mf_image_get_backend())
             continue;
-        mf_table_write_options wo;
-        mf_table_write_options_default(&wo);
-        wo.half_float = files[i].half;
-        wo.prefix = r->stem;
-        if (files[i].dds_set) {
-            wo.dds_fields_set = 1;
-            int base = files[i].dds_set == 1 ? MF_LTC_F_MINV_00 : MF_LTC_F_MAGNITUDE;
-            for (int c = 0; c < 4; ++c)
-                wo.dds_fields[c] = base + c;
+        if (files[i].kind == EX_THREEJS)
+            st = mf_ltc_write_threejs(path, t, msg, sizeof msg);
+        else if (files[i].kind == EX_EEVEE)
+            st = mf_ltc_write_eevee(path, t, NULL, msg, sizeof msg);
+        else if (files[i].kind == EX_RGBA_EXR)
+            st = mf_ltc_write_rgba_exr(path, t, files[i].dds_set, files[i].half, msg, sizeof msg);
+        else {
+            mf_table_write_options wo;
+            mf_table_write_options_default(&wo);
+            wo.half_float = files[i].half;
+            wo.prefix = r->stem;
+            wo.dds_legacy = files[i].legacy;
+            wo.zstd_level = files[i].zstd;
+            if (files[i].dds_set) {
+                wo.dds_fields_set = 1;
+                int base = files[i].dds_set == 1 ? MF_LTC_F_MINV_00 : MF_LTC_F_MAGNITUDE;
+                for (int c = 0; c < 4; ++c)
+                    wo.dds_fields[c] = base + c;
+            }
+            st = mf_table_write(path, t, &wo, NULL, msg, sizeof msg);
         }
-        st = mf_table_write(path, t, &wo, NULL, msg, sizeof msg);
         if (st != MF_OK) {
             set_msg(r, "%s (%s)", msg[0] ? msg : path, mf_status_str(st));
             return st;

@@ -12,7 +12,8 @@
 #define DXGI_R32G32B32A32_FLOAT 2u
 #define DXGI_R16G16B16A16_FLOAT 10u
 
-static void build_dds(mf_buf *b, const mf_table *t, const mf_table_atlas *a, const int *ch, int half)
+/* legacy: no DX10 header, FourCC 116 (D3DFMT_A32B32G32R32F) or 113 (D3DFMT_A16B16G16R16F), data at 128 */
+static void build_dds(mf_buf *b, const mf_table *t, const mf_table_atlas *a, const int *ch, int half, int legacy)
 {
     uint32_t w = (uint32_t)a->width, hgt = (uint32_t)a->height;
     uint32_t bpp = half ? 8u : 16u;
@@ -28,17 +29,22 @@ static void build_dds(mf_buf *b, const mf_table *t, const mf_table_atlas *a, con
         mf_buf_u32le(b, 0);                         /* dwReserved1 */
     mf_buf_u32le(b, 32);                            /* DDS_PIXELFORMAT.dwSize */
     mf_buf_u32le(b, 0x4u);                          /* DDPF_FOURCC */
-    mf_buf_put(b, "DX10", 4);
+    if (legacy)
+        mf_buf_u32le(b, half ? 113u : 116u);
+    else
+        mf_buf_put(b, "DX10", 4);
     for (int i = 0; i < 5; ++i)
         mf_buf_u32le(b, 0);                         /* bit count and masks */
     mf_buf_u32le(b, 0x1000u);                       /* DDSCAPS_TEXTURE */
     for (int i = 0; i < 4; ++i)
         mf_buf_u32le(b, 0);                         /* caps2..4, reserved2 */
-    mf_buf_u32le(b, half ? DXGI_R16G16B16A16_FLOAT : DXGI_R32G32B32A32_FLOAT);
-    mf_buf_u32le(b, 3);                             /* D3D10_RESOURCE_DIMENSION_TEXTURE2D */
-    mf_buf_u32le(b, 0);                             /* miscFlag */
-    mf_buf_u32le(b, 1);                             /* arraySize */
-    mf_buf_u32le(b, 0);                             /* miscFlags2: alpha mode unknown */
+    if (!legacy) {
+        mf_buf_u32le(b, half ? DXGI_R16G16B16A16_FLOAT : DXGI_R32G32B32A32_FLOAT);
+        mf_buf_u32le(b, 3);                         /* D3D10_RESOURCE_DIMENSION_TEXTURE2D */
+        mf_buf_u32le(b, 0);                         /* miscFlag */
+        mf_buf_u32le(b, 1);                         /* arraySize */
+        mf_buf_u32le(b, 0);                         /* miscFlags2: alpha mode unknown */
+    }
     size_t pixels = (size_t)a->width * (size_t)a->height;
     mf_buf_reserve(b, pixels * bpp);
     for (size_t p = 0; p < pixels && !b->failed; ++p) {
@@ -224,7 +230,7 @@ static mf_status write_dds(const char *path, const mf_table *t, const io_write_c
     io_header_extra x = {c->half_float ? "float16" : "float32", c->half_float ? c->half : NULL, c->ch,
                          t->naxes > 2 ? &a : NULL};
     mf_buf b = {0};
-    build_dds(&b, t, &a, c->ch, c->half_float);
+    build_dds(&b, t, &a, c->ch, c->half_float, c->dds_legacy);
     st = io_write_with_sidecar(path, &b, t, &x, msg, msg_size);
     mf_buf_free(&b);
     return st;

@@ -24,6 +24,9 @@ typedef struct io_write_ctx {
     int ch[4];                 /* IO_CAP_RGBA: the field of each channel R, G, B, A; -1 = zeros */
     const char *prefix;        /* IO_CAP_PREFIX: a valid identifier prefix */
     const mf_half_error *half; /* with half_float: the conversion report (stored in the metadata) */
+    int ch_set;                /* ch was chosen (always for IO_CAP_RGBA; IO_CAP_RGBA_OPTIONAL: if given) */
+    int zstd_level;            /* KTX2: Zstandard supercompression level, 0 = none */
+    int dds_legacy;            /* DDS: the legacy header (FourCC 116/113, data at byte 128) */
 } io_write_ctx;
 
 enum {
@@ -31,7 +34,8 @@ enum {
     IO_CAP_METADATA = 1u << 1, /* keeps the metadata (in the file, a sidecar or a comment) */
     IO_CAP_SIDECAR = 1u << 2,  /* the metadata goes to "<file>.json" */
     IO_CAP_PREFIX = 1u << 3,   /* source code: needs an identifier prefix */
-    IO_CAP_RGBA = 1u << 4      /* exactly 4 channels chosen from the fields */
+    IO_CAP_RGBA = 1u << 4,     /* exactly 4 channels chosen from the fields */
+    IO_CAP_RGBA_OPTIONAL = 1u << 5 /* all fields, or 4 channels chosen from them (dds_fields_set) */
 };
 
 typedef struct io_format_ops {
@@ -47,7 +51,7 @@ typedef struct io_format_ops {
 } io_format_ops;
 
 extern const io_format_ops io_format_exr, io_format_dds, io_format_c_header, io_format_glsl, io_format_hlsl,
-    io_format_json, io_format_npy, io_format_csv;
+    io_format_json, io_format_npy, io_format_csv, io_format_ktx2;
 
 /* ---- small helpers ------------------------------------------------------------------------- */
 

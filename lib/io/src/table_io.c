@@ -8,7 +8,7 @@
 /* In the order of mf_table_format (index = id). */
 static const io_format_ops *const k_formats[] = {
     NULL,           &io_format_exr,  &io_format_dds, &io_format_c_header, &io_format_glsl,
-    &io_format_hlsl, &io_format_json, &io_format_npy, &io_format_csv,
+    &io_format_hlsl, &io_format_json, &io_format_npy, &io_format_csv, &io_format_ktx2,
 };
 #define NFORMATS ((int)(sizeof k_formats / sizeof k_formats[0]))
 
@@ -144,7 +144,7 @@ mf_status mf_table_write(const char *path, const mf_table *t, const mf_table_wri
         return MF_ERR_UNSUPPORTED;
     }
     if (o.half_float && !(ops->caps & IO_CAP_HALF)) {
-        mf_io_msg(msg, msg_size, path, "half floats are stored only in .exr and .dds files, not .%s", ops->name);
+        mf_io_msg(msg, msg_size, path, "half floats are stored only in .exr, .dds and .ktx2 files, not .%s", ops->name);
         return MF_ERR_UNSUPPORTED;
     }
     if (t->naxes > ops->max_axes) {
@@ -165,7 +165,19 @@ mf_status mf_table_write(const char *path, const mf_table *t, const mf_table_wri
         }
         c.prefix = prefix;
     }
-    if (ops->caps & IO_CAP_RGBA) {
+    c.zstd_level = o.zstd_level;
+    c.dds_legacy = o.dds_legacy;
+    if (o.zstd_level < 0 || o.zstd_level > 22 || (o.zstd_level && fmt != MF_TABLE_FORMAT_KTX2)) {
+        mf_io_msg(msg, msg_size, path, "Zstandard level %d: only .ktx2 files are supercompressed, levels 1 to 22",
+                  o.zstd_level);
+        return MF_ERR_DOMAIN;
+    }
+    if (o.dds_legacy && fmt != MF_TABLE_FORMAT_DDS) {
+        mf_io_msg(msg, msg_size, path, "the legacy DDS header applies to .dds files only");
+        return MF_ERR_DOMAIN;
+    }
+    if ((ops->caps & IO_CAP_RGBA) || ((ops->caps & IO_CAP_RGBA_OPTIONAL) && o.dds_fields_set)) {
+        c.ch_set = 1;
         for (int k = 0; k < 4; ++k) {
             c.ch[k] = o.dds_fields_set ? o.dds_fields[k] : (k < t->nfields ? k : -1);
             if (c.ch[k] < -1 || c.ch[k] >= t->nfields) {
@@ -184,7 +196,7 @@ mf_status mf_table_write(const char *path, const mf_table *t, const mf_table_wri
     mf_half_error he;
     memset(&he, 0, sizeof he);
     if (o.half_float)
-        io_table_half_error(t, (ops->caps & IO_CAP_RGBA) ? c.ch : NULL, 4, &he);
+        io_table_half_error(t, c.ch_set ? c.ch : NULL, 4, &he);
     c.half = &he;
     mf_status st = ops->write(path, t, &c, msg, msg_size);
     if (st == MF_OK && half_out && o.half_float)

@@ -7,7 +7,10 @@
  * Files in out_dir, <p> = ltc_<model> ('-' becomes '_'): <p>.exr, <p>_half.exr, <p>_1.dds,
  * <p>_2.dds (RGBA32F: minv_00 minv_20 minv_02 minv_22 / magnitude fresnel zero sphere),
  * <p>_1_f16.dds, <p>_2_f16.dds (RGBA16F), <p>.h, <p>.glsl, <p>.hlsl, <p>.json, <p>.npy (with the
- * sidecars of mf_table_io.h), <p>_fit.json (mf_ltcfit_write_sidecar) and <p>_gate.json (the
+ * sidecars of mf_table_io.h); the engine files <p>_legacy_1.dds, <p>_legacy_2.dds (legacy DDS
+ * header, as the reference LTC code writes), <p>.ktx2 (RGBA32F, 2-layer array: ltc_1, ltc_2),
+ * <p>_f16.ktx2 (RGBA16F, Zstandard), <p>_1.exr, <p>_2.exr (channels R, G, B, A), and for the
+ * 64 x 64 default layout <p>_three.js and <p>_eevee.h (mf_ltc_export.h); <p>_fit.json (mf_ltcfit_write_sidecar) and <p>_gate.json (the
  * gate report: tool, version, brdf, passed, the fit summary and the checks; no timing and no
  * timestamp, so two runs with the same options give the same bytes).  Every file is written
  * atomically; the checkpoint <p>.checkpoint is removed after a successful export.  The EXR files
@@ -26,7 +29,7 @@
 extern "C" {
 #endif
 
-#define MF_LTC_BAKE_MAX_FILES 16
+#define MF_LTC_BAKE_MAX_FILES 32
 #define MF_LTC_BAKE_PATH_LEN 4096
 
 typedef struct {

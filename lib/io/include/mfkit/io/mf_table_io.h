@@ -77,14 +77,15 @@ typedef enum mf_table_format {
     MF_TABLE_FORMAT_HLSL,
     MF_TABLE_FORMAT_JSON,
     MF_TABLE_FORMAT_NPY,
-    MF_TABLE_FORMAT_CSV
+    MF_TABLE_FORMAT_CSV,
+    MF_TABLE_FORMAT_KTX2
 } mf_table_format;
 
 /* The format of a file name's extension (case-insensitive), or MF_TABLE_FORMAT_UNKNOWN. */
 mf_table_format mf_table_format_from_path(const char *path);
-/* "exr", "dds", "h", "glsl", "hlsl", "json", "npy", "csv"; "unknown". */
+/* "exr", "dds", "h", "glsl", "hlsl", "json", "npy", "csv", "ktx2"; "unknown". */
 const char *mf_table_format_name(mf_table_format f);
-/* Non-zero for the formats mf_table_read reads (EXR, DDS, JSON, NPY). */
+/* Non-zero for the formats mf_table_read reads (EXR, DDS, JSON, NPY, KTX2). */
 int mf_table_format_readable(mf_table_format f);
 
 /* ---- IEEE 754 binary16 ------------------------------------------------------------------ */
@@ -120,12 +121,17 @@ void mf_half_error_of(const double *x, size_t n, mf_half_error *out);
 
 typedef struct mf_table_write_options {
     mf_table_format format; /* MF_TABLE_FORMAT_UNKNOWN: from the path's extension */
-    int half_float;         /* EXR and DDS: 16-bit halves instead of float32 (other formats:
+    int half_float;         /* EXR, DDS and KTX2: 16-bit halves instead of float32 (other formats:
                              * MF_ERR_UNSUPPORTED) */
-    int dds_fields[4];      /* DDS: the field of each channel R, G, B, A; -1 = zeros */
-    int dds_fields_set;     /* 0: dds_fields ignored, the first min(4, nfields) fields are used */
+    int dds_fields[4];      /* DDS and KTX2: the field of each channel R, G, B, A; -1 = zeros */
+    int dds_fields_set;     /* 0: dds_fields ignored; DDS takes the first min(4, nfields) fields,
+                             * KTX2 all fields, four per array layer */
     const char *prefix;     /* .h/.glsl/.hlsl identifier prefix ([A-Za-z_][A-Za-z0-9_]*); NULL:
                              * the file name's stem, with other characters replaced by '_' */
+    int zstd_level;         /* KTX2: Zstandard supercompression at this level (1..22); 0 = none */
+    int dds_legacy;         /* DDS: the legacy header without DX10 extension (FourCC 116 =
+                             * A32B32G32R32F or 113 = A16B16G16R16F, data at byte 128), which the
+                             * reference LTC code writes and some loaders assume */
 } mf_table_write_options;
 
 /* Defaults: format from the extension, float32, first 4 fields to DDS, prefix from the name. */

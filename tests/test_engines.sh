@@ -1,0 +1,112 @@
+#!/usr/bin/env bash
+# test_engines.sh MFKIT SRC BUILD -- the engine files of `mfkit fit ltc` (mf_ltc_export.h, .ktx2,
+# legacy DDS) read back by independent readers, values compared with mfkit's JSON table:
+#   node + three.js + ktx-parse (tests/node, installed by `npm ci` from its lockfile into BUILD):
+#     the three.js module through three's own DataTexture/UniformsLib, the KTX2 files;
+#   OpenImageIO (oiiotool): the RGBA EXRs keep R, G, B, A and hold ltc_1 / ltc_2;
+#   numpy: the legacy DDS headers and data at byte 128;
+#   cc: the EEVEE header compiles (-Wall -Wextra -pedantic -Werror) and holds the values;
+#   mfkit validate on each shipped form (DDS pairs with and without sidecars, EXR pair, KTX2, three.js).
+# Missing node/npm, zstd or numpy fail the test (they are in README's install line).
+mfkit="$1"; src="$2"; build="$3"
+. "$src/tests/cli_test_lib.sh"
+for tool in node npm zstd oiiotool cc; do
+  command -v "$tool" >/dev/null || { echo "FAIL: '$tool' not found: install it (README's install line: nodejs npm zstd openimageio-tools build-essential)" >&2; exit 1; }
+done
+/usr/bin/python3 -c 'import numpy' 2>/dev/null || { echo "FAIL: /usr/bin/python3 has no numpy (python3-numpy)" >&2; exit 1; }
+
+# the node packages, pinned by the lockfile, installed once per build tree
+nm="$build/tests_node"
+if ! cmp -s "$src/tests/node/package-lock.json" "$nm/package-lock.json" || [ ! -d "$nm/node_modules/three" ]; then
+  mkdir -p "$nm" && cp "$src/tests/node/package.json" "$src/tests/node/package-lock.json" "$nm/" &&
+    (cd "$nm" && npm ci --no-audit --no-fund --loglevel=error >/dev/null) ||
+    { echo "FAIL: npm ci in $nm (three, ktx-parse from the npm registry)" >&2; exit 1; }
+fi
+
+out="$tmp/ltc"
+"$mfkit" fit ltc --out "$out" --quiet >"$tmp/fit.txt" 2>&1 || { cat "$tmp/fit.txt"; echo "FAIL: mfkit fit ltc" >&2; exit 1; }
+p="$out/ltc_ggx"
+for f in _three.js _eevee.h .ktx2 _f16.ktx2 _legacy_1.dds _legacy_2.dds _1.exr _2.exr; do
+  ok "[ -s '$p$f' ]" "mfkit fit ltc wrote ltc_ggx$f"
+done
+
+# node: the module's import 'three' resolves from the node_modules beside it
+ln -s "$nm/node_modules" "$out/node_modules"
+# (the script runs from beside its node_modules: ES modules resolve 'three' from their own place)
+cp "$src/tests/node/check_engines.mjs" "$nm/"
+node "$nm/check_engines.mjs" "$out" ltc_ggx >"$tmp/node.txt" 2>&1; rc=$?
+ok "[ $rc -eq 0 ]" "node readers: $(grep -v '^ok' "$tmp/node.txt" | head -20)"
+tail -1 "$tmp/node.txt"
+
+# OpenImageIO: channel order and values of the RGBA EXRs (--dumpdata prints %.9f: tolerance 5e-10)
+for k in 1 2; do
+  ok "iinfo -v '$p"_$k.exr"' | grep -q 'channel list: R, G, B, A'" "ltc_ggx_$k.exr channel list R, G, B, A"
+  oiiotool --dumpdata "$p"_$k.exr | grep 'Pixel (' >"$tmp/dump$k.txt"
+  ok "/usr/bin/python3 - '$tmp/dump$k.txt' '$p.json' $k <<'PY'
+import json, re, sys, numpy as np
+rows = [l for l in open(sys.argv[1])]
+t = json.load(open(sys.argv[2])); k = int(sys.argv[3])
+d = np.array([[float(v) for v in r] for r in t['data']], dtype=np.float32).astype(np.float64)
+base = 0 if k == 1 else 4
+worst = 0.0
+for l in rows:
+    m = re.match(r'\s*Pixel \((\d+), (\d+)\): (.*)', l)
+    x, y = int(m.group(1)), int(m.group(2)); v = np.array([float(s) for s in m.group(3).split()])
+    worst = max(worst, np.max(np.abs(v - d[x + 64 * y, base:base + 4])))
+ok = len(rows) == 4096 and worst <= 5e-10 * (1 + 1e-6)  # %.9f: half a unit of 1e-9, plus the parse
+print('EXR ltc_%d: %d pixels, worst |diff| %.2g' % (k, len(rows), worst))
+sys.exit(0 if ok else 1)
+PY" "ltc_ggx_$k.exr values (R, G, B, A = ltc_$k fields)"
+done
+
+# numpy: the legacy DDS (FourCC 116 at byte 84, data at byte 128) equals the JSON floats
+ok "/usr/bin/python3 - '$p' <<'PY'
+import json, sys, numpy as np
+p = sys.argv[1]
+d = np.array(json.load(open(p + '.json'))['data'], dtype=np.float32)
+for k, base in ((1, 0), (2, 4)):
+    b = open('%s_legacy_%d.dds' % (p, k), 'rb').read()
+    h = np.frombuffer(b[:128], dtype='<u4')
+    a = np.frombuffer(b, dtype='<f4', offset=128).reshape(64, 64, 4)
+    ref = d.reshape(64, 64, 8)[:, :, base:base + 4]
+    good = b[:4] == b'DDS ' and h[1] == 124 and h[3] == 64 and h[4] == 64 and h[21] == 116 and len(b) == 128 + 64 * 64 * 16
+    print('legacy DDS %d: header %s, FourCC %d, data equal: %s' % (k, good, h[21], np.array_equal(a, ref)))
+    if not (good and np.array_equal(a, ref)):
+        sys.exit(1)
+PY" "legacy DDS pair: header and data at byte 128"
+
+# cc: the EEVEE header compiles and holds the values (printed %a: exact)
+cat >"$tmp/eevee.c" <<C
+#include <stdio.h>
+#include "ltc_ggx_eevee.h"
+int main(void)
+{
+    for (int iu = 0; iu < 64; ++iu)
+        for (int ir = 0; ir < 64; ++ir)
+            printf("%a %a %a %a %a %a\n", ltc_mat_ggx[iu][ir][0], ltc_mat_ggx[iu][ir][1], ltc_mat_ggx[iu][ir][2],
+                   ltc_mat_ggx[iu][ir][3], ltc_mag_ggx[iu][ir][0], ltc_mag_ggx[iu][ir][1]);
+    return 0;
+}
+C
+ok "cc -std=c11 -Wall -Wextra -pedantic -Werror -I'$out' '$tmp/eevee.c' -o '$tmp/eevee' 2>'$tmp/cc.txt'" "EEVEE header compiles: $(cat "$tmp/cc.txt" 2>/dev/null | head -5)"
+ok "'$tmp/eevee' >'$tmp/eevee.txt' && /usr/bin/python3 - '$tmp/eevee.txt' '$p.json' <<'PY'
+import json, sys, numpy as np
+v = np.array([[float.fromhex(s) for s in l.split()] for l in open(sys.argv[1])])
+d = np.array(json.load(open(sys.argv[2]))['data'], dtype=np.float32).astype(np.float64)
+same = v.shape == (4096, 6) and np.array_equal(v, d[:, :6])
+print('EEVEE arrays [iu][ir] = JSON texel ir + 64 iu, fields 0..5:', same)
+sys.exit(0 if same else 1)
+PY" "EEVEE ltc_mat_ggx / ltc_mag_ggx values"
+
+# mfkit validate on what users ship (quick gate with the BRDF)
+mkdir -p "$tmp/nosidecar" && cp "$p"_legacy_1.dds "$p"_legacy_2.dds "$tmp/nosidecar/"
+for args in "$p"_1.dds' '"$p"_2.dds "$p"_1_f16.dds' '"$p"_2_f16.dds "$tmp/nosidecar/ltc_ggx_legacy_1.dds $tmp/nosidecar/ltc_ggx_legacy_2.dds" \
+            "$p"_1.exr' '"$p"_2.exr "$p.ktx2" "$p"_f16.ktx2 "$p"_three.js; do
+  ok "'$mfkit' validate $args --brdf ggx --quick --quiet >'$tmp/v.txt' 2>&1 && grep -q 'all checks passed' '$tmp/v.txt'" \
+     "mfkit validate $args: $(head -c 300 "$tmp/v.txt" 2>/dev/null)"
+done
+# the pair in the wrong order is not an LTC table (the order is what tells ltc_1 from ltc_2 without metadata)
+"$mfkit" validate "$tmp/nosidecar/ltc_ggx_legacy_2.dds" "$tmp/nosidecar/ltc_ggx_legacy_1.dds" --brdf ggx --quick --quiet >"$tmp/v.txt" 2>&1; rc=$?
+ok "[ $rc -eq 1 ] && grep -q 'SOME CHECKS FAILED' '$tmp/v.txt'" "validate of a swapped legacy pair must fail the gate (rc $rc)"
+expect_error "validate of a pair of different sizes" 3 "not the second texture" validate "$p"_1.dds "$tmp/nosidecar/../ltc/ltc_ggx.json"
+finish test_engines
