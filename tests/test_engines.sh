@@ -7,11 +7,12 @@
 #   numpy: the legacy DDS headers and data at byte 128;
 #   cc: the EEVEE header compiles (-Wall -Wextra -pedantic -Werror) and holds the values;
 #   mfkit validate on each shipped form (DDS pairs with and without sidecars, EXR pair, KTX2, three.js).
-# Missing node/npm, zstd or numpy fail the test (they are in README's install line).
+# Missing node/npm, zstd or numpy fail the test. zstd and numpy are in README's install line; node 20
+# with npm is part of the machine (NodeSource's nodejs package: Debian's npm package conflicts with it).
 mfkit="$1"; src="$2"; build="$3"
 . "$src/tests/cli_test_lib.sh"
 for tool in node npm zstd oiiotool cc; do
-  command -v "$tool" >/dev/null || { echo "FAIL: '$tool' not found: install it (README's install line: nodejs npm zstd openimageio-tools build-essential)" >&2; exit 1; }
+  command -v "$tool" >/dev/null || { echo "FAIL: '$tool' not found: install it (zstd, openimageio-tools, build-essential: README's install line; node and npm: Node.js 20)" >&2; exit 1; }
 done
 /usr/bin/python3 -c 'import numpy' 2>/dev/null || { echo "FAIL: /usr/bin/python3 has no numpy (python3-numpy)" >&2; exit 1; }
 
