@@ -8,7 +8,7 @@ mfkit="$1"
 # Beckmann 8x8 passes the gate (measured: polygon mean 0.0051 of 0.01, worst texel 0.024 of 0.05)
 "$mfkit" fit ltc --brdf beckmann --size 8 --threads 2 --out "$tmp/b" --quiet >"$tmp/b.log" 2>&1; rc=$?
 ok '[ $rc -eq 0 ]' "beckmann 8x8 fit exits 0 (rc=$rc): $(tail -3 "$tmp/b.log")"
-for f in .exr _half.exr _1.dds _2.dds _1_f16.dds _2_f16.dds .h .glsl .hlsl .json .npy _fit.json _gate.json; do
+for f in .exr _half.exr _1.dds _2.dds _1_f16.dds _2_f16.dds .h .glsl .hlsl .json .npy _area.glsl _area.hlsl _area.wgsl _fit.json _gate.json; do
   ok '[ -s "$tmp/b/ltc_beckmann$f" ]' "exported ltc_beckmann$f"
 done
 ok '[ -z "$(ls "$tmp/b" | grep -E "tmp|checkpoint")" ]' "no temporaries or checkpoint left"

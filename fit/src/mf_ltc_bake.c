@@ -7,6 +7,7 @@
 #include "mfkit/io/mf_io.h"
 #include "mfkit/io/mf_json.h"
 #include "mfkit/io/mf_ltc_export.h"
+#include "mfkit/io/mf_ltc_shader.h"
 #include "mfkit/io/mf_table_io.h"
 
 #include <errno.h>
@@ -137,6 +138,17 @@ static mf_status export_all(const mf_ltc_bake_options *o, const mf_table *t, mf_
         }
         if (st != MF_OK) {
             set_msg(r, "%s (%s)", msg[0] ? msg : path, mf_status_str(st));
+            return st;
+        }
+        ++r->nfiles;
+    }
+    for (int l = 0; l < 3; ++l) { /* <stem>_area.glsl/.hlsl/.wgsl: the area-light code (mf_ltc_shader.h) */
+        char suffix[16];
+        snprintf(suffix, sizeof suffix, "_area.%s", mf_shader_lang_name((mf_shader_lang)l));
+        if ((st = add_file(r, o->out_dir, suffix, &path)) != MF_OK)
+            return st;
+        if ((st = mf_ltc_shader_write(path, t, (mf_shader_lang)l, r->stem, msg, sizeof msg)) != MF_OK) {
+            set_msg(r, "%s", msg);
             return st;
         }
         ++r->nfiles;

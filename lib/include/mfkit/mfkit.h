@@ -14,6 +14,7 @@
 #include "mfkit/mf_sample.h"
 #include "mfkit/mf_polygon.h"
 #include "mfkit/mf_ltc.h"
+#include "mfkit/mf_ltc_lights.h"
 #include "mfkit/mf_check.h"
 #include "mfkit/mf_validate.h"
 #include "mfkit/mf_table.h"
