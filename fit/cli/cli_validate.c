@@ -120,7 +120,8 @@ static int validate_kind(const char *path, const mf_table *t, const mf_table_kin
                    secs);
     cli_buf body = {0};
     report_json(&body, checks, n, all);
-    const char *p = body.data ? strstr(body.data, "  \"passed\"") : NULL;
+    mf_buf_put(&body, "", 1); /* a C string for strstr (mf_buf holds bytes, no terminating NUL) */
+    const char *p = body.failed ? NULL : strstr(body.data, "  \"passed\"");
     cli_buf_printf(&jb, "%s", p ? p : "}\n");
     cli_buf_free(&body);
     cli_buf_printf(&tb, "%s gate: %s (", kind->name, path);
