@@ -274,7 +274,14 @@ def _path(p, what="path"):
 
 # ---- eval ------------------------------------------------------------------------------------
 
-_NOPTS = 8  # MF_EVAL_NOPTS
+def _option_count():
+    n = 0  # MF_EVAL_NOPTS: mf_eval_option_at is NULL past the last option
+    while _lib.mf_eval_option_at(n):
+        n += 1
+    return n
+
+
+_NOPTS = _option_count()
 
 
 def _options():
