@@ -2,8 +2,12 @@
 # make_figures.sh BUILD_DIR OUT_DIR [DATA_DIR] -- run the accuracy studies (fast settings) and plot
 # them (issue 6; docs/figures.md).  Run from the source directory, e.g.
 #   analysis/make_figures.sh build out/figures
-# CSV files go to DATA_DIR (default: a scratch directory, removed afterwards; pass notebooks_data
-# to keep them locally -- they are generated, not committed), figures (PNG + PDF) to OUT_DIR.
+# CSV files go to DATA_DIR (default: a scratch directory, removed afterwards), figures (PNG + PDF)
+# to OUT_DIR.  `analysis/make_figures.sh build out/figures notebooks_data` regenerates the committed
+# data behind the figures (notebooks_data/README.md): only CSV files, each starting with its
+# provenance line (command, version, seed, date), gzip-compressed (FILE.csv.gz, `gzip -n`: the bytes
+# do not depend on the time; 17 MB of text become 3.2 MB) after plotting; the intermediate LTC fits
+# go to a scratch directory, never to DATA_DIR.
 # bench_ltc's per-polygon CSV of the reference table tests/data/reference/ltc_code_ggx_64.csv
 # (vendored; its absence is an error) is added when bench_ltc was built (C++ dependencies on), and
 # so is study_ltc_texels' per-texel CSV (paired with the table named by the environment variable MFKIT_LTC_TABLE, if set,
@@ -17,12 +21,14 @@ fi
 build=$1 out=$2
 src=$(cd "$(dirname "$0")/.." && pwd)
 bin=$build/analysis
+work=$(mktemp -d "${TMPDIR:-/tmp}/mfkit_figures.XXXXXX")
+trap 'rm -rf "$work"' EXIT
 if [ $# -eq 3 ]; then
     data=$3
     mkdir -p "$data"
 else
-    data=$(mktemp -d "${TMPDIR:-/tmp}/mfkit_figures.XXXXXX")
-    trap 'rm -rf "$data"' EXIT
+    data=$work/data
+    mkdir -p "$data"
 fi
 for s in study_smith study_furnace study_proxy study_leadr_grid; do
     [ -x "$bin/$s" ] || { echo "make_figures.sh: $bin/$s not built (cmake --build $build)" >&2; exit 1; }
@@ -63,10 +69,14 @@ fi
 if [ -x "$bin/study_ltc_texels" ] && [ -x "$build/bin/mfkit" ]; then
     for b in ${MFKIT_FIGURES_BRDFS-ggx beckmann lambert disney charlie}; do
         echo "== fit ltc --brdf $b --size 12, study_ltc_texels"
-        "$build/bin/mfkit" fit ltc --brdf "$b" --size 12 --force --quiet --out "$data/ltc_$b" >/dev/null
+        "$build/bin/mfkit" fit ltc --brdf "$b" --size 12 --force --quiet --out "$work/ltc_$b" >/dev/null
         "$bin/study_ltc_texels" --polygons 16 --samples 16384 --out "$data/ltc_texels_$b.csv" \
-            "$data/ltc_$b/ltc_${b//-/_}.json" >/dev/null
+            "$work/ltc_$b/ltc_${b//-/_}.json" >/dev/null
     done
 fi
 echo "== plot.py"
 /usr/bin/python3 "$src/analysis/plot.py" "$data" "$out"
+if [ $# -eq 3 ]; then
+    for f in "$data"/*.csv; do gzip -n -9 -f "$f"; done
+    echo "== $data: $(ls "$data"/*.csv.gz | wc -l) files, $(cat "$data"/*.csv.gz | wc -c) bytes (.csv.gz)"
+fi
