@@ -168,8 +168,10 @@ int main(int argc, char **argv)
         return 1;
     }
     double t1 = now();
-    printf("fit 8^4, %d threads: %.2f s wall; worst residual %.4g, not converged %d of %zu, max iterations %d\n",
-           threads, t1 - t0, r.worst_residual, r.not_converged, mf_table_texels(&t), r.max_iterations);
+    printf("fit 8^4, %d threads: %.2f s wall; worst residual %.4g, not converged %d of %zu, max iterations %d, "
+           "anchor fallbacks %d\n",
+           threads, t1 - t0, r.worst_residual, r.not_converged, mf_table_texels(&t), r.max_iterations,
+           r.anchor_fallbacks);
     /* the full gate on the fitted table (the smoothness checks are reported here, not in ctest) */
     mf_check ch[MF_LTC_ANISO_GATE_MAX_CHECKS];
     int nch = 0;
@@ -183,6 +185,13 @@ int main(int argc, char **argv)
     errs et = {malloc(sizeof(double) * points * Q), malloc(sizeof(double) * points * Q), 0};
     errs ep = {malloc(sizeof(double) * points * Q), malloc(sizeof(double) * points * Q), 0};
     errs ef = {malloc(sizeof(double) * points * Q), malloc(sizeof(double) * points * Q), 0};
+    /* the same, split by where the point lies: min(alpha_x, alpha_y) below the second grid
+     * alpha (1/7: interpolating towards the alpha = 1e-4 anchors) or not */
+    errs gm[2], gp[2];
+    for (int g = 0; g < 2; ++g) {
+        gm[g] = (errs){malloc(sizeof(double) * points * Q), malloc(sizeof(double) * points * Q), 0};
+        gp[g] = (errs){malloc(sizeof(double) * points * Q), malloc(sizeof(double) * points * Q), 0};
+    }
     mf_pcg32 rng;
     mf_pcg32_seed(&rng, 12, 0x62656e6368ull);
     int flipped = 0;
@@ -215,6 +224,9 @@ int main(int argc, char **argv)
         for (int k = 0; k < Q; ++k) {
             double em_ = mf_ltc_integrate_polygon(&lm, &quads[k], MF_POLYGON_ONE_SIDED);
             add(&em, alb.val * em_, mc[k], alb.val);
+            int g = fmin(p[0], p[1]) < 1.0 / 7.0;
+            add(&gm[g], alb.val * em_, mc[k], alb.val);
+            add(&gp[g], alb.val * mf_ltc_integrate_polygon(&lp, &quads[k], MF_POLYGON_ONE_SIDED), mc[k], alb.val);
             add(&et, mag * em_, mc[k], alb.val);
             add(&ep, alb.val * mf_ltc_integrate_polygon(&lp, &quads[k], MF_POLYGON_ONE_SIDED), mc[k], alb.val);
             if (have_fit)
@@ -229,6 +241,10 @@ int main(int argc, char **argv)
     report("published 8^4 shape", &ep);
     report("mfkit 8^4 total", &et);
     report("mfkit fit at the point", &ef);
+    report("mfkit shape, min alpha<1/7", &gm[1]);
+    report("published,   min alpha<1/7", &gp[1]);
+    report("mfkit shape, min alpha>1/7", &gm[0]);
+    report("published,   min alpha>1/7", &gp[0]);
     mf_table_free(&t);
     mf_ltcfit_aniso_result_free(&r);
     free(pub);

@@ -139,8 +139,10 @@ int cli_fit_aniso(int argc, char **argv)
         mf_ltcfit_aniso_result_free(&r);
         return cli_exit_code(st) == CLI_EXIT_IO ? CLI_EXIT_IO : CLI_EXIT_FIT;
     }
-    printf("fit: %d x %d x %d x %d entries, worst residual %.4g (entry %d), not converged %d, max iterations %d\n",
-           o.n[0], o.n[1], o.n[2], o.n[3], r.worst_residual, r.worst_index, r.not_converged, r.max_iterations);
+    printf("fit: %d x %d x %d x %d entries, worst residual %.4g (entry %d), not converged %d, max iterations %d, "
+           "anchor fallbacks %d\n",
+           o.n[0], o.n[1], o.n[2], o.n[3], r.worst_residual, r.worst_index, r.not_converged, r.max_iterations,
+           r.anchor_fallbacks);
     mf_ltc_aniso_gate_options go;
     mf_ltc_aniso_gate_options_default(&go);
     go.seed = o.seed;
