@@ -59,16 +59,6 @@ static mf_mat3 mat(double a, double b, double c, double d, double e, double f, d
     return mf_ltc_matrix_general(m);
 }
 
-/* Rotation about the unit axis a by angle t (Rodrigues). */
-static mf_mat3 rotation(mf_vec3 a, double t)
-{
-    double c = cos(t), s = sin(t), k = 1.0 - c;
-    mf_mat3 r = {{{c + a.x * a.x * k, a.x * a.y * k - a.z * s, a.x * a.z * k + a.y * s},
-                  {a.y * a.x * k + a.z * s, c + a.y * a.y * k, a.y * a.z * k - a.x * s},
-                  {a.z * a.x * k - a.y * s, a.z * a.y * k + a.x * s, c + a.z * a.z * k}}};
-    return r;
-}
-
 /* The test matrices: well-conditioned ones (identity, isotropic GGX-like fits, a general
  * 9-parameter one, det < 0), and ill-conditioned ones (strong shear, anisotropy 1:1e3,
  * a near-specular lobe alpha ~ 1e-3). */
@@ -90,7 +80,7 @@ static int build_matrices(test_matrix *t)
     t[n++] = (test_matrix){"lobe below the horizon", mat(1.0, 0.0, 0.5, 0.0, 1.0, 0.0, 0.0, 0.3, -0.6), 1};
     t[n++] = (test_matrix){"strong shear", mat(1.0, 40.0, 0.0, 0.0, 1.0, 25.0, 0.0, 0.0, 1.0), 0};
     t[n++] = (test_matrix){"anisotropic 1:1e3",
-                           mf_mat3_mul(rotation(v3(0.6, 0.0, 0.8), 0.4), mat(1e-3, 0, 0, 0, 1, 0, 0, 0, 1)), 0};
+                           mf_mat3_mul(mf_test_rotation(v3(0.6, 0.0, 0.8), 0.4), mat(1e-3, 0, 0, 0, 1, 0, 0, 0, 1)), 0};
     t[n++] = (test_matrix){"near-specular alpha 1e-3, det<0", mat(-1e-3, 0, 2e-4, 0, 1e-3, 0, 5e-4, 0, 1.0), 0};
     return n;
 }
@@ -202,7 +192,7 @@ static void test_eval(mf_pcg32 *rng, const test_matrix *t, int nt)
                     scaled.m[r][c] *= 2.5;
             mf_ltc ls = make_ltc(scaled);
             CHECK_REL(mf_ltc_eval(&ls, w), d, tol);
-            mf_ltc lr = make_ltc(mf_mat3_mul(t[i].m, rotation(v3(0, 0, 1), 1.3)));
+            mf_ltc lr = make_ltc(mf_mat3_mul(t[i].m, mf_test_rotation(v3(0, 0, 1), 1.3)));
             CHECK_REL(mf_ltc_eval(&lr, w), d, tol);
             mf_ltc lm = make_ltc(mf_mat3_mul(t[i].m, mat(1, 0, 0, 0, -1, 0, 0, 0, 1)));
             CHECK(lm.det * l.det < 0.0);

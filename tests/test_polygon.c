@@ -40,16 +40,6 @@ static mf_polygon poly4(mf_vec3 a, mf_vec3 b, mf_vec3 c, mf_vec3 d)
     return mf_polygon_make(4, v);
 }
 
-/* Rotation about the unit axis a by angle t (Rodrigues). */
-static mf_mat3 rotation(mf_vec3 a, double t)
-{
-    double c = cos(t), s = sin(t), k = 1.0 - c;
-    mf_mat3 r = {{{c + a.x * a.x * k, a.x * a.y * k - a.z * s, a.x * a.z * k + a.y * s},
-                  {a.y * a.x * k + a.z * s, c + a.y * a.y * k, a.y * a.z * k - a.x * s},
-                  {a.z * a.x * k - a.y * s, a.z * a.y * k + a.x * s, c + a.z * a.z * k}}};
-    return r;
-}
-
 static mf_polygon transformed(mf_mat3 r, const mf_polygon *p)
 {
     mf_polygon q = *p;
@@ -173,7 +163,7 @@ static void test_tiny_oblique(void)
     for (int i = 0; i < 3; ++i)
         for (int k = 0; k < 3; ++k) {
             mf_polygon sq = zenith_square(hs[i]);
-            mf_mat3 r = mf_mat3_mul(rotation(v3(0, 0, 1), 0.7), rotation(v3(1, 0, 0), tilts[k] * DEG));
+            mf_mat3 r = mf_mat3_mul(mf_test_rotation(v3(0, 0, 1), 0.7), mf_test_rotation(v3(1, 0, 0), tilts[k] * DEG));
             mf_polygon t = transformed(r, &sq);
             double tol = 100 * DBL_EPSILON / hs[i];
             CHECK_REL(mf_polygon_integrate_cosine(&t, MF_POLYGON_ONE_SIDED),
@@ -193,7 +183,7 @@ static void test_rotations(mf_pcg32 *rng)
         mf_polygon p = random_polygon(rng, c, 0.1 + mf_pcg32_next_double(rng), k % 3 == 0);
         u[0] = mf_pcg32_next_double(rng);
         u[1] = mf_pcg32_next_double(rng);
-        mf_mat3 r = rotation(mf_sample_uniform_sphere(u), 2.0 * MF_PI * mf_pcg32_next_double(rng));
+        mf_mat3 r = mf_test_rotation(mf_sample_uniform_sphere(u), 2.0 * MF_PI * mf_pcg32_next_double(rng));
         mf_polygon q = transformed(r, &p);
         mf_vec3 fp = mf_polygon_form_factor(&p), fq = mf_polygon_form_factor(&q);
         mf_vec3 rf = mf_mat3_apply(r, fp);
@@ -202,7 +192,7 @@ static void test_rotations(mf_pcg32 *rng)
         /* |F| <= 1, rounding of O(1) terms: 64 eps absolute */
         CHECK(err <= 64 * DBL_EPSILON);
         CHECK_ABS(mf_polygon_solid_angle(&q), mf_polygon_solid_angle(&p), 64 * DBL_EPSILON);
-        mf_polygon z = transformed(rotation(v3(0, 0, 1), 2.0 * MF_PI * mf_pcg32_next_double(rng)), &p);
+        mf_polygon z = transformed(mf_test_rotation(v3(0, 0, 1), 2.0 * MF_PI * mf_pcg32_next_double(rng)), &p);
         CHECK_ABS(mf_polygon_integrate_cosine_signed(&z), mf_polygon_integrate_cosine_signed(&p), 64 * DBL_EPSILON);
         /* above the horizon, the clipped integral is F.z */
         int above = 1;
@@ -337,7 +327,7 @@ static void test_degenerate(void)
     mf_polygon thz = poly4(v3(0, 0, 1), v3(-0.5, -0.5, 1), v3(0.5, -0.5, 1), v3(0.5, 0.5, 1));
     mf_polygon thz2 = poly3(v3(-1, 0, 1), v3(1, 1e-17, 1), v3(0, 1, 1)); /* edge through (0,0,1) */
     for (int k = 1; k < 8; ++k) {
-        mf_mat3 r = rotation(v3(0, 0, 1), 0.9 * k);
+        mf_mat3 r = mf_test_rotation(v3(0, 0, 1), 0.9 * k);
         mf_polygon a = transformed(r, &thz), b = transformed(r, &thz2);
         CHECK_REL(mf_polygon_integrate_cosine_signed(&a), mf_polygon_integrate_cosine_signed(&thz), 32 * DBL_EPSILON);
         CHECK_REL(mf_polygon_integrate_cosine_signed(&b), mf_polygon_integrate_cosine_signed(&thz2), 32 * DBL_EPSILON);

@@ -1,6 +1,7 @@
 /*
- * test_polygon_mc.h -- the Monte Carlo side of mfkit's polygon tests (tests/ only): whether a ray
- * from the origin hits a planar polygon, and a polygon with its winding reversed.
+ * test_polygon_mc.h -- geometry shared by mfkit's polygon and LTC tests (tests/ only): whether a
+ * ray from the origin hits a planar polygon (the Monte Carlo reference), a polygon with its
+ * winding reversed, and a rotation about an axis.
  */
 #ifndef MF_TEST_POLYGON_MC_H
 #define MF_TEST_POLYGON_MC_H
@@ -52,6 +53,16 @@ static inline mf_polygon mf_test_reversed(const mf_polygon *p)
     mf_polygon r = *p;
     for (int i = 0; i < p->n; ++i)
         r.v[i] = p->v[p->n - 1 - i];
+    return r;
+}
+
+/* Rotation about the unit axis a by angle t (Rodrigues' formula). */
+static inline mf_mat3 mf_test_rotation(mf_vec3 a, double t)
+{
+    double c = cos(t), s = sin(t), k = 1.0 - c;
+    mf_mat3 r = {{{c + a.x * a.x * k, a.x * a.y * k - a.z * s, a.x * a.z * k + a.y * s},
+                  {a.y * a.x * k + a.z * s, c + a.y * a.y * k, a.y * a.z * k - a.x * s},
+                  {a.z * a.x * k - a.y * s, a.z * a.y * k + a.x * s, c + a.z * a.z * k}}};
     return r;
 }
 

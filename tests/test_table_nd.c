@@ -97,7 +97,8 @@ static int same_values(const mf_table *a, const mf_table *b, int half)
         return 0;
     for (size_t i = 0; i < n; ++i) {
         double want = half ? mf_half_to_double(mf_half_from_double(a->data[i])) : (double)(float)a->data[i];
-        if (mf_test_float_bits((float)want) != mf_test_float_bits((float)b->data[i]) || (double)(float)b->data[i] != b->data[i]) {
+        if (mf_test_float_bits((float)want) != mf_test_float_bits((float)b->data[i]) ||
+            (double)(float)b->data[i] != b->data[i]) {
             fprintf(stderr, "value %zu: %.9g read back as %.9g\n", i, want, b->data[i]);
             return 0;
         }
@@ -157,7 +158,8 @@ static void check_atlas_pixels(const mf_table *t, const char *exr_name, const ch
             int f = mf_table_field(t, ii.channel_names[c]);
             CHECK(f >= 0);
             for (size_t p = 0; f >= 0 && p < n / nf; ++p)
-                bad += mf_test_float_bits(img.pixels[p * nf + c]) != mf_test_float_bits((float)fill[p * nf + (size_t)f]);
+                bad += mf_test_float_bits(img.pixels[p * nf + c]) !=
+                       mf_test_float_bits((float)fill[p * nf + (size_t)f]);
         }
         if (bad)
             fprintf(stderr, "%s: %zu pixels differ from mf_table_atlas_fill\n", exr_name, bad);
