@@ -5,6 +5,7 @@
 #define MF_STATS_H
 
 #include <math.h>
+#include <stdlib.h>
 
 /* ---- regularized upper incomplete gamma Q(a, x) ----------------------------------------------
  * Numerical Recipes in C, 2nd ed. (Press et al. 1992), Sec. 6.2: gammq() with the series gser()
@@ -61,5 +62,69 @@ static inline double gamma_q(double a, double x)
 
 /* p-value of a chi-square statistic with dof degrees of freedom. */
 static inline double chi2_pvalue(double chi2, int dof) { return gamma_q(0.5 * dof, 0.5 * chi2); }
+
+/* ---- pooled chi-square statistic ---------------------------------------------------------------
+ * As pbrt-v3's chi2test() and Mitsuba 3's chi2: the n cells are sorted by expected count; cells of
+ * expected count 0 are left out (their observations counted in *zero_hits, to be judged by the
+ * caller), cells below min_expected are pooled, in order, with the following ones while the pool
+ * stays below min_expected, and the pool counts as one cell.  dof = cells used - 1 (all
+ * parameters known: only the total is constrained).  order: scratch space of n ints. */
+typedef struct chi2_pooled {
+    double chi2;
+    int dof;
+    int pooled_cells;
+    long zero_hits;
+} chi2_pooled;
+
+static const double *chi2_sort_key; /* for qsort */
+static inline int chi2_cmp_expected(const void *a, const void *b)
+{
+    double x = chi2_sort_key[*(const int *)a], y = chi2_sort_key[*(const int *)b];
+    return (x > y) - (x < y);
+}
+
+static inline chi2_pooled chi2_pool(const double *expected, const long *observed, int *order, int n,
+                                    double min_expected)
+{
+    chi2_pooled r = {0.0, 0, 0, 0};
+    for (int c = 0; c < n; ++c)
+        order[c] = c;
+    chi2_sort_key = expected;
+    qsort(order, (size_t)n, sizeof order[0], chi2_cmp_expected);
+    double pooled_obs = 0.0, pooled_exp = 0.0;
+    for (int k = 0; k < n; ++k) {
+        int c = order[k];
+        if (expected[c] == 0.0) {
+            r.zero_hits += observed[c];
+        } else if (expected[c] < min_expected || (pooled_exp > 0.0 && pooled_exp < min_expected)) {
+            pooled_obs += observed[c];
+            pooled_exp += expected[c];
+            r.pooled_cells++;
+        } else {
+            double diff = observed[c] - expected[c];
+            r.chi2 += diff * diff / expected[c];
+            r.dof++;
+        }
+    }
+    if (pooled_exp > 0.0) {
+        double diff = pooled_obs - pooled_exp;
+        r.chi2 += diff * diff / pooled_exp;
+        r.dof++;
+    }
+    r.dof -= 1;
+    return r;
+}
+
+#define CHI2_TWO_PI 6.28318530717958647692528676655900577 /* 2 pi: the same double as 2.0 * MF_PI */
+
+/* The azimuth cell (of n_phi equal cells over [0, 2 pi)) of the direction (x, y). */
+static inline int chi2_phi_cell(double y, double x, int n_phi)
+{
+    double phi = atan2(y, x);
+    if (phi < 0.0)
+        phi += CHI2_TWO_PI;
+    int j = (int)(phi * (n_phi / CHI2_TWO_PI));
+    return j >= n_phi ? n_phi - 1 : (j < 0 ? 0 : j);
+}
 
 #endif /* MF_STATS_H */

@@ -17,6 +17,7 @@
 #include <mfkit/fit/mf_image_oiio.h>
 
 #include "mf_test.h"
+#include "test_files.h"
 
 #define W 7
 #define H 5
@@ -27,33 +28,6 @@ static char dir[] = "/tmp/mfkit_test_image_XXXXXX";
 static void path_in_dir(char *out, size_t size, const char *name)
 {
     snprintf(out, size, "%s/%s", dir, name);
-}
-
-static long file_size(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0 ? (long)st.st_size : -1;
-}
-
-static int file_exists(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0;
-}
-
-/* Number of entries in the test directory whose name contains "tmp" (leftover temporaries). */
-static int count_temporaries(void)
-{
-    DIR *d = opendir(dir);
-    if (!d)
-        return -1;
-    int n = 0;
-    struct dirent *e;
-    while ((e = readdir(d)) != NULL)
-        if (strstr(e->d_name, ".tmp") != NULL)
-            ++n;
-    closedir(d);
-    return n;
 }
 
 /* Known values: magnitudes spread over [2^-6, 2^8] with both signs and mantissas that need
@@ -92,8 +66,8 @@ static void test_float_round_trip(void)
 
     CHECK(mf_image_write(path, &img, 0, msg, sizeof msg) == MF_OK);
     CHECK(msg[0] == '\0');
-    CHECK(file_exists(path));
-    CHECK(count_temporaries() == 0);
+    CHECK(mf_test_file_exists(path));
+    CHECK(mf_test_count_temporaries(dir) == 0);
 
     mf_image back = {-1, -1, -1, NULL};
     CHECK(mf_image_read(path, &back, msg, sizeof msg) == MF_OK);
@@ -126,7 +100,7 @@ static void test_float_round_trip(void)
     CHECK(mf_image_read(path, &back, msg, sizeof msg) == MF_OK);
     CHECK(back.width == 1 && back.height == 1 && back.channels == 1 && back.pixels && back.pixels[0] == 0.25f);
     mf_image_free(&back);
-    CHECK(count_temporaries() == 0);
+    CHECK(mf_test_count_temporaries(dir) == 0);
 }
 
 static void test_half_round_trip(void)
@@ -166,7 +140,7 @@ static void test_half_round_trip(void)
     char fpath[512];
     path_in_dir(fpath, sizeof fpath, "half_vs_float.exr");
     CHECK(mf_image_write(fpath, &img, 0, msg, sizeof msg) == MF_OK);
-    CHECK(file_size(path) > 0 && file_size(path) < file_size(fpath));
+    CHECK(mf_test_file_size(path) > 0 && mf_test_file_size(path) < mf_test_file_size(fpath));
 }
 
 /* A failed read: non-OK with the expected code, a message naming the file, and a zeroed image. */
@@ -226,11 +200,11 @@ static void test_read_errors(void)
     for (int k = 0; k < 2; ++k) {
         path_in_dir(path, sizeof path, k ? "truncated8.exr" : "truncated.exr");
         CHECK(mf_image_write(path, &img, 0, msg, sizeof msg) == MF_OK);
-        long size = file_size(path);
+        long size = mf_test_file_size(path);
         CHECK(size > 16);
         long to = cut[k] < 0 ? size / 2 : cut[k];
         CHECK(truncate(path, (off_t)to) == 0);
-        CHECK(file_size(path) == to);
+        CHECK(mf_test_file_size(path) == to);
         check_read_fails(path, MF_ERR_FORMAT);
     }
 
@@ -256,18 +230,18 @@ static void test_write_errors(void)
     CHECK(st == MF_ERR_IO);
     CHECK(memchr(msg, '\0', sizeof msg) != NULL);
     CHECK(strncmp(msg, path, strlen(path)) == 0 && strlen(msg) > strlen(path) + 2);
-    CHECK(!file_exists(path));
+    CHECK(!mf_test_file_exists(path));
     char sub[512];
     path_in_dir(sub, sizeof sub, "no_such_dir");
-    CHECK(!file_exists(sub));
+    CHECK(!mf_test_file_exists(sub));
 
     /* An extension no writer knows. */
     path_in_dir(path, sizeof path, "out.not_an_image_format");
     st = mf_image_write(path, &img, 0, msg, sizeof msg);
     CHECK(st == MF_ERR_UNSUPPORTED);
     CHECK(strncmp(msg, path, strlen(path)) == 0);
-    CHECK(!file_exists(path));
-    CHECK(count_temporaries() == 0);
+    CHECK(!mf_test_file_exists(path));
+    CHECK(mf_test_count_temporaries(dir) == 0);
 
     /* A format that refuses the image (PNG stores at most 4 channels): this fails after the
      * temporary file was created, so it checks that the temporary is removed again. */
@@ -277,16 +251,16 @@ static void test_write_errors(void)
     st = mf_image_write(path, &five, 0, msg, sizeof msg);
     CHECK(st == MF_ERR_UNSUPPORTED);
     CHECK(strncmp(msg, path, strlen(path)) == 0 && strlen(msg) > strlen(path) + 2);
-    CHECK(!file_exists(path));
-    CHECK(count_temporaries() == 0);
+    CHECK(!mf_test_file_exists(path));
+    CHECK(mf_test_count_temporaries(dir) == 0);
 
     /* A failing write does not touch an existing file. */
     path_in_dir(path, sizeof path, "keep.exr");
     CHECK(mf_image_write(path, &img, 0, msg, sizeof msg) == MF_OK);
-    long before = file_size(path);
+    long before = mf_test_file_size(path);
     mf_image bad = {W, H, C, NULL};
     CHECK(mf_image_write(path, &bad, 0, msg, sizeof msg) == MF_ERR_DOMAIN);
-    CHECK(file_size(path) == before);
+    CHECK(mf_test_file_size(path) == before);
 
     /* Invalid images. */
     mf_image zero = {0, H, C, px};
@@ -296,26 +270,8 @@ static void test_write_errors(void)
     CHECK(mf_image_write(path, NULL, 0, msg, sizeof msg) == MF_ERR_DOMAIN);
     CHECK(mf_image_write(NULL, &img, 0, msg, sizeof msg) == MF_ERR_DOMAIN);
     CHECK(mf_image_write("", &img, 0, NULL, 0) == MF_ERR_DOMAIN);
-    CHECK(file_size(path) == before);
-    CHECK(count_temporaries() == 0);
-}
-
-/* Remove the test directory's files, then the directory. */
-static void cleanup(void)
-{
-    DIR *d = opendir(dir);
-    if (!d)
-        return;
-    struct dirent *e;
-    char path[1024];
-    while ((e = readdir(d)) != NULL) {
-        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0)
-            continue;
-        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-        remove(path);
-    }
-    closedir(d);
-    CHECK(rmdir(dir) == 0);
+    CHECK(mf_test_file_size(path) == before);
+    CHECK(mf_test_count_temporaries(dir) == 0);
 }
 
 int main(void)
@@ -330,6 +286,6 @@ int main(void)
     test_half_round_trip();
     test_read_errors();
     test_write_errors();
-    cleanup();
+    CHECK(mf_test_remove_dir(dir) == 0);
     MF_TEST_MAIN_END();
 }

@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include "mf_test.h"
+#include "test_files.h"
 
 #include <mfkit/io/mf_image.h>
 #include <mfkit/io/mf_io.h>
@@ -67,21 +68,6 @@ static int dir_entries(const char *dir, char *list, size_t size)
     return n;
 }
 
-static void clear_dir(const char *dir)
-{
-    DIR *d = opendir(dir);
-    if (!d)
-        return;
-    char p[512];
-    for (struct dirent *e; (e = readdir(d));) {
-        if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, ".."))
-            continue;
-        snprintf(p, sizeof p, "%s/%s", dir, e->d_name);
-        remove(p);
-    }
-    closedir(d);
-}
-
 /* A full disk: every format's write fails with MF_ERR_IO, names the file, and leaves neither the
  * target nor a temporary.  RLIMIT_FSIZE = 4096 bytes makes write() fail with EFBIG past 4 KiB
  * (SIGXFSZ ignored), as ENOSPC would; every file below is larger than that. */
@@ -116,7 +102,7 @@ static void test_full_disk(void)
             int n = dir_entries(g_dir, list, sizeof list);
             if (n != 0)
                 MF_FAIL_AT(".%s (half %d) on a full disk left %d file(s): %s", exts[k], half, n, list);
-            clear_dir(g_dir);
+            mf_test_clear_dir(g_dir);
         }
     signal(SIGXFSZ, SIG_DFL);
     /* the same writes succeed without the limit (the test above fails for the right reason) */
@@ -127,7 +113,7 @@ static void test_full_disk(void)
         if (st != MF_OK)
             MF_FAIL_AT(".%s without a limit: %s", exts[k], msg);
     }
-    clear_dir(g_dir);
+    mf_test_clear_dir(g_dir);
     mf_table_free(&t);
 }
 
@@ -161,7 +147,7 @@ static void test_trailing_bytes(void)
             mf_table_free(&r);
         }
     }
-    clear_dir(g_dir);
+    mf_test_clear_dir(g_dir);
     mf_table_free(&t);
 }
 
@@ -200,7 +186,7 @@ static void test_exr_deterministic(void)
         free(a);
         free(b);
     }
-    clear_dir(g_dir);
+    mf_test_clear_dir(g_dir);
     mf_table_free(&t);
 }
 
@@ -251,7 +237,7 @@ static void test_json_nonfinite(void)
     CHECK(mf_table_read(path, &r, NULL, msg, sizeof msg) == MF_ERR_FORMAT);
     if (!strstr(msg, path) || !strstr(msg, "line 3"))
         MF_FAIL_AT("JSON syntax error: message '%s' should name %s and line 3", msg, path);
-    clear_dir(g_dir);
+    mf_test_clear_dir(g_dir);
     mf_table_free(&t);
 }
 
@@ -283,7 +269,7 @@ static void test_no_backend(void)
     if (st != MF_ERR_UNSUPPORTED || !strstr(msg, "reading EXR needs the OpenImageIO build"))
         MF_FAIL_AT("no backend, reading: status %s, message '%s'", mf_status_str(st), msg);
     mf_image_set_backend(saved);
-    clear_dir(g_dir);
+    mf_test_clear_dir(g_dir);
     mf_table_free(&t);
 }
 
@@ -311,7 +297,6 @@ int main(void)
     test_json_nonfinite();
     test_no_backend();
     test_atomic_errors();
-    clear_dir(g_dir);
-    rmdir(g_dir);
+    CHECK(mf_test_remove_dir(g_dir) == 0);
     MF_TEST_MAIN_END();
 }

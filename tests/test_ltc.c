@@ -22,6 +22,7 @@
  * hemisphere, so every cell integrand is smooth and a fixed product rule is exact to ~1e-13.
  */
 #include "mf_test.h"
+#include "test_polygon_mc.h"
 #include "mf_stats.h"
 #include "mfkit/mf_ltc.h"
 #include "mfkit/mf_quad.h"
@@ -58,16 +59,6 @@ static mf_mat3 mat(double a, double b, double c, double d, double e, double f, d
     return mf_ltc_matrix_general(m);
 }
 
-/* Rotation about the unit axis a by angle t (Rodrigues). */
-static mf_mat3 rotation(mf_vec3 a, double t)
-{
-    double c = cos(t), s = sin(t), k = 1.0 - c;
-    mf_mat3 r = {{{c + a.x * a.x * k, a.x * a.y * k - a.z * s, a.x * a.z * k + a.y * s},
-                  {a.y * a.x * k + a.z * s, c + a.y * a.y * k, a.y * a.z * k - a.x * s},
-                  {a.z * a.x * k - a.y * s, a.z * a.y * k + a.x * s, c + a.z * a.z * k}}};
-    return r;
-}
-
 /* The test matrices: well-conditioned ones (identity, isotropic GGX-like fits, a general
  * 9-parameter one, det < 0), and ill-conditioned ones (strong shear, anisotropy 1:1e3,
  * a near-specular lobe alpha ~ 1e-3). */
@@ -89,7 +80,7 @@ static int build_matrices(test_matrix *t)
     t[n++] = (test_matrix){"lobe below the horizon", mat(1.0, 0.0, 0.5, 0.0, 1.0, 0.0, 0.0, 0.3, -0.6), 1};
     t[n++] = (test_matrix){"strong shear", mat(1.0, 40.0, 0.0, 0.0, 1.0, 25.0, 0.0, 0.0, 1.0), 0};
     t[n++] = (test_matrix){"anisotropic 1:1e3",
-                           mf_mat3_mul(rotation(v3(0.6, 0.0, 0.8), 0.4), mat(1e-3, 0, 0, 0, 1, 0, 0, 0, 1)), 0};
+                           mf_mat3_mul(mf_test_rotation(v3(0.6, 0.0, 0.8), 0.4), mat(1e-3, 0, 0, 0, 1, 0, 0, 0, 1)), 0};
     t[n++] = (test_matrix){"near-specular alpha 1e-3, det<0", mat(-1e-3, 0, 2e-4, 0, 1e-3, 0, 5e-4, 0, 1.0), 0};
     return n;
 }
@@ -201,7 +192,7 @@ static void test_eval(mf_pcg32 *rng, const test_matrix *t, int nt)
                     scaled.m[r][c] *= 2.5;
             mf_ltc ls = make_ltc(scaled);
             CHECK_REL(mf_ltc_eval(&ls, w), d, tol);
-            mf_ltc lr = make_ltc(mf_mat3_mul(t[i].m, rotation(v3(0, 0, 1), 1.3)));
+            mf_ltc lr = make_ltc(mf_mat3_mul(t[i].m, mf_test_rotation(v3(0, 0, 1), 1.3)));
             CHECK_REL(mf_ltc_eval(&lr, w), d, tol);
             mf_ltc lm = make_ltc(mf_mat3_mul(t[i].m, mat(1, 0, 0, 0, -1, 0, 0, 0, 1)));
             CHECK(lm.det * l.det < 0.0);
@@ -267,50 +258,17 @@ static void test_view_frame(mf_pcg32 *rng)
 }
 
 /* ---- Monte Carlo: polygon integrals ---------------------------------------------------------- */
-/* 1 if the ray t w, t > 0, hits the planar polygon p (crossing number in the polygon's plane). */
-static int ray_hits(const mf_polygon *p, mf_vec3 w)
-{
-    mf_vec3 n = {0, 0, 0}; /* Newell's normal */
-    for (int i = 0; i < p->n; ++i) {
-        mf_vec3 a = p->v[i], b = p->v[(i + 1) % p->n];
-        n.x += (a.y - b.y) * (a.z + b.z);
-        n.y += (a.z - b.z) * (a.x + b.x);
-        n.z += (a.x - b.x) * (a.y + b.y);
-    }
-    double nw = mf_vec3_dot(n, w), d = mf_vec3_dot(n, p->v[0]);
-    if (nw == 0.0 || d / nw <= 0.0)
-        return 0;
-    mf_vec3 x = mf_vec3_scale(w, d / nw);
-    mf_frame f = mf_frame_from_normal(mf_vec3_normalize(n));
-    mf_vec3 q = mf_frame_to_local(f, x);
-    int inside = 0;
-    for (int i = 0, j = p->n - 1; i < p->n; j = i++) {
-        mf_vec3 a = mf_frame_to_local(f, p->v[i]), b = mf_frame_to_local(f, p->v[j]);
-        if (((a.y > q.y) != (b.y > q.y)) && (q.x < (b.x - a.x) * (q.y - a.y) / (b.y - a.y) + a.x))
-            inside = !inside;
-    }
-    return inside;
-}
-
 static double mc_ltc(const mf_ltc *l, const mf_polygon *p, mf_pcg32 *rng)
 {
     long hits = 0;
     for (long k = 0; k < MC_N; ++k) {
         double u[2] = {mf_pcg32_next_double(rng), mf_pcg32_next_double(rng)};
-        hits += ray_hits(p, mf_ltc_sample(l, u));
+        hits += mf_test_ray_hits(p, mf_ltc_sample(l, u));
     }
     return (double)hits / MC_N;
 }
 
 static double binomial_se(double p) { return sqrt(fmax(0.0, p * (1.0 - p)) / MC_N); }
-
-static mf_polygon reversed(const mf_polygon *p)
-{
-    mf_polygon r = *p;
-    for (int i = 0; i < p->n; ++i)
-        r.v[i] = p->v[p->n - 1 - i];
-    return r;
-}
 
 /* A random planar polygon (3..8 vertices, star-shaped around its centre c). */
 static mf_polygon random_polygon(mf_pcg32 *rng, mf_vec3 c, double size)
@@ -328,7 +286,7 @@ static mf_polygon random_polygon(mf_pcg32 *rng, mf_vec3 c, double size)
         v[i] = mf_vec3_add(c, mf_frame_to_world(f, v3(r * cos(a), r * sin(a), 0.0)));
     }
     mf_polygon p = mf_polygon_make(n, v);
-    return (mf_pcg32_next_u32(rng) & 1u) ? reversed(&p) : p;
+    return (mf_pcg32_next_u32(rng) & 1u) ? mf_test_reversed(&p) : p;
 }
 
 /* The polygon integral against Monte Carlo with the LTC's own sampler, for every test matrix and
@@ -447,13 +405,6 @@ typedef struct chi2_result {
     long bad_samples, outside;
 } chi2_result;
 
-static const double *g_expected;
-static int cmp_expected(const void *a, const void *b)
-{
-    double x = g_expected[*(const int *)a], y = g_expected[*(const int *)b];
-    return (x > y) - (x < y);
-}
-
 /* Cell integral of pdf over mu = cos(theta) in [m0, m1], phi in [p0, p1] around the frame fr, with
  * dw = sin(theta) dtheta dphi: in theta (not mu) the integrand is analytic up to the pole (in mu
  * it would have a sqrt(1 - mu) term there).  A product rule of panels x panels GL panels. */
@@ -508,37 +459,12 @@ static chi2_result chi2_test(const mf_ltc *sampler, const mf_ltc *pdf, uint64_t 
         }
         int i = (int)(lw.z * N_MU);
         i = i >= N_MU ? N_MU - 1 : i;
-        double ph = atan2(lw.y, lw.x);
-        if (ph < 0.0)
-            ph += TWO_PI;
-        int j = (int)(ph * (N_PHI / TWO_PI));
-        j = j >= N_PHI ? N_PHI - 1 : (j < 0 ? 0 : j);
-        observed[i * N_PHI + j]++;
+        observed[i * N_PHI + chi2_phi_cell(lw.y, lw.x, N_PHI)]++;
     }
-    for (int c = 0; c < N_CELLS; ++c)
-        order[c] = c;
-    g_expected = expected;
-    qsort(order, N_CELLS, sizeof order[0], cmp_expected);
-    double pooled_obs = 0.0, pooled_exp = 0.0;
-    for (int k = 0; k < N_CELLS; ++k) {
-        int c = order[k];
-        if (expected[c] == 0.0) {
-            r.outside += observed[c];
-        } else if (expected[c] < MIN_EXPECTED || (pooled_exp > 0.0 && pooled_exp < MIN_EXPECTED)) {
-            pooled_obs += observed[c];
-            pooled_exp += expected[c];
-        } else {
-            double diff = observed[c] - expected[c];
-            r.chi2 += diff * diff / expected[c];
-            r.dof++;
-        }
-    }
-    if (pooled_exp > 0.0) {
-        double diff = pooled_obs - pooled_exp;
-        r.chi2 += diff * diff / pooled_exp;
-        r.dof++;
-    }
-    r.dof -= 1;
+    chi2_pooled p = chi2_pool(expected, observed, order, N_CELLS, MIN_EXPECTED);
+    r.chi2 = p.chi2;
+    r.dof = p.dof;
+    r.outside += p.zero_hits;
     r.pvalue = gamma_q(0.5 * r.dof, 0.5 * r.chi2);
     return r;
 }
@@ -709,7 +635,7 @@ static void test_polygon_sphere(void)
 {
     mf_ltc l = make_ltc(mf_ltc_matrix_isotropic(0.5, 0.2, 0.5, -0.3));
     mf_vec3 v[4] = {v3(-0.3, -0.2, 1), v3(0.3, -0.2, 1), v3(0.3, 0.3, 1), v3(-0.3, 0.3, 1)};
-    mf_polygon p = mf_polygon_make(4, v), r = reversed(&p);
+    mf_polygon p = mf_polygon_make(4, v), r = mf_test_reversed(&p);
     double exact = mf_ltc_integrate_polygon(&l, &p, MF_POLYGON_TWO_SIDED);
     CHECK_REL(mf_ltc_integrate_polygon_sphere(&l, &p, MF_POLYGON_TWO_SIDED), exact, 1e-13);
     CHECK_REL(mf_ltc_integrate_polygon_sphere(&l, &r, MF_POLYGON_TWO_SIDED), exact, 1e-13);

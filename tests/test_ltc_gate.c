@@ -11,6 +11,7 @@
  * the vendored tests/data/reference of the source tree; a missing table is a failure)
  */
 #include "mf_test.h"
+#include "test_tables.h"
 
 #include "mfkit/mfkit.h"
 #ifdef MFKIT_HAVE_FIT
@@ -34,22 +35,6 @@ static int lambert_table(mf_table *t, int n)
     return 1;
 }
 
-static const mf_check *find(const mf_check *c, int n, const char *name)
-{
-    for (int i = 0; i < n; ++i)
-        if (!strcmp(c[i].name, name))
-            return &c[i];
-    return NULL;
-}
-
-static void print_checks(const char *title, const mf_check *c, int n)
-{
-    printf("-- %s\n", title);
-    for (int i = 0; i < n; ++i)
-        printf("  %-20s %-5s worst %-11.4g bound %-9.3g cases %-6ld %s\n", c[i].name, c[i].passed ? "pass" : "FAIL",
-               c[i].worst, c[i].bound, c[i].cases, c[i].worst_at);
-}
-
 /* Runs the gate on t (quick, seed) and checks which checks fail: exactly those in `fail` (comma list). */
 static void expect(const char *title, const mf_table *t, const mf_brdf_model *model, uint64_t seed, int quick,
                    const char *const *must_fail, int nfail)
@@ -61,11 +46,11 @@ static void expect(const char *title, const mf_table *t, const mf_brdf_model *mo
     o.seed = seed;
     o.quick = quick;
     mf_status st = mf_ltc_gate_run(t, model, &o, c, MF_LTC_GATE_MAX_CHECKS, &n);
-    print_checks(title, c, n);
+    mf_test_print_checks(title, c, n);
     CHECK(n == (model ? 9 : 5));
     CHECK(st == (nfail ? MF_ERR_CHECK_FAILED : MF_OK));
     for (int k = 0; k < nfail; ++k) {
-        const mf_check *x = find(c, n, must_fail[k]);
+        const mf_check *x = mf_test_find_check(c, n, must_fail[k]);
         CHECK(x != NULL);
         if (x && x->passed)
             MF_FAIL_AT("%s: check %s passed but must fail", title, must_fail[k]);
@@ -174,8 +159,8 @@ int main(int argc, char **argv)
             mf_check c[MF_LTC_GATE_MAX_CHECKS];
             int n = 0;
             CHECK(mf_ltc_gate_run(&big, NULL, NULL, c, MF_LTC_GATE_MAX_CHECKS, &n) == MF_ERR_CHECK_FAILED);
-            print_checks("true GGX albedo, model-free", c, n);
-            const mf_check *sp = find(c, n, "ltc_smooth_spike");
+            mf_test_print_checks("true GGX albedo, model-free", c, n);
+            const mf_check *sp = mf_test_find_check(c, n, "ltc_smooth_spike");
             CHECK(sp && !sp->passed && strstr(sp->worst_at, "magnitude along u"));
             mf_ltc_gate_options o;
             mf_ltc_gate_options_default(&o);
@@ -183,8 +168,8 @@ int main(int argc, char **argv)
             o.seed = seed;
             mf_status gs = mf_ltc_gate_run(&big, ggx, &o, c, MF_LTC_GATE_MAX_CHECKS, &n);
             CHECK(gs == MF_OK || gs == MF_ERR_CHECK_FAILED);
-            print_checks("true GGX albedo, ggx, quick", c, n);
-            sp = find(c, n, "ltc_smooth_spike");
+            mf_test_print_checks("true GGX albedo, ggx, quick", c, n);
+            sp = mf_test_find_check(c, n, "ltc_smooth_spike");
             CHECK(sp && sp->passed);
             mf_table_free(&big);
         }
@@ -223,8 +208,9 @@ int main(int argc, char **argv)
         mf_check c[MF_LTC_GATE_MAX_CHECKS];
         int n = 0;
         CHECK(mf_ltc_gate_run(&bad, NULL, NULL, c, MF_LTC_GATE_MAX_CHECKS, &n) == MF_ERR_CHECK_FAILED);
-        print_checks("NaN rule", c, n);
-        const mf_check *en = find(c, n, "ltc_energy"), *no = find(c, n, "ltc_normalisation");
+        mf_test_print_checks("NaN rule", c, n);
+        const mf_check *en = mf_test_find_check(c, n, "ltc_energy");
+        const mf_check *no = mf_test_find_check(c, n, "ltc_normalisation");
         CHECK(en && !en->passed && isnan(en->worst));
         CHECK(en && strstr(en->worst_at, "NaN at ") == en->worst_at && strstr(en->worst_at, "ir 5, iu 7"));
         CHECK(en && en->cases == (long)mf_table_texels(&bad));
@@ -248,7 +234,7 @@ int main(int argc, char **argv)
         }
         /* energy values are <= 0 on the exact table (magnitude 1, fresnel 0: max(0, -1, -1, -0)), and
          * the check reports worst = 0 (mf_check.h: worst is the maximum of the values and 0) */
-        const mf_check *en = find(c, n, "ltc_energy");
+        const mf_check *en = mf_test_find_check(c, n, "ltc_energy");
         CHECK(en && en->worst == 0.0 && en->passed);
         char why[160];
         CHECK(mf_ltc_gate_layout_ok(&good, why, sizeof why) == 1);
@@ -381,7 +367,7 @@ int main(int argc, char **argv)
                 int n = 0;
                 mf_status gs = mf_ltc_gate_run(&ref, NULL, NULL, c, MF_LTC_GATE_MAX_CHECKS, &n);
                 CHECK(gs == MF_OK || gs == MF_ERR_CHECK_FAILED);
-                print_checks("reference table, model-free", c, n);
+                mf_test_print_checks("reference table, model-free", c, n);
                 /* With the GGX model (quick): the reference's matrices pass the polygon budget, its
                  * albedo (32 x 32 MC, up to 6.5 % low at grazing) fails the albedo checks.  A
                  * wrong convention (minv_02 and minv_20 swapped: the transposed matrix) fails the
@@ -396,19 +382,19 @@ int main(int argc, char **argv)
                     o.quick = 1;
                     o.seed = seed;
                     CHECK(mf_ltc_gate_run(&ref, ggx, &o, cg, MF_LTC_GATE_MAX_CHECKS, &ng) == MF_ERR_CHECK_FAILED);
-                    print_checks("reference table, ggx, quick", cg, ng);
+                    mf_test_print_checks("reference table, ggx, quick", cg, ng);
                     for (int k = 0; k < 3; ++k)
-                        CHECK(find(cg, ng, fa[k]) && !find(cg, ng, fa[k])->passed);
-                    CHECK(find(cg, ng, "ltc_polygon_mean") && find(cg, ng, "ltc_polygon_mean")->passed);
-                    CHECK(find(cg, ng, "ltc_polygon_entry") && find(cg, ng, "ltc_polygon_entry")->passed);
+                        CHECK(mf_test_check_passed(cg, ng, fa[k]) == 0);
+                    CHECK(mf_test_check_passed(cg, ng, "ltc_polygon_mean") == 1);
+                    CHECK(mf_test_check_passed(cg, ng, "ltc_polygon_entry") == 1);
                     for (size_t i = 0; i < mf_table_texels(&ref); ++i) {
                         double *r = ref.data + i * (size_t)ref.nfields, tmp = r[MF_LTC_F_MINV_02];
                         r[MF_LTC_F_MINV_02] = r[MF_LTC_F_MINV_20];
                         r[MF_LTC_F_MINV_20] = tmp;
                     }
                     CHECK(mf_ltc_gate_run(&ref, ggx, &o, cg, MF_LTC_GATE_MAX_CHECKS, &ng) == MF_ERR_CHECK_FAILED);
-                    print_checks("reference table transposed, ggx, quick", cg, ng);
-                    CHECK(find(cg, ng, "ltc_polygon_mean") && !find(cg, ng, "ltc_polygon_mean")->passed);
+                    mf_test_print_checks("reference table transposed, ggx, quick", cg, ng);
+                    CHECK(mf_test_check_passed(cg, ng, "ltc_polygon_mean") == 0);
                 }
                 mf_table_free(&ref);
             }

@@ -44,6 +44,7 @@
 #include <mfkit/fit/mf_image_oiio.h>
 
 #include "mf_test.h"
+#include "test_files.h"
 
 #define W 64
 #define H 32
@@ -352,12 +353,6 @@ static int channel(const mf_image_info *info, const char *name)
     return 0;
 }
 
-static int file_exists(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0;
-}
-
 static int check_maps(const char *prefix, const char *mode, const char *source, double base)
 {
     const int discrete = !strcmp(source, "height");
@@ -378,7 +373,7 @@ static int check_maps(const char *prefix, const char *mode, const char *source, 
     const char *tag = bump ? "roughness" : tok ? "toksvig" : "m1";
     char path[4096];
     snprintf(path, sizeof path, "%s_%s_mip%d.exr", prefix, tag, levels);
-    CHECK(!file_exists(path)); /* exactly `levels` levels */
+    CHECK(!mf_test_file_exists(path)); /* exactly `levels` levels */
     /* level-0 analytic quantities: moments (5) and unit normals (3) per texel */
     double *m0 = malloc(sizeof(double) * 8 * W * H);
     for (int j = 0; j < H; ++j)

@@ -13,6 +13,7 @@
  * above the horizon could be hit a few times; P(Poisson(1) >= 6) = 6e-4).
  */
 #include "mf_test.h"
+#include "test_polygon_mc.h"
 #include "mfkit/mf_polygon.h"
 #include "mfkit/mf_rng.h"
 #include "mfkit/mf_sample.h"
@@ -39,24 +40,6 @@ static mf_polygon poly4(mf_vec3 a, mf_vec3 b, mf_vec3 c, mf_vec3 d)
     return mf_polygon_make(4, v);
 }
 
-static mf_polygon reversed(const mf_polygon *p)
-{
-    mf_polygon r = *p;
-    for (int i = 0; i < p->n; ++i)
-        r.v[i] = p->v[p->n - 1 - i];
-    return r;
-}
-
-/* Rotation about the unit axis a by angle t (Rodrigues). */
-static mf_mat3 rotation(mf_vec3 a, double t)
-{
-    double c = cos(t), s = sin(t), k = 1.0 - c;
-    mf_mat3 r = {{{c + a.x * a.x * k, a.x * a.y * k - a.z * s, a.x * a.z * k + a.y * s},
-                  {a.y * a.x * k + a.z * s, c + a.y * a.y * k, a.y * a.z * k - a.x * s},
-                  {a.z * a.x * k - a.y * s, a.z * a.y * k + a.x * s, c + a.z * a.z * k}}};
-    return r;
-}
-
 static mf_polygon transformed(mf_mat3 r, const mf_polygon *p)
 {
     mf_polygon q = *p;
@@ -80,58 +63,13 @@ static double zenith_square_e(double h)
 }
 static double zenith_square_omega(double h) { return 4.0 * asin(h * h / (1.0 + h * h)); }
 
-/* ---- Monte Carlo reference ----------------------------------------------------------------- */
-/* 1 if the ray t w, t > 0, hits the planar polygon p (crossing number in the polygon's plane). */
-static int ray_hits(const mf_polygon *p, mf_vec3 w)
-{
-    /* Newell's normal: robust for any planar polygon */
-    mf_vec3 n = {0, 0, 0};
-    for (int i = 0; i < p->n; ++i) {
-        mf_vec3 a = p->v[i], b = p->v[(i + 1) % p->n];
-        n.x += (a.y - b.y) * (a.z + b.z);
-        n.y += (a.z - b.z) * (a.x + b.x);
-        n.z += (a.x - b.x) * (a.y + b.y);
-    }
-    double nw = mf_vec3_dot(n, w), d = mf_vec3_dot(n, p->v[0]);
-    if (nw == 0.0 || d / nw <= 0.0)
-        return 0;
-    mf_vec3 x = mf_vec3_scale(w, d / nw);
-    /* 2D coordinates: drop the largest component of n */
-    int ax = (fabs(n.x) > fabs(n.y)) ? (fabs(n.x) > fabs(n.z) ? 0 : 2) : (fabs(n.y) > fabs(n.z) ? 1 : 2);
-    double px, py;
-#define PROJ(v, ox, oy)                                                                                             \
-    do {                                                                                                            \
-        if (ax == 0) {                                                                                              \
-            ox = (v).y;                                                                                             \
-            oy = (v).z;                                                                                             \
-        } else if (ax == 1) {                                                                                       \
-            ox = (v).z;                                                                                             \
-            oy = (v).x;                                                                                             \
-        } else {                                                                                                    \
-            ox = (v).x;                                                                                             \
-            oy = (v).y;                                                                                             \
-        }                                                                                                           \
-    } while (0)
-    PROJ(x, px, py);
-    int inside = 0;
-    for (int i = 0, j = p->n - 1; i < p->n; j = i++) {
-        double xi, yi, xj, yj;
-        PROJ(p->v[i], xi, yi);
-        PROJ(p->v[j], xj, yj);
-        if (((yi > py) != (yj > py)) && (px < (xj - xi) * (py - yi) / (yj - yi) + xi))
-            inside = !inside;
-    }
-#undef PROJ
-    return inside;
-}
-
 /* Hit fraction of MC_N cosine-distributed directions. */
 static double mc_cosine(const mf_polygon *p, mf_pcg32 *rng)
 {
     long hits = 0;
     for (long k = 0; k < MC_N; ++k) {
         double u[2] = {mf_pcg32_next_double(rng), mf_pcg32_next_double(rng)};
-        hits += ray_hits(p, mf_sample_cosine_hemisphere(u));
+        hits += mf_test_ray_hits(p, mf_sample_cosine_hemisphere(u));
     }
     return (double)hits / MC_N;
 }
@@ -159,7 +97,7 @@ static mf_polygon random_polygon(mf_pcg32 *rng, mf_vec3 c, double size, int nonc
         v[i] = mf_vec3_add(c, mf_frame_to_world(f, v3(r * cos(ang[i]), r * sin(ang[i]), 0.0)));
     }
     mf_polygon p = mf_polygon_make(n, v);
-    return (mf_pcg32_next_u32(rng) & 1u) ? reversed(&p) : p;
+    return (mf_pcg32_next_u32(rng) & 1u) ? mf_test_reversed(&p) : p;
 }
 
 /* ---- tests ----------------------------------------------------------------------------------- */
@@ -175,7 +113,7 @@ static void test_closed_forms(void)
     CHECK_REL(f.y, 0.25, 4 * DBL_EPSILON);
     CHECK_REL(f.z, 0.25, 4 * DBL_EPSILON);
     /* reversed: back-facing */
-    mf_polygon rev = reversed(&oct);
+    mf_polygon rev = mf_test_reversed(&oct);
     CHECK_REL(mf_polygon_solid_angle(&rev), 0.5 * MF_PI, 4 * DBL_EPSILON);
     CHECK_REL(mf_polygon_solid_angle_signed(&rev), -0.5 * MF_PI, 4 * DBL_EPSILON);
     CHECK(mf_polygon_integrate_cosine(&rev, MF_POLYGON_ONE_SIDED) == 0.0);
@@ -225,7 +163,7 @@ static void test_tiny_oblique(void)
     for (int i = 0; i < 3; ++i)
         for (int k = 0; k < 3; ++k) {
             mf_polygon sq = zenith_square(hs[i]);
-            mf_mat3 r = mf_mat3_mul(rotation(v3(0, 0, 1), 0.7), rotation(v3(1, 0, 0), tilts[k] * DEG));
+            mf_mat3 r = mf_mat3_mul(mf_test_rotation(v3(0, 0, 1), 0.7), mf_test_rotation(v3(1, 0, 0), tilts[k] * DEG));
             mf_polygon t = transformed(r, &sq);
             double tol = 100 * DBL_EPSILON / hs[i];
             CHECK_REL(mf_polygon_integrate_cosine(&t, MF_POLYGON_ONE_SIDED),
@@ -245,7 +183,7 @@ static void test_rotations(mf_pcg32 *rng)
         mf_polygon p = random_polygon(rng, c, 0.1 + mf_pcg32_next_double(rng), k % 3 == 0);
         u[0] = mf_pcg32_next_double(rng);
         u[1] = mf_pcg32_next_double(rng);
-        mf_mat3 r = rotation(mf_sample_uniform_sphere(u), 2.0 * MF_PI * mf_pcg32_next_double(rng));
+        mf_mat3 r = mf_test_rotation(mf_sample_uniform_sphere(u), 2.0 * MF_PI * mf_pcg32_next_double(rng));
         mf_polygon q = transformed(r, &p);
         mf_vec3 fp = mf_polygon_form_factor(&p), fq = mf_polygon_form_factor(&q);
         mf_vec3 rf = mf_mat3_apply(r, fp);
@@ -254,7 +192,7 @@ static void test_rotations(mf_pcg32 *rng)
         /* |F| <= 1, rounding of O(1) terms: 64 eps absolute */
         CHECK(err <= 64 * DBL_EPSILON);
         CHECK_ABS(mf_polygon_solid_angle(&q), mf_polygon_solid_angle(&p), 64 * DBL_EPSILON);
-        mf_polygon z = transformed(rotation(v3(0, 0, 1), 2.0 * MF_PI * mf_pcg32_next_double(rng)), &p);
+        mf_polygon z = transformed(mf_test_rotation(v3(0, 0, 1), 2.0 * MF_PI * mf_pcg32_next_double(rng)), &p);
         CHECK_ABS(mf_polygon_integrate_cosine_signed(&z), mf_polygon_integrate_cosine_signed(&p), 64 * DBL_EPSILON);
         /* above the horizon, the clipped integral is F.z */
         int above = 1;
@@ -263,7 +201,7 @@ static void test_rotations(mf_pcg32 *rng)
         if (above)
             CHECK_ABS(mf_polygon_integrate_cosine_signed(&p), fp.z, 64 * DBL_EPSILON);
         /* reversing the order negates the signed quantities */
-        mf_polygon rv = reversed(&p);
+        mf_polygon rv = mf_test_reversed(&p);
         CHECK_ABS(mf_polygon_integrate_cosine_signed(&rv), -mf_polygon_integrate_cosine_signed(&p), 64 * DBL_EPSILON);
         CHECK_ABS(mf_polygon_solid_angle_signed(&rv), -mf_polygon_solid_angle_signed(&p), 64 * DBL_EPSILON);
         CHECK_ABS(mf_polygon_integrate_cosine(&rv, MF_POLYGON_TWO_SIDED),
@@ -334,13 +272,13 @@ static void test_form_factor_mc(mf_pcg32 *rng)
     for (int k = 0; k < 3; ++k) {
         /* make each front-facing so that F points into it */
         if (mf_polygon_solid_angle_signed(&ps[k]) < 0.0)
-            ps[k] = reversed(&ps[k]);
+            ps[k] = mf_test_reversed(&ps[k]);
         mf_vec3 f = mf_polygon_form_factor(&ps[k]);
         double s[3] = {0, 0, 0}, s2[3] = {0, 0, 0};
         for (long n = 0; n < MC_N; ++n) {
             double u[2] = {mf_pcg32_next_double(rng), mf_pcg32_next_double(rng)};
             mf_vec3 w = mf_sample_uniform_sphere(u);
-            if (!ray_hits(&ps[k], w))
+            if (!mf_test_ray_hits(&ps[k], w))
                 continue;
             double c[3] = {4 * w.x, 4 * w.y, 4 * w.z};
             for (int i = 0; i < 3; ++i) {
@@ -389,7 +327,7 @@ static void test_degenerate(void)
     mf_polygon thz = poly4(v3(0, 0, 1), v3(-0.5, -0.5, 1), v3(0.5, -0.5, 1), v3(0.5, 0.5, 1));
     mf_polygon thz2 = poly3(v3(-1, 0, 1), v3(1, 1e-17, 1), v3(0, 1, 1)); /* edge through (0,0,1) */
     for (int k = 1; k < 8; ++k) {
-        mf_mat3 r = rotation(v3(0, 0, 1), 0.9 * k);
+        mf_mat3 r = mf_test_rotation(v3(0, 0, 1), 0.9 * k);
         mf_polygon a = transformed(r, &thz), b = transformed(r, &thz2);
         CHECK_REL(mf_polygon_integrate_cosine_signed(&a), mf_polygon_integrate_cosine_signed(&thz), 32 * DBL_EPSILON);
         CHECK_REL(mf_polygon_integrate_cosine_signed(&b), mf_polygon_integrate_cosine_signed(&thz2), 32 * DBL_EPSILON);

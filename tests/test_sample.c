@@ -413,13 +413,6 @@ typedef struct chi2_result {
     long zero_cell_hits; /* samples in cells with expected count 0, or outside the domain */
 } chi2_result;
 
-static const double *g_expected; /* for qsort */
-static int cmp_expected(const void *a, const void *b)
-{
-    double x = g_expected[*(const int *)a], y = g_expected[*(const int *)b];
-    return (x > y) - (x < y);
-}
-
 static chi2_result chi2_test(const dist *sampler, const dist *pdf, uint64_t seed, uint64_t stream)
 {
     static double expected[N_CELLS];
@@ -459,43 +452,15 @@ static chi2_result chi2_test(const dist *sampler, const dist *pdf, uint64_t seed
                         w.z);
             continue;
         }
-        double phi = atan2(w.y, w.x);
-        if (phi < 0.0)
-            phi += TWO_PI;
-        int j = (int)(phi * (N_PHI / TWO_PI));
-        if (j >= N_PHI)
-            j = N_PHI - 1;
-        if (j < 0)
-            j = 0;
-        observed[i * N_PHI + j]++;
+        observed[i * N_PHI + chi2_phi_cell(w.y, w.x, N_PHI)]++;
     }
 
     /* pooling, as pbrt-v3 chi2test() (sorted by expected count; pool while < MIN_EXPECTED) */
-    for (int c = 0; c < N_CELLS; ++c)
-        order[c] = c;
-    g_expected = expected;
-    qsort(order, N_CELLS, sizeof order[0], cmp_expected);
-    double pooled_obs = 0.0, pooled_exp = 0.0;
-    for (int k = 0; k < N_CELLS; ++k) {
-        int c = order[k];
-        if (expected[c] == 0.0) {
-            r.zero_cell_hits += observed[c];
-        } else if (expected[c] < MIN_EXPECTED || (pooled_exp > 0.0 && pooled_exp < MIN_EXPECTED)) {
-            pooled_obs += observed[c];
-            pooled_exp += expected[c];
-            r.pooled_cells++;
-        } else {
-            double diff = observed[c] - expected[c];
-            r.chi2 += diff * diff / expected[c];
-            r.dof++;
-        }
-    }
-    if (pooled_exp > 0.0) {
-        double diff = pooled_obs - pooled_exp;
-        r.chi2 += diff * diff / pooled_exp;
-        r.dof++;
-    }
-    r.dof -= 1; /* all parameters known: only the total is constrained */
+    chi2_pooled p = chi2_pool(expected, observed, order, N_CELLS, MIN_EXPECTED);
+    r.chi2 = p.chi2;
+    r.dof = p.dof;
+    r.pooled_cells = p.pooled_cells;
+    r.zero_cell_hits += p.zero_hits;
     r.pvalue = chi2_pvalue(r.chi2, r.dof);
     return r;
 }

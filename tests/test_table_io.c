@@ -28,76 +28,18 @@
 #include <mfkit/fit/mf_image_oiio.h>
 
 #include "mf_test.h"
+#include "test_tables.h"
+#include "test_files.h"
 
 static char dir[] = "/tmp/mfkit_test_table_io_XXXXXX";
 static int have_numpy = -1;
 
 static void path_in_dir(char *out, size_t size, const char *name) { snprintf(out, size, "%s/%s", dir, name); }
 
-static long file_size(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0 ? (long)st.st_size : -1;
-}
-
-static int file_exists(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0;
-}
-
-static int count_temporaries(void)
-{
-    DIR *d = opendir(dir);
-    if (!d)
-        return -1;
-    int n = 0;
-    struct dirent *e;
-    while ((e = readdir(d)) != NULL)
-        if (strstr(e->d_name, ".tmp") != NULL)
-            ++n;
-    closedir(d);
-    return n;
-}
-
-static unsigned char *slurp(const char *path, long *len)
-{
-    *len = file_size(path);
-    FILE *f = fopen(path, "rb");
-    if (!f || *len < 0) {
-        if (f)
-            fclose(f);
-        return NULL;
-    }
-    unsigned char *p = malloc((size_t)*len + 1);
-    if (p && fread(p, 1, (size_t)*len, f) != (size_t)*len) {
-        free(p);
-        p = NULL;
-    }
-    fclose(f);
-    return p;
-}
-
-static int spit(const char *path, const void *data, size_t len)
-{
-    FILE *f = fopen(path, "wb");
-    if (!f)
-        return -1;
-    int ok = fwrite(data, 1, len, f) == len;
-    return (fclose(f) == 0 && ok) ? 0 : -1;
-}
-
 static int run(const char *cmd)
 {
     int rc = system(cmd);
     return rc;
-}
-
-static int have_tool(const char *name)
-{
-    char cmd[256];
-    snprintf(cmd, sizeof cmd, "command -v %s >/dev/null 2>&1", name);
-    return run(cmd) == 0;
 }
 
 static int numpy_available(void)
@@ -182,34 +124,6 @@ static void make_table(mf_table *t, int n0, int n1, int extremes)
     }
 }
 
-/* Same axes, fields and meta, bit for bit. */
-static int same_metadata(const mf_table *a, const mf_table *b)
-{
-    if (a->naxes != b->naxes || a->nfields != b->nfields || a->nmeta != b->nmeta)
-        return 0;
-    for (int k = 0; k < a->naxes; ++k) {
-        const mf_table_axis *x = &a->axes[k], *y = &b->axes[k];
-        if (strcmp(x->name, y->name) || strcmp(x->physical, y->physical) || x->size != y->size ||
-            memcmp(&x->lo, &y->lo, sizeof(double)) || memcmp(&x->hi, &y->hi, sizeof(double)) ||
-            x->mapping != y->mapping || memcmp(&x->physical_min, &y->physical_min, sizeof(double)))
-            return 0;
-    }
-    for (int f = 0; f < a->nfields; ++f)
-        if (strcmp(a->fields[f], b->fields[f]))
-            return 0;
-    for (int i = 0; i < a->nmeta; ++i)
-        if (strcmp(a->meta[i].key, b->meta[i].key) || strcmp(a->meta[i].value, b->meta[i].value))
-            return 0;
-    return 1;
-}
-
-static uint32_t float_bits(float f)
-{
-    uint32_t u;
-    memcpy(&u, &f, 4);
-    return u;
-}
-
 /* Every value of b is exactly the float32 of the same value of a (bitwise). */
 static int same_float_data(const mf_table *a, const mf_table *b)
 {
@@ -220,7 +134,7 @@ static int same_float_data(const mf_table *a, const mf_table *b)
         float fa = (float)a->data[i];
         if ((double)(float)b->data[i] != b->data[i] && !isnan(b->data[i]))
             return 0; /* not a float32 value */
-        if (float_bits(fa) != float_bits((float)b->data[i])) {
+        if (mf_test_float_bits(fa) != mf_test_float_bits((float)b->data[i])) {
             fprintf(stderr, "value %zu: %.9g vs %.9g\n", i, (double)fa, b->data[i]);
             return 0;
         }
@@ -318,7 +232,7 @@ static void test_half_matches_oiio(void)
     if (back.pixels && back.width == w && back.height == hgt)
         for (size_t i = 0; i < n; ++i) {
             double ours = half_round((double)v[i]);
-            if (float_bits((float)ours) != float_bits(back.pixels[i]) && mismatches++ == 0)
+            if (mf_test_float_bits((float)ours) != mf_test_float_bits(back.pixels[i]) && mismatches++ == 0)
                 first = i;
         }
     else
@@ -345,7 +259,7 @@ static void write_ok(const char *name, const mf_table *t, const mf_table_write_o
         fprintf(stderr, "write %s: %s\n", name, msg);
     CHECK(st == MF_OK);
     CHECK(msg[0] == '\0');
-    CHECK(file_exists(path));
+    CHECK(mf_test_file_exists(path));
 }
 
 static void check_round_trip(const char *name, const mf_table *t, mf_table_format fmt)
@@ -361,7 +275,7 @@ static void check_round_trip(const char *name, const mf_table *t, mf_table_forma
     if (st != MF_OK)
         return;
     CHECK(info.format == fmt && info.has_metadata && !info.half_float && !info.has_half_error);
-    CHECK(same_metadata(t, &back));
+    CHECK(mf_test_same_metadata(t, &back));
     CHECK(same_float_data(t, &back));
     mf_table_free(&back);
 }
@@ -375,8 +289,8 @@ static void test_round_trips(void)
     check_round_trip("t.npy", &t, MF_TABLE_FORMAT_NPY);
     char path[512];
     path_in_dir(path, sizeof path, "t.npy.json");
-    CHECK(file_exists(path));
-    CHECK(count_temporaries() == 0);
+    CHECK(mf_test_file_exists(path));
+    CHECK(mf_test_count_temporaries(dir) == 0);
 
     /* special values in JSON: NaN as null (reads back as a NaN), infinities as 1e999, -0 kept */
     mf_table s;
@@ -398,7 +312,7 @@ static void test_round_trips(void)
             CHECK(b.data[4] == (double)1e-45f);
             int rest = 1;
             for (int i = 5; i < 30; ++i)
-                rest = rest && float_bits((float)b.data[i]) == float_bits((float)s.data[i]);
+                rest = rest && mf_test_float_bits((float)b.data[i]) == mf_test_float_bits((float)s.data[i]);
             CHECK(rest);
         }
         mf_table_free(&b);
@@ -471,7 +385,7 @@ static void test_exr_half(void)
     CHECK(mf_table_read(path, &back, &info, msg, sizeof msg) == MF_OK);
     CHECK(info.half_float && info.has_metadata && info.has_half_error);
     CHECK(info.half_error.max_abs_error == he.max_abs_error && info.half_error.max_rel_error == he.max_rel_error);
-    CHECK(same_metadata(&t, &back));
+    CHECK(mf_test_same_metadata(&t, &back));
     int exact = 1, changed = 0;
     if (back.data)
         for (size_t i = 0; i < 64 * 64 * 5; ++i) {
@@ -500,7 +414,7 @@ static void test_exr_half(void)
     /* half in a format without halves */
     path_in_dir(path, sizeof path, "h.json");
     CHECK(mf_table_write(path, &t, &o, &he, msg, sizeof msg) == MF_ERR_UNSUPPORTED);
-    CHECK(!file_exists(path) && strncmp(msg, path, strlen(path)) == 0);
+    CHECK(!mf_test_file_exists(path) && strncmp(msg, path, strlen(path)) == 0);
     mf_table_free(&t);
 }
 
@@ -515,7 +429,7 @@ static void numpy_check_dds(const char *dds, const float *expect, size_t n, int 
     char raw[512], py[512], cmd[2048];
     path_in_dir(raw, sizeof raw, "dds_expect.f32");
     path_in_dir(py, sizeof py, "check_dds.py");
-    CHECK(spit(raw, expect, n * sizeof(float)) == 0);
+    CHECK(mf_test_write_file(raw, expect, n * sizeof(float)) == 0);
     const char *script =
         "import sys, numpy as np\n"
         "b = open(sys.argv[1], 'rb').read()\n"
@@ -531,7 +445,7 @@ static void numpy_check_dds(const char *dds, const float *expect, size_t n, int 
         "px = px.astype(np.float32).reshape(hgt, w, 4)\n"
         "exp = np.fromfile(sys.argv[2], dtype='<f4').reshape(hgt, w, 4)\n"
         "assert np.array_equal(px.view(np.uint32), exp.view(np.uint32))\n";
-    CHECK(spit(py, script, strlen(script)) == 0);
+    CHECK(mf_test_write_file(py, script, strlen(script)) == 0);
     snprintf(cmd, sizeof cmd, "/usr/bin/python3 %s %s %s %d %d %d", py, dds, raw, half, w, h);
     CHECK(run(cmd) == 0);
 }
@@ -557,7 +471,7 @@ static void test_dds(void)
             snprintf(name, sizeof name, "t%s%s.dds", half ? "16" : "32", custom ? "c" : "");
             mf_half_error he;
             write_ok(name, &t, &o, &he, path, sizeof path);
-            CHECK(file_size(path) == 148 + 16 * 8 * (half ? 8 : 16));
+            CHECK(mf_test_file_size(path) == 148 + 16 * 8 * (half ? 8 : 16));
             if (half) {
                 CHECK(he.count == 16 * 8 * (size_t)(custom ? 3 : 4));
                 CHECK(he.overflow_count == (custom ? 1u : 1u)); /* -1e30 (scale) in both */
@@ -622,7 +536,7 @@ static void test_dds(void)
         memcpy(o.dds_fields, bad[k], sizeof bad[k]);
         path_in_dir(path, sizeof path, "bad.dds");
         CHECK(mf_table_write(path, &t, &o, NULL, msg, sizeof msg) == MF_ERR_DOMAIN);
-        CHECK(!file_exists(path));
+        CHECK(!mf_test_file_exists(path));
     }
     mf_table_free(&t);
 }
@@ -645,7 +559,7 @@ static void test_numpy(void)
     for (size_t i = 0; i < n; ++i)
         f[i] = (float)t.data[i];
     path_in_dir(raw, sizeof raw, "np_expect.f32");
-    CHECK(spit(raw, f, n * sizeof *f) == 0);
+    CHECK(mf_test_write_file(raw, f, n * sizeof *f) == 0);
     path_in_dir(py, sizeof py, "check_npy.py");
     /* a[i1, i0, f] is field f of texel (i0, i1): spot values checked against the formula's float */
     int idx[2] = {17, 9};
@@ -667,7 +581,7 @@ static void test_numpy(void)
              "assert np.array_equal(np.array(j['data'], dtype=np.float32).reshape(32, 64, 5).view(np.uint32),"
              " e.view(np.uint32))\n",
              rec[0], rec[4]);
-    CHECK(spit(py, script, strlen(script)) == 0);
+    CHECK(mf_test_write_file(py, script, strlen(script)) == 0);
     char jpath[512];
     write_ok("np.json", &t, NULL, NULL, jpath, sizeof jpath);
     snprintf(cmd, sizeof cmd, "/usr/bin/python3 %s %s %s %s", py, path, raw, jpath);
@@ -684,7 +598,7 @@ static void test_c_header(void)
     make_table(&t, 64, 64, 1);
     char path[512], src[512], obj[512], bin[512], out[512], cmd[4096];
     write_ok("lut_ggx.h", &t, NULL, NULL, path, sizeof path);
-    int have_cc = have_tool("cc"), have_cxx = have_tool("c++");
+    int have_cc = mf_test_have_tool("cc"), have_cxx = mf_test_have_tool("c++");
     if (!have_cc && !have_cxx) {
         printf("note: no cc or c++: the C header is not compiled\n");
         mf_table_free(&t);
@@ -711,7 +625,7 @@ static void test_c_header(void)
         snprintf(obj, sizeof obj, "%s/use_lut_%d.o", dir, cxx);
         snprintf(bin, sizeof bin, "%s/use_lut_%d", dir, cxx);
         snprintf(out, sizeof out, "%s/lut_dump_%d.f32", dir, cxx);
-        CHECK(spit(src, prog, strlen(prog)) == 0);
+        CHECK(mf_test_write_file(src, prog, strlen(prog)) == 0);
         snprintf(cmd, sizeof cmd, "%s -Wall -Wextra -pedantic -Werror -I%s -c %s -o %s", cxx ? "c++ -std=c++17" : "cc -std=c11",
                  dir, src, obj);
         int rc = run(cmd);
@@ -721,14 +635,14 @@ static void test_c_header(void)
         snprintf(cmd, sizeof cmd, "%s %s -o %s && %s %s", cxx ? "c++" : "cc", obj, bin, bin, out);
         CHECK(run(cmd) == 0);
         long len;
-        unsigned char *dump = slurp(out, &len);
+        unsigned char *dump = mf_test_read_file(out, &len);
         CHECK(dump != NULL && len == (long)(mf_table_texels(&t) * 5 * sizeof(float)));
         if (dump && len == (long)(mf_table_texels(&t) * 5 * sizeof(float))) {
             int same = 1;
             for (size_t i = 0; i < mf_table_texels(&t) * 5; ++i) {
                 float f;
                 memcpy(&f, dump + 4 * i, 4);
-                if (float_bits(f) != float_bits((float)t.data[i]))
+                if (mf_test_float_bits(f) != mf_test_float_bits((float)t.data[i]))
                     same = 0;
             }
             CHECK(same); /* the %.9g literals give back every float bit for bit */
@@ -742,7 +656,7 @@ static void test_c_header(void)
     const char *prog2 = "#include \"lut_nf.h\"\nint lut_first_is_nan(void);\n"
                         "int lut_first_is_nan(void) { return lut_nf_data[10] != lut_nf_data[10] && lut_nf_data[11] < 0; }\n";
     snprintf(src, sizeof src, "%s/use_nf.c", dir);
-    CHECK(spit(src, prog2, strlen(prog2)) == 0);
+    CHECK(mf_test_write_file(src, prog2, strlen(prog2)) == 0);
     if (have_cc) {
         snprintf(cmd, sizeof cmd, "cc -std=c11 -Wall -Wextra -pedantic -Werror -I%s -c %s -o %s/use_nf.o", dir, src, dir);
         CHECK(run(cmd) == 0);
@@ -758,11 +672,11 @@ static void test_c_header(void)
     o.prefix = "9bad";
     char msg[512];
     path_in_dir(path, sizeof path, "bad_prefix.h");
-    CHECK(mf_table_write(path, &t, &o, NULL, msg, sizeof msg) == MF_ERR_DOMAIN && !file_exists(path));
+    CHECK(mf_table_write(path, &t, &o, NULL, msg, sizeof msg) == MF_ERR_DOMAIN && !mf_test_file_exists(path));
     o.prefix = "my_lut";
     write_ok("named.h", &t, &o, NULL, path, sizeof path);
     long len;
-    char *text = (char *)slurp(path, &len);
+    char *text = (char *)mf_test_read_file(path, &len);
     if (text) {
         text[len] = '\0';
         CHECK(strstr(text, "static const float my_lut_data[20480] = {") != NULL);
@@ -810,7 +724,7 @@ static void test_shaders(void)
     write_ok("lut.glsl", &t, NULL, NULL, glsl, sizeof glsl);
     write_ok("lut.hlsl", &t, NULL, NULL, hlsl, sizeof hlsl);
     long len;
-    char *g = (char *)slurp(glsl, &len);
+    char *g = (char *)mf_test_read_file(glsl, &len);
     if (g) {
         g[len] = '\0';
         CHECK(shader_sane(g));
@@ -820,7 +734,7 @@ static void test_shaders(void)
         CHECK(strstr(g, "return (u - (0.0)) / (1.0) * 31.0 / 32.0 + 0.5 / 32.0;") != NULL);
         CHECK(strstr(g, "\"physical_min\": 0.0001") != NULL);
     }
-    char *h = (char *)slurp(hlsl, &len);
+    char *h = (char *)mf_test_read_file(hlsl, &len);
     if (h) {
         h[len] = '\0';
         CHECK(shader_sane(h));
@@ -828,7 +742,7 @@ static void test_shaders(void)
               NULL);
         CHECK(strstr(h, "table.SampleLevel(samp, uv, 0.0)") != NULL);
     }
-    if (have_tool("glslangValidator")) {
+    if (mf_test_have_tool("glslangValidator")) {
         /* GLSL 3.30 fragment shader and an HLSL pixel shader around the snippets */
         path_in_dir(path, sizeof path, "use_lut.frag");
         char *src = malloc((size_t)len + 4096 + (g ? strlen(g) : 0));
@@ -837,7 +751,7 @@ static void test_shaders(void)
                      "#version 330\n%s\nuniform sampler2D tab;\nin vec2 x;\nout vec4 color;\n"
                      "void main() { color = lut_lookup(tab, x.x, x.y) + vec4(lut_uv(x.y, x.x), 0.0, 0.0); }\n",
                      g);
-            CHECK(spit(path, src, strlen(src)) == 0);
+            CHECK(mf_test_write_file(path, src, strlen(src)) == 0);
             snprintf(cmd, sizeof cmd, "glslangValidator %s >%s/glslang.log 2>&1 || cat %s/glslang.log", path, dir, dir);
             CHECK(run(cmd) == 0);
             path_in_dir(path, sizeof path, "use_lut.hlsl");
@@ -845,7 +759,7 @@ static void test_shaders(void)
                      "%s\nTexture2D<float4> tab : register(t0);\nSamplerState smp : register(s0);\n"
                      "float4 main(float2 x : TEXCOORD0) : SV_Target { return lut_lookup(tab, smp, x.x, x.y); }\n",
                      h);
-            CHECK(spit(path, src, strlen(src)) == 0);
+            CHECK(mf_test_write_file(path, src, strlen(src)) == 0);
             snprintf(cmd, sizeof cmd,
                      "glslangValidator -V -D -e main -S frag -o %s/hlsl.spv %s >%s/glslang.log 2>&1 || cat %s/glslang.log",
                      dir, path, dir, dir);
@@ -867,7 +781,7 @@ static void test_csv(void)
     char path[512];
     write_ok("t.csv", &t, NULL, NULL, path, sizeof path);
     long len;
-    char *s = (char *)slurp(path, &len);
+    char *s = (char *)mf_test_read_file(path, &len);
     if (s) {
         s[len] = '\0';
         const char *head = "i0,i1,u,r,cos_theta_o,alpha,scale,bias,g1,dscale_dr,e_comp\n";
@@ -912,7 +826,7 @@ static void fuzz_file(const char *name, int every_offset, int flips, uint64_t se
     char path[512], bad[512];
     path_in_dir(path, sizeof path, name);
     long len;
-    unsigned char *orig = slurp(path, &len);
+    unsigned char *orig = mf_test_read_file(path, &len);
     CHECK(orig != NULL && len > 0);
     if (!orig)
         return;
@@ -923,7 +837,7 @@ static void fuzz_file(const char *name, int every_offset, int flips, uint64_t se
     int truncations_ok = 0, trunc_fail = 0;
     long step = every_offset ? 1 : (len / 997 + 1);
     for (long cut = 0; cut < len; cut += step) {
-        CHECK(spit(bad, orig, (size_t)cut) == 0);
+        CHECK(mf_test_write_file(bad, orig, (size_t)cut) == 0);
         mf_status st = read_checked(bad);
         if (st == MF_OK) {
             /* only whitespace may have been cut */
@@ -952,7 +866,7 @@ static void fuzz_file(const char *name, int every_offset, int flips, uint64_t se
             size_t at = (k & 1) ? r % (uint32_t)len : r % (uint32_t)(len < 512 ? len : 512);
             copy[at] ^= (unsigned char)(1u << (mf_pcg32_next_u32(&rng) % 8));
         }
-        CHECK(spit(bad, copy, (size_t)len) == 0);
+        CHECK(mf_test_write_file(bad, copy, (size_t)len) == 0);
         flip_fail += read_checked(bad) != MF_OK;
     }
     printf("fuzz %-10s %6ld bytes: %d truncations failed cleanly (%d whitespace-only OK), %d of %d bit-flipped "
@@ -985,7 +899,7 @@ static void test_corrupt_inputs(void)
     fuzz_file("c.npy.json", 1, 1000, 16);
     path_in_dir(path, sizeof path, "c.npy.json");
     long len;
-    unsigned char *side = slurp(path, &len);
+    unsigned char *side = mf_test_read_file(path, &len);
     CHECK(side != NULL);
     if (side) {
         char npy[512];
@@ -994,7 +908,7 @@ static void test_corrupt_inputs(void)
         mf_pcg32_seed(&rng, mf_test_seed(17), 3);
         int refused = 0;
         for (long cut = 0; cut < len; ++cut) {
-            CHECK(spit(path, side, (size_t)cut) == 0);
+            CHECK(mf_test_write_file(path, side, (size_t)cut) == 0);
             refused += read_checked(npy) != MF_OK;
         }
         CHECK(refused >= len - 2); /* all but cuts of the trailing newline */
@@ -1004,11 +918,11 @@ static void test_corrupt_inputs(void)
                 break;
             memcpy(c, side, (size_t)len);
             c[mf_pcg32_next_u32(&rng) % (uint32_t)len] ^= (unsigned char)(1u << (k % 8));
-            CHECK(spit(path, c, (size_t)len) == 0);
+            CHECK(mf_test_write_file(path, c, (size_t)len) == 0);
             (void)read_checked(npy);
             free(c);
         }
-        CHECK(spit(path, side, (size_t)len) == 0);
+        CHECK(mf_test_write_file(path, side, (size_t)len) == 0);
         CHECK(read_checked(npy) == MF_OK);
         free(side);
     }
@@ -1023,10 +937,10 @@ static void test_corrupt_inputs(void)
     };
     path_in_dir(path, sizeof path, "garbage.json");
     for (size_t k = 0; k < sizeof garbage / sizeof *garbage; ++k) {
-        CHECK(spit(path, garbage[k], strlen(garbage[k])) == 0);
+        CHECK(mf_test_write_file(path, garbage[k], strlen(garbage[k])) == 0);
         CHECK(read_checked(path) == MF_ERR_FORMAT);
     }
-    CHECK(spit(path, "{\"a\":\0 1}", 9) == 0);
+    CHECK(mf_test_write_file(path, "{\"a\":\0 1}", 9) == 0);
     CHECK(read_checked(path) == MF_ERR_FORMAT);
     /* a .npy header announcing a huge array backed by no data */
     const char *dict = "{'descr': '<f4', 'fortran_order': False, 'shape': (1048576, 4096, 32), }\n";
@@ -1036,7 +950,7 @@ static void test_corrupt_inputs(void)
     huge[9] = 0;
     memcpy(huge + 10, dict, strlen(dict));
     path_in_dir(path, sizeof path, "huge.npy");
-    CHECK(spit(path, huge, 10 + strlen(dict)) == 0);
+    CHECK(mf_test_write_file(path, huge, 10 + strlen(dict)) == 0);
     CHECK(read_checked(path) == MF_ERR_FORMAT);
     /* missing files and write-only formats */
     path_in_dir(path, sizeof path, "missing.json");
@@ -1065,31 +979,31 @@ static void test_write_errors(void)
         mf_status st = mf_table_write(path, &t, NULL, NULL, msg, sizeof msg);
         CHECK(st == MF_ERR_IO);
         CHECK(memchr(msg, '\0', sizeof msg) && strncmp(msg, path, strlen(path)) == 0 && !strchr(msg, '\n'));
-        CHECK(!file_exists(path) && !file_exists(sub));
+        CHECK(!mf_test_file_exists(path) && !mf_test_file_exists(sub));
     }
     /* unknown extension; invalid arguments */
     path_in_dir(path, sizeof path, "out.xyz");
-    CHECK(mf_table_write(path, &t, NULL, NULL, msg, sizeof msg) == MF_ERR_UNSUPPORTED && !file_exists(path));
+    CHECK(mf_table_write(path, &t, NULL, NULL, msg, sizeof msg) == MF_ERR_UNSUPPORTED && !mf_test_file_exists(path));
     CHECK(mf_table_write(NULL, &t, NULL, NULL, msg, sizeof msg) == MF_ERR_DOMAIN);
     CHECK(mf_table_write(path, NULL, NULL, NULL, msg, sizeof msg) == MF_ERR_DOMAIN);
     /* a failed write leaves an existing file as it was */
     write_ok("keep.json", &t, NULL, NULL, path, sizeof path);
-    long before = file_size(path);
+    long before = mf_test_file_size(path);
     mf_table_write_options o;
     mf_table_write_options_default(&o);
     o.half_float = 1;
     CHECK(mf_table_write(path, &t, &o, NULL, msg, sizeof msg) == MF_ERR_UNSUPPORTED);
-    CHECK(file_size(path) == before);
+    CHECK(mf_test_file_size(path) == before);
     /* a read-only directory (skipped as root, who may write anyway) */
     if (geteuid() != 0) {
         char ro[512];
         path_in_dir(ro, sizeof ro, "ro");
         CHECK(mkdir(ro, 0555) == 0);
         path_in_dir(path, sizeof path, "ro/out.npy");
-        CHECK(mf_table_write(path, &t, NULL, NULL, msg, sizeof msg) == MF_ERR_IO && !file_exists(path));
+        CHECK(mf_table_write(path, &t, NULL, NULL, msg, sizeof msg) == MF_ERR_IO && !mf_test_file_exists(path));
         rmdir(ro);
     }
-    CHECK(count_temporaries() == 0);
+    CHECK(mf_test_count_temporaries(dir) == 0);
     mf_table_free(&t);
 }
 
@@ -1102,23 +1016,6 @@ static void test_formats(void)
     CHECK(mf_table_format_from_path(".json") == MF_TABLE_FORMAT_UNKNOWN);
     CHECK(strcmp(mf_table_format_name(MF_TABLE_FORMAT_HLSL), "hlsl") == 0);
     CHECK(mf_table_format_readable(MF_TABLE_FORMAT_DDS) && !mf_table_format_readable(MF_TABLE_FORMAT_CSV));
-}
-
-static void cleanup(void)
-{
-    DIR *d = opendir(dir);
-    if (!d)
-        return;
-    struct dirent *e;
-    char path[1024];
-    while ((e = readdir(d)) != NULL) {
-        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0)
-            continue;
-        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-        remove(path);
-    }
-    closedir(d);
-    CHECK(rmdir(dir) == 0);
 }
 
 int main(int argc, char **argv)
@@ -1151,6 +1048,6 @@ int main(int argc, char **argv)
     test_csv();
     test_corrupt_inputs();
     test_write_errors();
-    cleanup();
+    CHECK(mf_test_remove_dir(dir) == 0);
     MF_TEST_MAIN_END();
 }

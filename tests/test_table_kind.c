@@ -3,6 +3,7 @@
  * a table with the exact answer and fails the corrupted copies; moment maps convert to tables
  * and back bit for bit. */
 #include "mf_test.h"
+#include "test_tables.h"
 
 #include "mfkit/mfkit.h"
 
@@ -104,29 +105,13 @@ static int proxy_table(mf_table *t)
     return 1;
 }
 
-static const mf_check *find(const mf_check *c, int n, const char *name)
-{
-    for (int i = 0; i < n; ++i)
-        if (!strcmp(c[i].name, name))
-            return &c[i];
-    return NULL;
-}
-
-static void print_checks(const char *title, const mf_check *c, int n)
-{
-    printf("-- %s\n", title);
-    for (int i = 0; i < n; ++i)
-        printf("  %-18s %-4s worst %-10.3g bound %-8.3g cases %-5ld %s\n", c[i].name, c[i].passed ? "pass" : "FAIL",
-               c[i].worst, c[i].bound, c[i].cases, c[i].worst_at);
-}
-
 /* Runs the gate of t's kind; exactly the checks in must_fail fail. */
 static void expect(const char *title, const mf_table *t, const char *kind, const char *const *must_fail, int nfail)
 {
     mf_check c[8];
     int n = 0;
     mf_status st = mf_table_kind_gate(t, NULL, NULL, c, 8, &n);
-    print_checks(title, c, n);
+    mf_test_print_checks(title, c, n);
     const mf_table_kind *k = mf_table_kind_of(t, NULL, 0);
     CHECK(k && !strcmp(k->name, kind));
     CHECK(k && n == k->nchecks);
@@ -173,7 +158,7 @@ static void test_proxy(void)
         mf_check c[8];
         int n = 0;
         CHECK(mf_table_kind_gate(&bad, NULL, NULL, c, 8, &n) == MF_ERR_CHECK_FAILED);
-        const mf_check *e = find(c, n, "proxy_exact");
+        const mf_check *e = mf_test_find_check(c, n, "proxy_exact");
         CHECK(e && isnan(e->worst) && strstr(e->worst_at, "NaN at texel 85") == e->worst_at);
     }
     mf_table_free(&bad);

@@ -31,47 +31,14 @@
 #include <mfkit/mf_table.h>
 
 #include "mf_test.h"
+#include "test_tables.h"
+#include "test_files.h"
 
 static char dir[] = "/tmp/mfkit_test_table_nd_XXXXXX";
 
 static void path_in_dir(char *out, size_t size, const char *name) { snprintf(out, size, "%s/%s", dir, name); }
 
-static unsigned char *slurp(const char *path, long *len)
-{
-    struct stat st;
-    FILE *f = fopen(path, "rb");
-    if (!f || stat(path, &st) != 0) {
-        if (f)
-            fclose(f);
-        return NULL;
-    }
-    *len = (long)st.st_size;
-    unsigned char *p = malloc((size_t)*len + 1);
-    if (p && fread(p, 1, (size_t)*len, f) != (size_t)*len) {
-        free(p);
-        p = NULL;
-    }
-    fclose(f);
-    if (p)
-        p[*len] = 0;
-    return p;
-}
-
-static int spit(const char *path, const char *text)
-{
-    FILE *f = fopen(path, "wb");
-    if (!f)
-        return -1;
-    int ok = fputs(text, f) >= 0;
-    return (fclose(f) == 0 && ok) ? 0 : -1;
-}
-
-static int have_tool(const char *name)
-{
-    char cmd[256];
-    snprintf(cmd, sizeof cmd, "command -v %s >/dev/null 2>&1", name);
-    return system(cmd) == 0;
-}
+static int spit(const char *path, const char *text) { return mf_test_write_file(path, text, strlen(text)); }
 
 /* Runs cmd with its output in dir/cmd.log, printed on failure. */
 static int run_logged(const char *cmd)
@@ -86,13 +53,6 @@ static int run_logged(const char *cmd)
             fprintf(stderr, "(no log)\n");
     }
     return rc;
-}
-
-static uint32_t float_bits(float f)
-{
-    uint32_t u;
-    memcpy(&u, &f, 4);
-    return u;
 }
 
 /* ---- the sample tables ---------------------------------------------------------------------- */
@@ -129,26 +89,6 @@ static void make_nd(mf_table *t, int naxes, int nfields)
     t->data[n - 1] = 0.1;
 }
 
-static int same_metadata(const mf_table *a, const mf_table *b)
-{
-    if (a->naxes != b->naxes || a->nfields != b->nfields || a->nmeta != b->nmeta)
-        return 0;
-    for (int k = 0; k < a->naxes; ++k) {
-        const mf_table_axis *x = &a->axes[k], *y = &b->axes[k];
-        if (strcmp(x->name, y->name) || strcmp(x->physical, y->physical) || x->size != y->size ||
-            memcmp(&x->lo, &y->lo, sizeof(double)) || memcmp(&x->hi, &y->hi, sizeof(double)) ||
-            x->mapping != y->mapping || memcmp(&x->physical_min, &y->physical_min, sizeof(double)))
-            return 0;
-    }
-    for (int f = 0; f < a->nfields; ++f)
-        if (strcmp(a->fields[f], b->fields[f]))
-            return 0;
-    for (int i = 0; i < a->nmeta; ++i)
-        if (strcmp(a->meta[i].key, b->meta[i].key) || strcmp(a->meta[i].value, b->meta[i].value))
-            return 0;
-    return 1;
-}
-
 /* b's values are exactly round(a's values) (float32, or half with `half`), bit for bit. */
 static int same_values(const mf_table *a, const mf_table *b, int half)
 {
@@ -157,7 +97,8 @@ static int same_values(const mf_table *a, const mf_table *b, int half)
         return 0;
     for (size_t i = 0; i < n; ++i) {
         double want = half ? mf_half_to_double(mf_half_from_double(a->data[i])) : (double)(float)a->data[i];
-        if (float_bits((float)want) != float_bits((float)b->data[i]) || (double)(float)b->data[i] != b->data[i]) {
+        if (mf_test_float_bits((float)want) != mf_test_float_bits((float)b->data[i]) ||
+            (double)(float)b->data[i] != b->data[i]) {
             fprintf(stderr, "value %zu: %.9g read back as %.9g\n", i, want, b->data[i]);
             return 0;
         }
@@ -186,7 +127,7 @@ static void round_trip(const mf_table *t, const char *name, int half)
     CHECK(st == MF_OK);
     if (st != MF_OK)
         return;
-    int ok_meta = same_metadata(t, &back), ok_val = same_values(t, &back, half);
+    int ok_meta = mf_test_same_metadata(t, &back), ok_val = same_values(t, &back, half);
     if (!ok_meta || !ok_val)
         fprintf(stderr, "%s (%d axes): metadata %s, values %s\n", name, t->naxes, ok_meta ? "same" : "DIFFER",
                 ok_val ? "same" : "DIFFER");
@@ -217,7 +158,8 @@ static void check_atlas_pixels(const mf_table *t, const char *exr_name, const ch
             int f = mf_table_field(t, ii.channel_names[c]);
             CHECK(f >= 0);
             for (size_t p = 0; f >= 0 && p < n / nf; ++p)
-                bad += float_bits(img.pixels[p * nf + c]) != float_bits((float)fill[p * nf + (size_t)f]);
+                bad += mf_test_float_bits(img.pixels[p * nf + c]) !=
+                       mf_test_float_bits((float)fill[p * nf + (size_t)f]);
         }
         if (bad)
             fprintf(stderr, "%s: %zu pixels differ from mf_table_atlas_fill\n", exr_name, bad);
@@ -228,7 +170,7 @@ static void check_atlas_pixels(const mf_table *t, const char *exr_name, const ch
     /* DDS: 148 header bytes, then RGBA32F rows from the top; the first 4 fields */
     path_in_dir(path, sizeof path, dds_name);
     long len = 0;
-    unsigned char *d = slurp(path, &len);
+    unsigned char *d = mf_test_read_file(path, &len);
     size_t px = (size_t)a.width * (size_t)a.height;
     CHECK(d && len == (long)(148 + 16 * px));
     if (d && len == (long)(148 + 16 * px)) {
@@ -241,7 +183,7 @@ static void check_atlas_pixels(const mf_table *t, const char *exr_name, const ch
             for (int c = 0; c < 4; ++c) {
                 float v;
                 memcpy(&v, d + 148 + 16 * p + 4 * (size_t)c, 4);
-                bad += float_bits(v) != float_bits((float)fill[p * (size_t)t->nfields + (size_t)c]);
+                bad += mf_test_float_bits(v) != mf_test_float_bits((float)fill[p * (size_t)t->nfields + (size_t)c]);
             }
         if (bad)
             fprintf(stderr, "%s: %zu values differ from mf_table_atlas_fill\n", dds_name, bad);
@@ -289,7 +231,7 @@ static void test_round_trips(void)
         path_in_dir(path, sizeof path, name);
         CHECK(mf_table_write(path, &t, NULL, NULL, msg, sizeof msg) == MF_OK);
         long len = 0;
-        char *csv = (char *)slurp(path, &len);
+        char *csv = (char *)mf_test_read_file(path, &len);
         size_t rows = 0;
         for (long i = 0; csv && i < len; ++i)
             rows += csv[i] == '\n';
@@ -329,7 +271,7 @@ static void test_bad_atlas(void)
     CHECK(mf_table_write(path, &t, NULL, NULL, msg, sizeof msg) == MF_OK);
     snprintf(side, sizeof side, "%s.json", path);
     long len = 0;
-    char *s = (char *)slurp(side, &len);
+    char *s = (char *)mf_test_read_file(side, &len);
     char *p = s ? strstr(s, "\"atlas\": \"tiles_x=3") : NULL;
     CHECK(p != NULL);
     if (p) {
@@ -354,7 +296,7 @@ static void test_c_header(void)
     char path[512], src[512], cmd[4096], msg[512];
     path_in_dir(path, sizeof path, "lut4.h");
     CHECK(mf_table_write(path, &t, NULL, NULL, msg, sizeof msg) == MF_OK);
-    if (!have_tool("cc") || !have_tool("c++")) {
+    if (!mf_test_have_tool("cc") || !mf_test_have_tool("c++")) {
         fprintf(stderr, "cc and c++ are needed to compile the header\n");
         CHECK(0);
         mf_table_free(&t);
@@ -447,7 +389,7 @@ static void make_shader_table(mf_table *t, int naxes)
 
 static void test_shader_compiles(void)
 {
-    if (!have_tool("glslangValidator")) {
+    if (!mf_test_have_tool("glslangValidator")) {
         fprintf(stderr, "glslangValidator is needed (Debian: glslang-tools)\n");
         CHECK(0);
         return;
@@ -464,7 +406,7 @@ static void test_shader_compiles(void)
             path_in_dir(path, sizeof path, name);
             CHECK(mf_table_write(path, &t, NULL, NULL, msg, sizeof msg) == MF_OK);
             long len = 0;
-            char *snip = (char *)slurp(path, &len);
+            char *snip = (char *)mf_test_read_file(path, &len);
             if (!snip) {
                 CHECK(0);
                 continue;
@@ -502,7 +444,7 @@ static void test_shader_compiles(void)
  * GPU evaluates it, and in double), against mf_table_atlas_lookup at random parameters. */
 static void test_shader_twin(void)
 {
-    if (!have_tool("c++")) {
+    if (!mf_test_have_tool("c++")) {
         fprintf(stderr, "c++ is needed for the shader twin test\n");
         CHECK(0);
         return;
@@ -619,23 +561,6 @@ static void test_shader_twin(void)
     }
 }
 
-static void cleanup(void)
-{
-    DIR *d = opendir(dir);
-    if (!d)
-        return;
-    struct dirent *e;
-    char path[1024];
-    while ((e = readdir(d)) != NULL) {
-        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0)
-            continue;
-        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-        remove(path);
-    }
-    closedir(d);
-    CHECK(rmdir(dir) == 0);
-}
-
 int main(void)
 {
     mf_image_set_backend(mf_image_oiio_backend()); /* EXR files */
@@ -650,7 +575,7 @@ int main(void)
     test_shader_compiles();
     test_shader_twin();
     if (mf_test_failures == 0)
-        cleanup();
+        CHECK(mf_test_remove_dir(dir) == 0);
     else
         fprintf(stderr, "files kept in %s\n", dir);
     MF_TEST_MAIN_END();

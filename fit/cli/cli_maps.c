@@ -68,18 +68,11 @@ static const cli_command k_maps_cmd = {
     .epilog = "exit status: 0 success, 2 usage or input error, 3 I/O error\n",
 };
 
-static void usage(FILE *f) { cli_opt_usage(&k_maps_cmd, f); }
-
 #ifndef MFKIT_CLI_HAVE_IMAGE
 
 int cli_maps(int argc, char **argv)
 {
-    for (int i = 1; i < argc; ++i)
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-            usage(stdout);
-            return 0;
-        }
-    return cli_error(k_cmd, "needs the OpenImageIO build (configured with MFKIT_WITH_OIIO=OFF)");
+    return cli_opt_unavailable(&k_maps_cmd, k_cmd, "OpenImageIO", "MFKIT_WITH_OIIO", argc, argv);
 }
 
 #else
@@ -91,6 +84,8 @@ int cli_maps(int argc, char **argv)
 #include <errno.h>
 #include <sys/stat.h>
 #include <unistd.h>
+
+static void usage(FILE *f) { cli_opt_usage(&k_maps_cmd, f); }
 
 typedef enum { MODE_LEAN, MODE_LEADR, MODE_BUMP, MODE_TOKSVIG } maps_mode;
 

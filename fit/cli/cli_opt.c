@@ -310,3 +310,14 @@ void cli_opt_usage(const cli_command *cmd, FILE *f)
         fputs(cmd->epilog, f);
     }
 }
+
+int cli_opt_unavailable(const cli_command *cmd, const char *context, const char *what, const char *option, int argc,
+                        char **argv)
+{
+    for (int i = 1; i < argc; ++i)
+        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+            cli_opt_usage(cmd, stdout);
+            return 0;
+        }
+    return cli_error(context, "needs the %s build (configured with %s=OFF)", what, option);
+}

@@ -80,6 +80,12 @@ int cli_opt_parse(const cli_command *cmd, int argc, char **argv, unsigned allowe
  * with each option's help and default, and the epilog. */
 void cli_opt_usage(const cli_command *cmd, FILE *f);
 
+/* The command cmd where this build lacks what it needs: "--help" or "-h" among argv[1..argc) prints
+ * the usage and returns 0; otherwise one line "mfkit CONTEXT: needs the WHAT build (configured
+ * with OPTION=OFF)" and the usage exit status 2. */
+int cli_opt_unavailable(const cli_command *cmd, const char *context, const char *what, const char *option, int argc,
+                        char **argv);
+
 /* Index of the option named `name` in cmd (or -1): for commands whose code reads vals by name. */
 int cli_opt_index(const cli_command *cmd, const char *name);
 

@@ -44,18 +44,11 @@ static const cli_command k_sh_cmd = {
     .epilog = "exit status: 0 success, 2 usage or input error, 3 I/O error\n",
 };
 
-static void usage(FILE *f) { cli_opt_usage(&k_sh_cmd, f); }
-
 #ifndef MFKIT_CLI_HAVE_IMAGE
 
 int cli_sh(int argc, char **argv)
 {
-    for (int i = 1; i < argc; ++i)
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-            usage(stdout);
-            return 0;
-        }
-    return cli_error(k_cmd, "needs the OpenImageIO build (configured with MFKIT_WITH_OIIO=OFF)");
+    return cli_opt_unavailable(&k_sh_cmd, k_cmd, "OpenImageIO", "MFKIT_WITH_OIIO", argc, argv);
 }
 
 #else
@@ -65,6 +58,8 @@ int cli_sh(int argc, char **argv)
 
 #include <errno.h>
 #include <stdlib.h>
+
+static void usage(FILE *f) { cli_opt_usage(&k_sh_cmd, f); }
 
 static const char *const k_names[MF_SH_COEFFS] = {"L00", "L1m1", "L10", "L11", "L2m2", "L2m1", "L20", "L21", "L22"};
 

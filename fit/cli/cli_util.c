@@ -210,18 +210,20 @@ static int build_index(cli_csv *csv)
     return 0;
 }
 
-/* "line N: ..." (name NULL) or "name:N: ..." into msg. */
+/* "line N: ..." (name NULL) or "name:N: ..." into msg, on one line (mf_io_msg). */
 #if defined(__GNUC__)
 __attribute__((format(printf, 5, 6)))
 #endif
 static void csv_msg(char *msg, size_t msg_size, const char *name, long line, const char *fmt, ...)
 {
-    int n = name ? snprintf(msg, msg_size, "%s:%ld: ", name, line) : snprintf(msg, msg_size, "line %ld: ", line);
-    if (n < 0 || (size_t)n >= msg_size)
-        return;
+    char where[4096 + 32]; /* a path and a line number */
+    if (name)
+        snprintf(where, sizeof where, "%s:%ld", name, line);
+    else
+        snprintf(where, sizeof where, "line %ld", line);
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(msg + n, msg_size - (size_t)n, fmt, ap);
+    mf_io_vmsg(msg, msg_size, where, fmt, ap);
     va_end(ap);
 }
 

@@ -334,24 +334,26 @@ const mf_check_def mf_energy_kulla_conty_checks[] = {
 };
 const int mf_energy_kulla_conty_nchecks = 2;
 
-mf_status mf_energy_dfg_gate(const mf_table *t, double storage_u, mf_check *checks, int cap, int *count)
+/* Runs the n checks defs of an energy table of the given kind. */
+static mf_status run_gate(const mf_table *t, const char *kind, const mf_check_def *defs, int n, double storage_u,
+                          mf_check *checks, int cap, int *count)
 {
     if (count)
         *count = 0;
     gate_ctx g;
-    if (gate_setup(t, "dfg", &g) != 0)
+    if (gate_setup(t, kind, &g) != 0)
         return MF_ERR_DOMAIN;
     g.u = storage_u > 0.0 ? storage_u : 0.0;
-    return mf_check_run_defs(mf_energy_dfg_checks, mf_energy_dfg_nchecks, &g, 0, checks, cap, count);
+    return mf_check_run_defs(defs, n, &g, 0, checks, cap, count);
+}
+
+mf_status mf_energy_dfg_gate(const mf_table *t, double storage_u, mf_check *checks, int cap, int *count)
+{
+    return run_gate(t, "dfg", mf_energy_dfg_checks, mf_energy_dfg_nchecks, storage_u, checks, cap, count);
 }
 
 mf_status mf_energy_kulla_conty_gate(const mf_table *t, double storage_u, mf_check *checks, int cap, int *count)
 {
-    if (count)
-        *count = 0;
-    gate_ctx g;
-    if (gate_setup(t, "kulla_conty", &g) != 0)
-        return MF_ERR_DOMAIN;
-    g.u = storage_u > 0.0 ? storage_u : 0.0;
-    return mf_check_run_defs(mf_energy_kulla_conty_checks, mf_energy_kulla_conty_nchecks, &g, 0, checks, cap, count);
+    return run_gate(t, "kulla_conty", mf_energy_kulla_conty_checks, mf_energy_kulla_conty_nchecks, storage_u, checks,
+                    cap, count);
 }

@@ -139,17 +139,24 @@ static void cholesky(const mf_gaussian_slopes *g, double *l00, double *l10, doub
     }
 }
 
+/* Node (j, k) of the grid warped to the slopes of g, whose Cholesky factor is l[3] = (l00, l10,
+ * l11) [Dupuy 2013, Sec. 5.1]; returns the node's weight. */
+static double warp_node(const mf_leadr_grid *grid, const mf_gaussian_slopes *g, const double l[3], int j, int k,
+                        double slope[2])
+{
+    slope[0] = l[0] * grid->p[j] + g->mean_x;
+    slope[1] = l[1] * grid->p[j] + l[2] * grid->p[k] + g->mean_y;
+    return grid->w[j] * grid->w[k];
+}
+
 double mf_leadr_grid_warp(const mf_leadr_grid *grid, const mf_gaussian_slopes *g, int j, int k, double slope[2])
 {
     slope[0] = slope[1] = NAN;
     if (!grid_valid(grid) || !mf_gaussian_valid(g) || j < 0 || k < 0 || j >= grid->n || k >= grid->n)
         return NAN;
-    double l00, l10, l11;
-    cholesky(g, &l00, &l10, &l11);
-    /* [Dupuy 2013, Sec. 5.1] */
-    slope[0] = l00 * grid->p[j] + g->mean_x;
-    slope[1] = l10 * grid->p[j] + l11 * grid->p[k] + g->mean_y;
-    return grid->w[j] * grid->w[k];
+    double l[3];
+    cholesky(g, &l[0], &l[1], &l[2]);
+    return warp_node(grid, g, l, j, k, slope);
 }
 
 double mf_leadr_grid_sample_area(const mf_leadr_grid *grid, const mf_gaussian_slopes *g)
@@ -162,18 +169,24 @@ double mf_leadr_grid_sample_area(const mf_leadr_grid *grid, const mf_gaussian_sl
 
 /* ---- shading -------------------------------------------------------------------------- */
 
-/* The shared set-up: validity, the prefactor (n_bar.g)/(n_bar.wo) and Lambda(wo).
- * Returns 0 for invalid input, 1 to shade, 2 for a view on or below the mesosurface (I = 0). */
-static int shading_setup(const mf_leadr_grid *grid, const mf_gaussian_slopes *g, mf_vec3 wo, double *prefactor,
-                         double *lo)
+/* The shared set-up: validity (usable: the caller's own arguments are valid), *out = NaN, the
+ * prefactor (n_bar.g)/(n_bar.wo) and Lambda(wo).  Returns 0 for invalid input, 1 to shade, 2 for a
+ * view on or below the mesosurface (*out = 0). */
+static int shading_setup(int usable, const mf_leadr_grid *grid, const mf_gaussian_slopes *g, mf_vec3 wo,
+                         double *prefactor, double *lo, double *out)
 {
-    if (!grid_valid(grid) || !mf_gaussian_valid(g) || !is_unit(wo))
+    if (!out)
+        return 0;
+    *out = NAN;
+    if (!usable || !grid_valid(grid) || !mf_gaussian_valid(g) || !is_unit(wo))
         return 0;
     mf_vec3 n = mf_gaussian_mesonormal(g);
     double n_wo = mf_vec3_dot(n, wo);
     *lo = lambda_view(g, wo);
-    if (!(n_wo > 0.0) || isinf(*lo))
+    if (!(n_wo > 0.0) || isinf(*lo)) {
+        *out = 0.0;
         return 2;
+    }
     *prefactor = n.z / n_wo; /* [Dupuy 2013, Eq. 16, 19, 21]: n_bar.g / n_bar.wo */
     return 1;
 }
@@ -181,27 +194,18 @@ static int shading_setup(const mf_leadr_grid *grid, const mf_gaussian_slopes *g,
 mf_status mf_leadr_specular_env(const mf_leadr_grid *grid, const mf_gaussian_slopes *g, mf_fresnel fresnel,
                                 mf_vec3 wo, mf_leadr_env_fn env, void *user, double *out)
 {
-    if (!out)
-        return MF_ERR_DOMAIN;
-    *out = NAN;
     double pref = 0.0, lo = 0.0;
-    int s = env && !isnan(mf_fresnel_eval(fresnel, 1.0)) ? shading_setup(grid, g, wo, &pref, &lo) : 0;
-    if (s == 0)
-        return MF_ERR_DOMAIN;
-    if (s == 2) {
-        *out = 0.0;
-        return MF_OK;
-    }
+    int s = shading_setup(env && !isnan(mf_fresnel_eval(fresnel, 1.0)), grid, g, wo, &pref, &lo, out);
+    if (s != 1)
+        return s == 2 ? MF_OK : MF_ERR_DOMAIN;
     const double area = mf_leadr_grid_sample_area(grid, g);
-    double l00, l10, l11;
-    cholesky(g, &l00, &l10, &l11);
+    double l[3], slope[2];
+    cholesky(g, &l[0], &l[1], &l[2]);
     double sum = 0.0;
     for (int j = 0; j < grid->n; ++j)
         for (int k = 0; k < grid->n; ++k) {
-            /* the warp of mf_leadr_grid_warp [Dupuy 2013, Sec. 5.1] */
-            double w = grid->w[j] * grid->w[k];
-            mf_vec3 wn = mf_normal_from_slope(l00 * grid->p[j] + g->mean_x,
-                                              l10 * grid->p[j] + l11 * grid->p[k] + g->mean_y);
+            double w = warp_node(grid, g, l, j, k, slope);
+            mf_vec3 wn = mf_normal_from_slope(slope[0], slope[1]);
             double cos_no = mf_vec3_dot(wn, wo);
             if (!(cos_no > 0.0)) /* <wn, wo> = 0: a back-facing micro-normal */
                 continue;
@@ -226,25 +230,17 @@ mf_status mf_leadr_specular_env(const mf_leadr_grid *grid, const mf_gaussian_slo
 mf_status mf_leadr_diffuse(const mf_leadr_grid *grid, const mf_gaussian_slopes *g, mf_vec3 wo,
                            mf_leadr_irradiance_fn irradiance, void *user, double *out)
 {
-    if (!out)
-        return MF_ERR_DOMAIN;
-    *out = NAN;
     double pref = 0.0, lo = 0.0;
-    int s = irradiance ? shading_setup(grid, g, wo, &pref, &lo) : 0;
-    if (s == 0)
-        return MF_ERR_DOMAIN;
-    if (s == 2) {
-        *out = 0.0;
-        return MF_OK;
-    }
-    double l00, l10, l11;
-    cholesky(g, &l00, &l10, &l11);
+    int s = shading_setup(irradiance != 0, grid, g, wo, &pref, &lo, out);
+    if (s != 1)
+        return s == 2 ? MF_OK : MF_ERR_DOMAIN;
+    double l[3], slope[2];
+    cholesky(g, &l[0], &l[1], &l[2]);
     double sum = 0.0;
     for (int j = 0; j < grid->n; ++j)
         for (int k = 0; k < grid->n; ++k) {
-            double w = grid->w[j] * grid->w[k];
-            mf_vec3 wn = mf_normal_from_slope(l00 * grid->p[j] + g->mean_x,
-                                              l10 * grid->p[j] + l11 * grid->p[k] + g->mean_y);
+            double w = warp_node(grid, g, l, j, k, slope);
+            mf_vec3 wn = mf_normal_from_slope(slope[0], slope[1]);
             double cos_no = mf_vec3_dot(wn, wo);
             if (!(cos_no > 0.0))
                 continue;

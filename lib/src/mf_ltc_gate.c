@@ -655,7 +655,7 @@ static int polygon_pass(gate_ctx *g)
             mf_ltc ltc;
             int ok = unpack_at(t, &g->L, ir, iu, &ltc) && isfinite(mag);
             mf_ltc_gate_random_polygons(model, alpha, wo, g->o.seed, stream_id(STREAM_POLY, texel), npoly, polys);
-            mf_result alb, q;
+            mf_result alb = {0}, q; /* alb is read (and ignored) by record_entry when !ok */
             if (mf_ltc_gate_polygon_mc(model, alpha, wo, polys, npoly, nsamples, g->o.seed, stream_id(STREAM_MC, texel), mc,
                                        se, &alb) != MF_OK)
                 ok = 0;
@@ -700,21 +700,33 @@ static int polygon_pass(gate_ctx *g)
     return 1;
 }
 
+/* Records v for the MC entry e, or +inf if its texel or the model was unusable (v is not used). */
+static void record_entry(mf_check *c, const gate_entry *e, double v, const char *what)
+{
+    if (!e->ok)
+        record_texel(c, INFINITY, "unusable entry or model", e->ir, e->iu, e->alpha, e->ct);
+    else
+        record_texel(c, v, what, e->ir, e->iu, e->alpha, e->ct);
+}
+
+/* Runs the polygon pass for the check c (once per gate); 0 (c failed: out of memory) if it could not. */
+static int need_polygon_pass(gate_ctx *g, mf_check *c)
+{
+    if (polygon_pass(g))
+        return 1;
+    out_of_memory(g, c);
+    return 0;
+}
+
 static void check_albedo_mc(void *ctx, mf_check *c)
 {
     gate_ctx *g = ctx;
-    if (!polygon_pass(g)) {
-        out_of_memory(g, c);
+    if (!need_polygon_pass(g, c))
         return;
-    }
     for (long k = 0; k < g->nent; ++k) {
         const gate_entry *e = &g->ent[k];
-        if (!e->ok)
-            record_texel(c, INFINITY, "unusable entry or model", e->ir, e->iu, e->alpha, e->ct);
-        else
-            record_texel(c, fabs(e->mag - e->alb.val) / (GATE_Z * e->alb.err + 1e-3 * fabs(e->mag)),
-                         e->mag > e->alb.val ? "magnitude above MC" : "magnitude below MC", e->ir, e->iu, e->alpha,
-                         e->ct);
+        record_entry(c, e, fabs(e->mag - e->alb.val) / (GATE_Z * e->alb.err + 1e-3 * fabs(e->mag)),
+                     e->mag > e->alb.val ? "magnitude above MC" : "magnitude below MC");
     }
 }
 
@@ -724,10 +736,8 @@ static void check_polygon_mean(void *ctx, mf_check *c)
     snprintf(c->what, sizeof c->what, "mean over polygons of max(0, |LTC - MC| - 5.5 se) / albedo (budget %g)",
              g->budget_mean);
     c->bound = g->budget_mean;
-    if (!polygon_pass(g)) {
-        out_of_memory(g, c);
+    if (!need_polygon_pass(g, c))
         return;
-    }
     /* one aggregate value: the mean excess over all polygons (+inf for an unusable texel) */
     long np = g->np;
     mf_check_recordf(c, np > 0 ? g->sum_excess / (double)np : INFINITY,
@@ -743,17 +753,10 @@ static void check_polygon_entry(void *ctx, mf_check *c)
     snprintf(c->what, sizeof c->what, "worst texel's mean of max(0, |LTC - MC| - 5.5 se) / albedo (budget %g)",
              g->budget_entry);
     c->bound = g->budget_entry;
-    if (!polygon_pass(g)) {
-        out_of_memory(g, c);
+    if (!need_polygon_pass(g, c))
         return;
-    }
-    for (long k = 0; k < g->nent; ++k) {
-        const gate_entry *e = &g->ent[k];
-        if (!e->ok)
-            record_texel(c, INFINITY, "unusable entry or model", e->ir, e->iu, e->alpha, e->ct);
-        else
-            record_texel(c, e->excess / g->npoly, "mean polygon excess", e->ir, e->iu, e->alpha, e->ct);
-    }
+    for (long k = 0; k < g->nent; ++k)
+        record_entry(c, &g->ent[k], g->ent[k].excess / g->npoly, "mean polygon excess");
 }
 
 /* The gate: name, what it measures, bound, needs a model, function (bounds and reasons in

@@ -40,11 +40,9 @@ static double charlie_lambda(double r, double cos_t)
 static double charlie_eval_cos(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, mf_vec3 wi)
 {
     (void)m;
-    double alpha = p->alpha_x; /* isotropic: alpha_y is not read */
-    if (isnan(wo.z) || isnan(wi.z) || !(alpha > 0.0))
-        return NAN;
-    if (!(wo.z > 0.0) || !(wi.z > 0.0))
-        return 0.0;
+    double alpha, value;
+    if (!mf_model_iso_domain(p, wo, wi, &alpha, &value))
+        return value;
     double r = fmin(alpha, 1.0);
     mf_vec3 h = mf_vec3_add(wo, wi);
     double h_len_sq = mf_vec3_dot(h, h);

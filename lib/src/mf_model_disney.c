@@ -23,11 +23,9 @@ static double pow5(double x)
 static double disney_eval_cos(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, mf_vec3 wi)
 {
     (void)m;
-    double alpha = p->alpha_x; /* isotropic: alpha_y is not read */
-    if (isnan(wo.z) || isnan(wi.z) || !(alpha > 0.0))
-        return NAN;
-    if (!(wo.z > 0.0) || !(wi.z > 0.0))
-        return 0.0;
+    double alpha, value;
+    if (!mf_model_iso_domain(p, wo, wi, &alpha, &value))
+        return value;
     double rough = sqrt(alpha);
     /* cos^2 theta_d = (wi.wh)^2 = (1 + wo.wi) / 2 (half-angle identity, no normalisation needed) */
     double cos_d_sq = 0.5 * (1.0 + mf_vec3_dot(wo, wi));

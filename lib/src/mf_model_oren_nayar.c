@@ -37,11 +37,9 @@ static const double gl8_w[8] = {0.1012285362903763, 0.2223810344533745, 0.313706
 static double on_eval_cos(const mf_brdf_model *m, const mf_brdf_params *prm, mf_vec3 wo, mf_vec3 wi)
 {
     (void)m;
-    double alpha = prm->alpha_x; /* isotropic: alpha_y is not read */
-    if (isnan(wo.z) || isnan(wi.z) || !(alpha > 0.0))
-        return NAN;
-    if (!(wo.z > 0.0) || !(wi.z > 0.0))
-        return 0.0;
+    double alpha, value;
+    if (!mf_model_iso_domain(prm, wo, wi, &alpha, &value))
+        return value;
     double node[ON_N], weight[ON_N];
     for (int p = 0; p < ON_PANELS; ++p)
         for (int k = 0; k < 8; ++k) {

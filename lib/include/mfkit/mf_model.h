@@ -59,6 +59,23 @@ static inline mf_brdf_params mf_brdf_params_iso(double alpha)
     return p;
 }
 
+/* The domain rule of an isotropic model's eval_cos (used by its first lines): returns 1 to evaluate,
+ * with *alpha = p->alpha_x; else 0 with *value the result, NaN for a NaN wo.z or wi.z or an alpha
+ * that is not > 0, and 0 for wo or wi on or below the horizon. */
+static inline int mf_model_iso_domain(const mf_brdf_params *p, mf_vec3 wo, mf_vec3 wi, double *alpha, double *value)
+{
+    *alpha = p->alpha_x; /* isotropic: alpha_y is not read */
+    if (isnan(wo.z) || isnan(wi.z) || !(*alpha > 0.0)) {
+        *value = NAN;
+        return 0;
+    }
+    if (!(wo.z > 0.0) || !(wi.z > 0.0)) {
+        *value = 0.0;
+        return 0;
+    }
+    return 1;
+}
+
 /* Claims of a model (mf_brdf_model.flags), each checked by tests/test_models.c. */
 enum {
     MF_MODEL_ANISOTROPIC = 1 << 0,       /* reads alpha_y too (else alpha_x only) */

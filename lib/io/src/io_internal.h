@@ -138,6 +138,14 @@ mf_status io_read_sidecar(const char *path, cJSON **root, char *msg, size_t msg_
 
 /* Appends text with every line prefixed by `lead` ("*" "/" pairs broken apart in block comments). */
 void io_put_commented(mf_buf *b, const char *text, const char *lead, int block_comment);
+/* prefix in upper case into up (up_size >= the prefix's length + 1; prefixes are < 64). */
+void io_upper_prefix(char *up, size_t up_size, const char *prefix);
+/* One comment line per axis: "<lead>axis k: name, n texels, name in [lo, hi]; mapping", lo and hi
+ * with `digits` significant digits. */
+void io_put_axes_comment(mf_buf *b, const mf_table *t, const char *lead, int digits);
+/* The table's metadata (io_header_text) as comment lines after `lead`; b->failed if it cannot be
+ * built. */
+void io_put_metadata_comment(mf_buf *b, const mf_table *t, const char *lead, int block_comment);
 /* The "tool" metadata if it is a short printable mfkit command, else "mfkit". */
 const char *io_generator(const mf_table *t);
 /* %.9g with a '.' or an exponent, then the suffix ("f" for C). */

@@ -24,6 +24,37 @@ void io_put_commented(mf_buf *b, const char *text, const char *lead, int block_c
     mf_buf_puts(b, "\n");
 }
 
+void io_upper_prefix(char *up, size_t up_size, const char *prefix)
+{
+    size_t i = 0;
+    for (; prefix[i] && i + 1 < up_size; ++i)
+        up[i] = (char)toupper((unsigned char)prefix[i]);
+    up[i] = '\0';
+}
+
+void io_put_axes_comment(mf_buf *b, const mf_table *t, const char *lead, int digits)
+{
+    for (int k = 0; k < t->naxes; ++k) {
+        char desc[256];
+        mf_axis_describe(&t->axes[k], desc, sizeof desc);
+        mf_buf_printf(b, "%saxis %d: %s, %d texels, %s in [%.*g, %.*g]; %s\n", lead, k, t->axes[k].name,
+                      t->axes[k].size, t->axes[k].name, digits, t->axes[k].lo, digits, t->axes[k].hi, desc);
+    }
+}
+
+void io_put_metadata_comment(mf_buf *b, const mf_table *t, const char *lead, int block_comment)
+{
+    mf_buf h = {0};
+    io_header_extra x = {"float32", NULL, NULL, NULL};
+    io_header_text(&h, t, &x);
+    mf_buf_put(&h, "", 1);
+    if (h.failed)
+        b->failed = 1;
+    else
+        io_put_commented(b, h.data, lead, block_comment);
+    mf_buf_free(&h);
+}
+
 /* The program that made the table (its "tool" metadata, if it is a short printable mfkit command),
  * for the headers of generated source files. */
 const char *io_generator(const mf_table *t)

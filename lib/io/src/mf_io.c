@@ -113,20 +113,25 @@ void mf_buf_free(mf_buf *b)
 
 /* ---- messages ------------------------------------------------------------------------------ */
 
-void mf_io_msg(char *msg, size_t msg_size, const char *path, const char *fmt, ...)
+void mf_io_vmsg(char *msg, size_t msg_size, const char *path, const char *fmt, va_list ap)
 {
     if (!msg || msg_size == 0)
         return;
     int n = snprintf(msg, msg_size, "%s: ", path ? path : "(null)");
     if (n < 0 || (size_t)n >= msg_size)
         return;
-    va_list ap;
-    va_start(ap, fmt);
     vsnprintf(msg + n, msg_size - (size_t)n, fmt, ap);
-    va_end(ap);
     for (char *c = msg; *c; ++c)
         if (*c == '\n' || *c == '\r')
             *c = ' ';
+}
+
+void mf_io_msg(char *msg, size_t msg_size, const char *path, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    mf_io_vmsg(msg, msg_size, path, fmt, ap);
+    va_end(ap);
 }
 
 void mf_io_msg_clear(char *msg, size_t msg_size)

@@ -59,6 +59,8 @@ void mf_buf_free(mf_buf *b);
 __attribute__((format(printf, 4, 5)))
 #endif
 void mf_io_msg(char *msg, size_t msg_size, const char *path, const char *fmt, ...);
+/* The same with the arguments in ap. */
+void mf_io_vmsg(char *msg, size_t msg_size, const char *path, const char *fmt, va_list ap);
 /* Empties msg (if not NULL). */
 void mf_io_msg_clear(char *msg, size_t msg_size);
 
