@@ -86,6 +86,20 @@ static void report_json(cli_buf *b, const mf_check *c, int n, int all_passed)
     cli_buf_printf(b, "\n}\n");
 }
 
+/* Writes the JSON report to json_file (atomically) if given, then the JSON or the text report to
+ * stdout; frees both buffers.  rc is the status so far; returns the final exit status. */
+static int emit_report(const char *cmd, int rc, cli_buf *jb, cli_buf *tb, int json, const char *json_file)
+{
+    char msg[1024];
+    if (json_file && cli_buf_write_file_atomic(jb, json_file, msg, sizeof msg) != 0)
+        rc = CLI_EXIT_IO, cli_error(cmd, "--json-file %s", msg);
+    if (rc != CLI_EXIT_IO && cli_buf_write(json ? jb : tb, stdout) != 0)
+        rc = CLI_EXIT_IO, cli_error(cmd, "stdout: write failed");
+    cli_buf_free(jb);
+    cli_buf_free(tb);
+    return rc;
+}
+
 /* The gate of a table kind other than the LTC table's (model-free: GGX proxy, moment maps, ...). */
 static int validate_kind(const char *path, const mf_table *t, const mf_table_kind *kind, double storage_u,
                          const char *brdf, int quick, uint64_t seed, int json, const char *json_file, int quiet)
@@ -131,14 +145,7 @@ static int validate_kind(const char *path, const mf_table *t, const mf_table_kin
     cli_buf_checks_table(&tb, checks, n, all);
     free(checks);
     int rc = all ? CLI_EXIT_OK : CLI_EXIT_CHECK_FAILED;
-    char msg[1024];
-    if (json_file && cli_buf_write_file_atomic(&jb, json_file, msg, sizeof msg) != 0)
-        rc = CLI_EXIT_IO, cli_error(cmd, "--json-file %s", msg);
-    if (rc != CLI_EXIT_IO && cli_buf_write(json ? &jb : &tb, stdout) != 0)
-        rc = CLI_EXIT_IO, cli_error(cmd, "stdout: write failed");
-    cli_buf_free(&jb);
-    cli_buf_free(&tb);
-    return rc;
+    return emit_report(cmd, rc, &jb, &tb, json, json_file);
 }
 
 /* The gate of the table's kind on a table file: the LTC gate for LTC tables. */
@@ -269,13 +276,7 @@ static int validate_table(const char *path, const char *path2, const char *brdf,
                        stats.polygons, stats.entries, stats.mean_abs, stats.p95_abs, stats.worst_abs, stats.mean_rel,
                        stats.p95_rel, stats.worst_rel, stats.mean_se);
     int rc = all ? CLI_EXIT_OK : CLI_EXIT_CHECK_FAILED;
-    if (json_file && cli_buf_write_file_atomic(&jb, json_file, msg, sizeof msg) != 0)
-        rc = CLI_EXIT_IO, cli_error(cmd, "--json-file %s", msg);
-    if (rc != CLI_EXIT_IO && cli_buf_write(json ? &jb : &tb, stdout) != 0)
-        rc = CLI_EXIT_IO, cli_error(cmd, "stdout: write failed");
-    cli_buf_free(&jb);
-    cli_buf_free(&tb);
-    return rc;
+    return emit_report(cmd, rc, &jb, &tb, json, json_file);
 }
 
 int cli_validate(int argc, char **argv)
@@ -317,12 +318,5 @@ int cli_validate(int argc, char **argv)
     cli_buf_checks_table(&tb, checks, n, all);
     free(checks);
     int rc = all ? CLI_EXIT_OK : CLI_EXIT_CHECK_FAILED;
-    char msg[512];
-    if (json_file && cli_buf_write_file_atomic(&jb, json_file, msg, sizeof msg) != 0)
-        rc = CLI_EXIT_IO, cli_error(cmd, "--json-file %s", msg);
-    if (rc != CLI_EXIT_IO && cli_buf_write(json ? &jb : &tb, stdout) != 0)
-        rc = CLI_EXIT_IO, cli_error(cmd, "stdout: write failed");
-    cli_buf_free(&jb);
-    cli_buf_free(&tb);
-    return rc;
+    return emit_report(cmd, rc, &jb, &tb, json, json_file);
 }
