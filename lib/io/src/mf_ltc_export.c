@@ -24,8 +24,15 @@ int mf_ltc_table_is_dropin(const mf_table *t)
            r->lo == 0.0 && r->hi == 1.0 && u->lo == 0.0 && u->hi == 1.0;
 }
 
+/* The checks every engine writer starts with: arguments, and the drop-in layout the engine's shader
+ * hard-codes (msg cleared on success). */
 static mf_status need_dropin(const char *path, const mf_table *t, const char *engine, char *msg, size_t msg_size)
 {
+    mf_io_msg_clear(msg, msg_size);
+    if (!path || !t) {
+        mf_io_msg(msg, msg_size, path, "invalid argument (NULL path or table)");
+        return MF_ERR_DOMAIN;
+    }
     if (mf_ltc_table_is_dropin(t))
         return MF_OK;
     mf_io_msg(msg, msg_size, path, "%s's shader samples a 64 x 64 LTC table over r, u in [0, 1] (fields %s, ...); "
@@ -71,11 +78,6 @@ static void js_array(mf_buf *b, const mf_table *t, const char *name, int base, i
 
 mf_status mf_ltc_write_threejs(const char *path, const mf_table *t, char *msg, size_t msg_size)
 {
-    mf_io_msg_clear(msg, msg_size);
-    if (!path || !t) {
-        mf_io_msg(msg, msg_size, path, "invalid argument (NULL path or table)");
-        return MF_ERR_DOMAIN;
-    }
     mf_status st = need_dropin(path, t, "three.js", msg, msg_size);
     if (st != MF_OK)
         return st;
@@ -261,11 +263,6 @@ done:
 
 mf_status mf_ltc_write_eevee(const char *path, const mf_table *t, const char *brdf, char *msg, size_t msg_size)
 {
-    mf_io_msg_clear(msg, msg_size);
-    if (!path || !t) {
-        mf_io_msg(msg, msg_size, path, "invalid argument (NULL path or table)");
-        return MF_ERR_DOMAIN;
-    }
     mf_status st = need_dropin(path, t, "EEVEE", msg, msg_size);
     if (st != MF_OK)
         return st;
