@@ -10,7 +10,7 @@
  * mfkit file, the 6-digit decimals of the reference CSV) are the reference.
  *
  * Rounding.  Every value x becomes h = mf_half_to_double(mf_half_from_double(x)): the half nearest
- * to x, ties to even, exactly the conversion of mfkit's half-float writers (fit/src/mf_table_io.c,
+ * to x, ties to even, exactly the conversion of mfkit's half-float writers (lib/io/src/fmt_exr.c, fmt_dds.c,
  * public in mf_table_io.h).  Per texel and field: abs_err = |h - x| (inf on overflow), rel_err =
  * abs_err / |x| (nan for x = 0 or non-finite x).  In half's normal range (|x| >= 2^-14) rounding to
  * nearest gives rel_err <= 2^-11 = 4.88e-4 [IEEE 754-2008, Sec. 3.6: p = 11]; below it the spacing
