@@ -556,8 +556,12 @@ mf_status mf_ltc_aniso_gate_run(const mf_table *t, const mf_brdf_model *model, c
         g.o.polygons_per_entry = 24;
     if (g.o.mc_samples < 2)
         g.o.mc_samples = 32768;
-    mf_status st = mf_check_run_defs(mf_ltc_aniso_gate_check_table, MF_LTC_ANISO_GATE_MAX_CHECKS, &g, model != NULL,
-                                     checks, cap, count);
+    mf_check_def defs[MF_LTC_ANISO_GATE_MAX_CHECKS];
+    memcpy(defs, mf_ltc_aniso_gate_check_table, sizeof defs);
+    for (int k = 0; k < MF_LTC_ANISO_GATE_MAX_CHECKS; ++k)
+        if (defs[k].run == chk_inverse && g.o.unit_roundoff > 0.0)
+            defs[k].bound += 3.0 * g.o.unit_roundoff; /* float storage of minv and m (the header) */
+    mf_status st = mf_check_run_defs(defs, MF_LTC_ANISO_GATE_MAX_CHECKS, &g, model != NULL, checks, cap, count);
     free(g.entries);
     free(g.albedo);
     return g.failed ? MF_ERR_ALLOC : st;

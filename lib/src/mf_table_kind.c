@@ -265,13 +265,16 @@ static mf_status kc_gate(const mf_table *t, const mf_brdf_model *model, const vo
 }
 
 /* Through the registry the options are a generic mf_table_storage_options (what `mfkit validate`
- * passes to every kind), so the anisotropic gate runs with its defaults here; callers that want
- * its own options call mf_ltc_aniso_gate_run. */
+ * passes to every kind): the anisotropic gate runs with its defaults and that storage rounding;
+ * callers that want its other options call mf_ltc_aniso_gate_run. */
 static mf_status ltca_gate(const mf_table *t, const mf_brdf_model *model, const void *options, mf_check *checks,
                            int cap, int *count)
 {
-    (void)options;
-    return mf_ltc_aniso_gate_run(t, model, NULL, checks, cap, count);
+    const mf_table_storage_options *so = options;
+    mf_ltc_aniso_gate_options o;
+    mf_ltc_aniso_gate_options_default(&o);
+    o.unit_roundoff = so ? so->unit_roundoff : 0.0;
+    return mf_ltc_aniso_gate_run(t, model, &o, checks, cap, count);
 }
 
 /* ---- the registry ---------------------------------------------------------------------------- */

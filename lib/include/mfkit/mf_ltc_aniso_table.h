@@ -107,6 +107,10 @@ typedef struct mf_ltc_aniso_gate_options {
     int mc_samples;         /* default 32768 */
     /* outputs (may be NULL): polygon error aggregates in units of the albedo */
     double *mean_abs_out, *mean_rel_out;
+    double unit_roundoff;   /* storage rounding of the table's values (mf_table_storage_roundoff: 2^-24
+                             * for a float32 file; default 0, a table in memory): ltca_inverse's bound
+                             * adds 3 u (each product term of minv m carries <= 2 u, and the sum is
+                             * bounded by |minv| |m| by Cauchy-Schwarz) */
 } mf_ltc_aniso_gate_options;
 
 #define MF_LTC_ANISO_GATE_MAX_CHECKS 9
