@@ -20,7 +20,9 @@
  * Views below a texel's horizon [Nahmias 2022, Sec. 3, "Sampling the base BRDF"]: the thesis
  * clamps the cosine of the view elevation in the texel frame to a small positive constant
  * ("since we cannot shade a texel if the view is underneath the microfacet"; its listing names
- * the constant ZEROZEROONE, read here as 0.01) and keeps the view's azimuth about n(q) (its
+ * the constant ZEROZEROONE; read here as 0.001: with 0.01 the last tabulated elevation,
+ * 0.999 pi/2 (cos = 0.00157), is clamped even on a flat map, and a constant map's grazing-row
+ * albedo came out 0.9765 instead of GGX's 0.9959) and keeps the view's azimuth about n(q) (its
  * second rotation R_1 aligns the tangent-plane projections of the texel-frame and the geometric
  * view).  mfkit does the same: wo_q = R_q^T wo, and where wo_q.z < MF_PREFILTER_COS_MIN, wo_q is
  * replaced by the direction of the same azimuth about n(q) with cosine MF_PREFILTER_COS_MIN (the
@@ -51,7 +53,7 @@
 extern "C" {
 #endif
 
-#define MF_PREFILTER_COS_MIN 0.01
+#define MF_PREFILTER_COS_MIN 0.001
 #define MF_PREFILTER_ALBEDO_N 128
 #define MF_PREFILTER_THETA_MAX (0.999 * 0.5 * MF_PI)
 
