@@ -12,5 +12,6 @@ int cli_fit(int argc, char **argv);      /* argv[0] = "fit"; usage and --list on
 int cli_fit_aniso(int argc, char **argv); /* argv[0] = "fit", argv[1] = "ltc-aniso" (cli_fit dispatches) */
 int cli_maps(int argc, char **argv);     /* argv[0] = "maps"; an error without OpenImageIO */
 int cli_sh(int argc, char **argv);       /* argv[0] = "sh"; an error without OpenImageIO */
+int cli_prefilter(int argc, char **argv); /* argv[0] = "prefilter"; needs Ceres and OpenImageIO */
 
 #endif /* MF_CLI_H */

@@ -80,6 +80,12 @@ static unsigned needs_image(int argc, char **argv)
     return has_arg(argc, argv, "--help", "-h") ? CLI_NEEDS_CORE : CLI_NEEDS_IMAGE;
 }
 
+/* prefilter: images and the solver, except --help */
+static unsigned needs_image_solver(int argc, char **argv)
+{
+    return has_arg(argc, argv, "--help", "-h") ? CLI_NEEDS_CORE : CLI_NEEDS_IMAGE | CLI_NEEDS_SOLVER;
+}
+
 /* energy: its tables are plain C, and it writes EXR too where the build has the image backend */
 static unsigned needs_image_if_built(int argc, char **argv)
 {
@@ -110,6 +116,9 @@ static const cli_entry k_commands[] = {
      "                  (needs the OpenImageIO build)"},
     {"sh", cli_sh, needs_image,
      "sh project ENV  order-2 SH coefficients of a lat-long environment as JSON (OpenImageIO build)"},
+    {"prefilter", cli_prefilter, needs_image_solver,
+     "prefilter NORMALMAP --out DIR\n"
+     "                  LTC lobes of a normal map's footprints per MIP level and view (Ceres + OpenImageIO)"},
 };
 #define N_COMMANDS ((int)(sizeof k_commands / sizeof k_commands[0]))
 

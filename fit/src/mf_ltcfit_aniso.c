@@ -228,7 +228,7 @@ static int make_lights_shaped(mf_vec3 m, mf_vec3 t1, mf_vec3 t2, const double lw
 /* Samples, magnitude, lobe statistics, lights and their targets of one entry (the isotropic
  * fitter's texel_prepare with the model's anisotropic sampler and a 3-D lobe frame). */
 static mf_status atexel_prepare(const mf_brdf_model *m, mf_brdf_params prm, double theta, double phi, int sym,
-                                const uint32_t scr[2], workspace *ws, atexel *t)
+                                const double *given_mag, const uint32_t scr[2], workspace *ws, atexel *t)
 {
     double cp, sp;
     cos_sin_phi(phi, sym, &cp, &sp);
@@ -236,13 +236,19 @@ static mf_status atexel_prepare(const mf_brdf_model *m, mf_brdf_params prm, doub
     mf_vec3 wo = mf_vec3_make(st * cp, st * sp, ct);
     t->sym = sym;
     ws->n = ct < GRAZING_COS ? GRAZING_FACTOR * ws->base : ws->base;
-    mf_result alb, fres;
-    mf_status status = mf_model_albedo_fresnel(m, &prm, wo, 8 * QUAD_PANELS, &alb, &fres);
-    if (status != MF_OK)
-        return status;
-    t->magnitude = alb.val;
-    t->magnitude_err = alb.err;
-    t->fresnel = fres.val;
+    if (given_mag) { /* the caller's albedo (value, error); no Fresnel moment */
+        t->magnitude = given_mag[0];
+        t->magnitude_err = given_mag[1];
+        t->fresnel = 0.0;
+    } else {
+        mf_result alb, fres;
+        mf_status status = mf_model_albedo_fresnel(m, &prm, wo, 8 * QUAD_PANELS, &alb, &fres);
+        if (status != MF_OK)
+            return status;
+        t->magnitude = alb.val;
+        t->magnitude_err = alb.err;
+        t->fresnel = fres.val;
+    }
     for (int j = 0; j < ws->n; ++j)
         mf_sobol2((uint32_t)j, scr[0], scr[1], ws->u + 2 * j);
     mf_model_sample_weights(m, &prm, wo, ws->n, ws->u, ws->dir, ws->pdf, ws->w);
@@ -618,14 +624,14 @@ static mf_mat3 polar_gauge(mf_mat3 m)
 }
 
 static mf_status fit_entry(const mf_brdf_model *model, mf_brdf_params prm, double theta, double phi, int sym,
-                           const double *lobe_start, const double *alt_start, const mf_ltcfit_aniso_options *o,
+                           const double *given_mag, const double *lobe_start, const double *alt_start, const mf_ltcfit_aniso_options *o,
                            const uint32_t scr[2], workspace *ws, mf_ltcfit_aniso_entry *out)
 {
     atexel *t = malloc(sizeof *t);
     if (!t)
         return MF_ERR_ALLOC;
     memset(out, 0, sizeof *out);
-    mf_status st = atexel_prepare(model, prm, theta, phi, sym, scr, ws, t);
+    mf_status st = atexel_prepare(model, prm, theta, phi, sym, given_mag, scr, ws, t);
     if (st != MF_OK) {
         free(t);
         return st;
@@ -739,7 +745,28 @@ mf_status mf_ltcfit_aniso_entry_fit(const mf_brdf_model *model, double alpha_x, 
     uint32_t scr[2];
     sobol_scramble(o->seed, scr);
     mf_brdf_params prm = {alpha_x, alpha_y};
-    mf_status st = fit_entry(model, prm, theta, phi, sym_of(theta, phi), lobe_start, NULL, o, scr, &ws, out);
+    mf_status st = fit_entry(model, prm, theta, phi, sym_of(theta, phi), NULL, lobe_start, NULL, o, scr, &ws, out);
+    ws_free(&ws);
+    return st;
+}
+
+mf_status mf_ltcfit_aniso_entry_fit_general(const mf_brdf_model *model, mf_brdf_params prm, double theta, double phi,
+                                            double magnitude, double magnitude_err, const double *lobe_start,
+                                            const mf_ltcfit_aniso_options *o, mf_ltcfit_aniso_entry *out)
+{
+    if (!model || !model->eval_cos || !check_options(o) || !(prm.alpha_x > 0.0) || !(prm.alpha_y > 0.0) ||
+        !(theta >= 0.0 && theta < 0.5 * MF_PI) || !(phi >= 0.0 && phi < 2.0 * MF_PI) || !out ||
+        !(magnitude >= 0.0 && magnitude < INFINITY) || !(magnitude_err >= 0.0))
+        return MF_ERR_DOMAIN;
+    workspace ws;
+    if (!ws_init(&ws, o->samples)) {
+        ws_free(&ws);
+        return MF_ERR_ALLOC;
+    }
+    uint32_t scr[2];
+    sobol_scramble(o->seed, scr);
+    double mag[2] = {magnitude, magnitude_err};
+    mf_status st = fit_entry(model, prm, theta, phi, 0, mag, lobe_start, NULL, o, scr, &ws, out);
     ws_free(&ws);
     return st;
 }
@@ -850,7 +877,7 @@ static mf_status fit_pair(ajob *j, workspace *ws, int i0, int i1, const int nb[2
         prm.alpha_y = (1.0 - ANCHOR_T) * ay + ANCHOR_T * by;
     }
 #define NB_LOBE(k, l) (nb ? j->entries[entry_index(n, nb[0], nb[1], (k), (l))].lobe : NULL)
-    mf_status st = fit_entry(j->model, prm, 0.0, 0.0, SYM_X | SYM_Y, NULL, NB_LOBE(0, 0), j->o, j->scr, ws, &buf[0]);
+    mf_status st = fit_entry(j->model, prm, 0.0, 0.0, SYM_X | SYM_Y, NULL, NULL, NB_LOBE(0, 0), j->o, j->scr, ws, &buf[0]);
     if (st != MF_OK)
         return st;
     for (int l = 1; l < n[3]; ++l)
@@ -864,7 +891,7 @@ static mf_status fit_pair(ajob *j, workspace *ws, int i0, int i1, const int nb[2
             idx[3] = l;
             mf_ltc_aniso_entry_values(t, idx, &ax, &ay, &th, &ph);
             int sym = l == 0 ? SYM_Y : (l == n[3] - 1 ? SYM_X : 0);
-            st = fit_entry(j->model, prm, th, ph, sym, buf[(size_t)n[2] * l + k - 1].lobe, NB_LOBE(k, l), j->o,
+            st = fit_entry(j->model, prm, th, ph, sym, NULL, buf[(size_t)n[2] * l + k - 1].lobe, NB_LOBE(k, l), j->o,
                            j->scr, ws, &buf[(size_t)n[2] * l + k]);
             if (st != MF_OK)
                 return st;

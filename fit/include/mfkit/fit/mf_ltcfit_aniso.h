@@ -145,6 +145,16 @@ mf_status mf_ltcfit_aniso_entry_fit(const mf_brdf_model *model, double alpha_x, 
                                     double phi, const double *lobe_start, const mf_ltcfit_aniso_options *o,
                                     mf_ltcfit_aniso_entry *out) MF_WARN_UNUSED;
 
+/* The same for a model without the mirror symmetries (e.g. the effective BRDF of a normal-map
+ * footprint, mf_prefilter.h): no parameter is held at 0 at theta == 0, phi == 0 or pi/2, and the
+ * magnitude is the caller's albedo (value and error estimate, e.g. an exact mixture of albedos)
+ * instead of mf_model_albedo_fresnel (out->fresnel = 0: not computed).  The samples, lights,
+ * start, solver and stored gauge are those of mf_ltcfit_aniso_entry_fit.  p is passed to the
+ * model's eval_cos and sampler as is. */
+mf_status mf_ltcfit_aniso_entry_fit_general(const mf_brdf_model *model, mf_brdf_params p, double theta, double phi,
+                                            double magnitude, double magnitude_err, const double *lobe_start,
+                                            const mf_ltcfit_aniso_options *o, mf_ltcfit_aniso_entry *out) MF_WARN_UNUSED;
+
 /* Writes the published layout: a little-endian float32 .npy of shape (n0, n1, n2, n3, 3, 3),
  * C order (the LAST table axis fastest, unlike mf_table's storage), the forward M of each entry
  * divided by the norm of its last column.  Atomic.  MF_ERR_DOMAIN (not an anisotropic LTC

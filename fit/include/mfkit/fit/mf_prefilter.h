@@ -1,0 +1,124 @@
+/*
+ * mf_prefilter.h -- normal-map appearance prefiltering with LTCs [Nahmias 2022, Ch. 2.3 and 3]:
+ * for every MIP level >= 1, every texel of that level and every tabulated view, one anisotropic
+ * LTC (mf_ltcfit_aniso.h, 7-parameter lobe-frame chart) fitted to the effective BRDF of the
+ * texel's footprint.
+ *
+ * The effective BRDF [Nahmias 2022, Eq. 2.34-2.36]: the footprint F of a level-l texel is the
+ * 2^l x 2^l block of level-0 texels q under it (box MIP), gamma_F = (1/N) sum_q delta(n - n(q))
+ * (Eq. 2.34), and
+ *     f_eff(wo, wi) = (1/N) sum_q f(R_q^T wo, R_q^T wi)                       (Eq. 2.36)
+ * with R_q a rotation taking z to n(q) (the base BRDF, GGX, is isotropic, so the rotation about
+ * n(q) does not matter).  What is fitted (the model's eval_cos, per steradian of wi):
+ *     (1/N) sum_q f(wo_q, R_q^T wi) (R_q^T wi).z,     wi.z > 0 (the geometric hemisphere),
+ * i.e. each texel's lobe weighted by its own (texel-frame) cosine -- the footprint average of the
+ * per-texel shading a renderer would do at level 0 -- and 0 below the geometric horizon, where
+ * an LTC has no support.  It is evaluated deterministically over ALL texels of the footprint
+ * (a finite mixture; texels with bitwise equal normals are merged into one component with their
+ * count as weight, which is exact), never by random texel samples.
+ *
+ * Views below a texel's horizon [Nahmias 2022, Sec. 3, "Sampling the base BRDF"]: the thesis
+ * clamps the cosine of the view elevation in the texel frame to a small positive constant
+ * ("since we cannot shade a texel if the view is underneath the microfacet"; its listing names
+ * the constant ZEROZEROONE; read here as 0.001: with 0.01 the last tabulated elevation,
+ * 0.999 pi/2 (cos = 0.00157), is clamped even on a flat map, and a constant map's grazing-row
+ * albedo came out 0.9765 instead of GGX's 0.9959) and keeps the view's azimuth about n(q) (its
+ * second rotation R_1 aligns the tangent-plane projections of the texel-frame and the geometric
+ * view).  mfkit does the same: wo_q = R_q^T wo, and where wo_q.z < MF_PREFILTER_COS_MIN, wo_q is
+ * replaced by the direction of the same azimuth about n(q) with cosine MF_PREFILTER_COS_MIN (the
+ * azimuth x if wo = -n(q)).  Such a texel keeps its weight 1/N: its grazing lobe still counts.
+ *
+ * Frame: the view-azimuth-aligned frame.  For the tabulated view (theta, phi) in the tangent
+ * frame (x = +column, y = up the image, z = the geometric normal), the footprint's normals are
+ * rotated by -phi about z, so that the view is wo = (sin theta, 0, cos theta); the stored M is
+ * the forward LTC in that frame (a shader rotates the polygon by -phi about the normal, then
+ * applies M^-1), divided by the norm of its last column (mf_ltcfit_aniso.h).
+ *
+ * Magnitude: the effective BRDF's albedo, exactly the mixture of the texels' albedos
+ * (1/N) sum_q rho_q(wo), rho_q the integral over the geometric hemisphere of the texel's
+ * cosine-weighted lobe, each by mf_model_albedo (n = MF_PREFILTER_ALBEDO_N) of the one-texel
+ * mixture (the clip at the geometric horizon is a discontinuity of the integrand: its error is
+ * the stored error estimate |Q(n) - Q(n/2)|).
+ */
+#ifndef MF_PREFILTER_H
+#define MF_PREFILTER_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include <mfkit/mf_core.h>
+#include <mfkit/mf_model.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define MF_PREFILTER_COS_MIN 0.001
+#define MF_PREFILTER_ALBEDO_N 128
+#define MF_PREFILTER_THETA_MAX (0.999 * 0.5 * MF_PI)
+
+/* The effective BRDF of a footprint as an mf_brdf_model: `model` is the first member, so the
+ * fitters take &mix->model (its functions cast back).  eval_cos, sample (pick a texel by weight
+ * with u[0], rescaled to [0, 1) inside its interval, then the base sampler rotated to the texel;
+ * the returned density is the mixture's), pdf (the mixture of the texels' densities, 0 below the
+ * geometric horizon) and sample_weights (bit for bit the separate calls).  Not thread-safe to
+ * build; read-only (hence shareable) once built. */
+typedef struct mf_prefilter_mix {
+    mf_brdf_model model;
+    const mf_brdf_model *base;
+    int n;        /* components (distinct normals) */
+    double *rot;  /* 9 per component, row-major R_q (texel -> geometric frame; column 2 = n(q)) */
+    double *w;    /* weights, sum 1 */
+    double *cdf;  /* cumulative weights; cdf[n - 1] = 1 */
+} mf_prefilter_mix;
+
+/* Builds the mixture of `count` unit normals (xyz, n.z > 0), each of weight 1/count, bitwise
+ * equal normals merged (their order: the first occurrence).  base: an isotropic model with a
+ * sampler (e.g. "ggx").  MF_ERR_DOMAIN, MF_ERR_ALLOC. */
+mf_status mf_prefilter_mix_init(mf_prefilter_mix *m, const mf_brdf_model *base, const double *normals,
+                                int count) MF_WARN_UNUSED;
+void mf_prefilter_mix_free(mf_prefilter_mix *m);
+
+/* The albedo of the mixture at wo (wo.z > 0): sum_j w_j rho_j (see above), err the weighted sum
+ * of the components' error estimates. */
+mf_status mf_prefilter_mix_albedo(const mf_prefilter_mix *m, const mf_brdf_params *p, mf_vec3 wo,
+                                  mf_result *out) MF_WARN_UNUSED;
+
+typedef struct mf_prefilter_options {
+    double alpha;        /* base GGX roughness (default 0.1) */
+    int n_theta, n_phi;  /* views: theta_i = i / (n_theta - 1) MF_PREFILTER_THETA_MAX, phi_j = 2 pi j / n_phi
+                            (default 8 x 16; n_theta >= 2, n_phi >= 1, each <= 256) */
+    int threads;         /* 1..256 (default 1); the result does not depend on it */
+    int samples;         /* directions per fit (mf_ltcfit_aniso_options; default 4096) */
+    int max_iterations;  /* per fit (default 100) */
+    uint64_t seed;       /* default 1 */
+} mf_prefilter_options;
+
+void mf_prefilter_options_default(mf_prefilter_options *o);
+
+/* One level's lobes.  Index (row from the top, column, i_theta, i_phi) in C order. */
+typedef struct mf_prefilter_level {
+    int level, width, height, n_theta, n_phi;
+    float *m;          /* (h, w, n_theta, n_phi, 3, 3): forward M, row-major */
+    float *magnitude;  /* (h, w, n_theta, n_phi): the effective BRDF's albedo */
+    double worst_residual, worst_albedo_err;
+    int not_converged;
+    long iterations, lobes;
+} mf_prefilter_level;
+
+/* Fits every level >= 1 of a width x height map of unit normals (xyz per texel, rows from the
+ * top, n.z > 0; width and height powers of two, at least one > 1): *levels gets
+ * log2(max(width, height)) records (free with mf_prefilter_levels_free).  MF_ERR_DOMAIN with msg
+ * (bad options or map), MF_ERR_ALLOC, MF_ERR_INTERNAL. */
+mf_status mf_prefilter_run(const double *normals, int width, int height, const mf_prefilter_options *o,
+                           mf_prefilter_level **levels, int *nlevels, char *msg, size_t msg_size) MF_WARN_UNUSED;
+void mf_prefilter_levels_free(mf_prefilter_level *levels, int nlevels);
+
+/* The view of table index (i_theta, i_phi). */
+double mf_prefilter_theta(const mf_prefilter_options *o, int i);
+double mf_prefilter_phi(const mf_prefilter_options *o, int j);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* MF_PREFILTER_H */
