@@ -20,6 +20,7 @@
 #ifdef MFKIT_CLI_HAVE_SOLVER
 #include "mfkit/mf_ltc_aniso_table.h"
 #include "mfkit/fit/mf_ltcfit_aniso.h"
+#include "mfkit/io/mf_ltc_aniso_shader.h"
 #include "mfkit/io/mf_table_io.h"
 
 /* --size N or AxBxCxD, each 2..256: a packs the four sizes (8 bits - 1 each... stored in v->a as
@@ -84,7 +85,9 @@ static const cli_command k_cmd = {
     .nopts = A_NOPTS,
     .epilog = "files (in DIR, <p> = ltca_<brdf>): <p>.json, <p>.npy, <p>.exr (all fields; skipped with a note\n"
               "where this build cannot write 4-axis EXR), <p>_kt.npy (the published layout: forward M,\n"
-              "(n0, n1, n2, n3, 3, 3) float32, divided by the norm of its last column).\n\n"
+              "(n0, n1, n2, n3, 3, 3) float32, divided by the norm of its last column), <p>.glsl and <p>.hlsl\n"
+              "(the lookup snippet: any azimuth, all four axes interpolated, returns M^-1, M, magnitude and\n"
+              "fresnel) and its three textures <p>_m0.dds, <p>_m1.dds, <p>_m2.dds (RGBA32F atlases).\n\n"
               "exit status: 0 exported, 1 a gate check failed, 2 usage error, 3 I/O error, 4 fit failed\n",
 };
 
@@ -191,8 +194,36 @@ int cli_fit_aniso(int argc, char **argv)
             rc = CLI_EXIT_IO;
         }
     }
+    /* the lookup snippet and the three textures it samples */
+    for (int k = 0; k < 3 && rc == 0; ++k) {
+        snprintf(path, sizeof path, "%s/ltca_%s_m%d.dds", out, brdf, k);
+        mf_table_write_options wo;
+        mf_table_write_options_default(&wo);
+        memcpy(wo.dds_fields, mf_ltc_aniso_shader_fields[k], sizeof wo.dds_fields);
+        wo.dds_fields_set = 1;
+        mf_status ws = mf_table_write(path, &t, &wo, NULL, msg, sizeof msg);
+        if (ws != MF_OK) {
+            cli_error(cmd, "%s (%s)", msg[0] ? msg : path, mf_status_str(ws));
+            rc = CLI_EXIT_IO;
+        }
+    }
+    for (int hlsl = 0; hlsl <= 1 && rc == 0; ++hlsl) {
+        char prefix[80];
+        snprintf(prefix, sizeof prefix, "ltca_%s", brdf);
+        for (char *c = prefix; *c; ++c)
+            if (!((*c >= 'a' && *c <= 'z') || (*c >= 'A' && *c <= 'Z') || (*c >= '0' && *c <= '9')))
+                *c = '_';
+        snprintf(path, sizeof path, "%s/ltca_%s.%s", out, brdf, hlsl ? "hlsl" : "glsl");
+        mf_status ws =
+            mf_ltc_aniso_shader_write(path, &t, hlsl ? MF_SHADER_HLSL : MF_SHADER_GLSL, prefix, msg, sizeof msg);
+        if (ws != MF_OK) {
+            cli_error(cmd, "%s (%s)", msg[0] ? msg : path, mf_status_str(ws));
+            rc = CLI_EXIT_IO;
+        }
+    }
     if (rc == 0 && !quiet)
-        fprintf(stderr, "exported %s/ltca_%s.{json,npy,exr} and %s/ltca_%s_kt.npy\n", out, brdf, out, brdf);
+        fprintf(stderr, "exported %s/ltca_%s.{json,npy,exr,glsl,hlsl}, %s/ltca_%s_m{0,1,2}.dds and %s/ltca_%s_kt.npy\n",
+                out, brdf, out, brdf, out, brdf);
     mf_table_free(&t);
     mf_ltcfit_aniso_result_free(&r);
     return rc;

@@ -148,6 +148,10 @@ void io_put_axes_comment(mf_buf *b, const mf_table *t, const char *lead, int dig
 void io_put_metadata_comment(mf_buf *b, const mf_table *t, const char *lead, int block_comment);
 /* The "tool" metadata if it is a short printable mfkit command, else "mfkit". */
 const char *io_generator(const mf_table *t);
+/* The lookup functions of the .glsl/.hlsl snippet of t (fmt_shader.c; hlsl 0 or 1), every name
+ * prefixed <prefix>_ (and <PREFIX>_ATLAS_* for an atlas): <prefix>_param<k>, _coord0/1, _pos<k>,
+ * _tile, _lookup_params(table, p0, ...) (one texture of 4 fields), _lookup(table, physical ...). */
+void io_shader_lookup_functions(mf_buf *b, const mf_table *t, const char *prefix, int hlsl);
 /* %.9g with a '.' or an exponent, then the suffix ("f" for C). */
 void io_float_literal(mf_buf *b, double v, const char *suffix);
 
