@@ -109,6 +109,7 @@ static const cli_entry k_commands[] = {
      "                  .csv) and describe them"},
     {"fit", cli_fit, needs_fit,
      "fit ltc         fit an LTC table to a BRDF, gate it and export it (needs the Ceres build)\n"
+     "  fit ltc-aniso   fit the 4-D anisotropic GGX LTC table, gate it and export it (Ceres build)\n"
      "  fit ggx-proxy   fit the shader formula of the GGX proxy roughness and export it (Ceres build)"},
     {"maps", cli_maps, needs_image,
      "maps lean|leadr|bump-roughness|toksvig INPUT --out PREFIX\n"
