@@ -173,23 +173,13 @@ static mf_status texel_prepare(const mf_brdf_model *m, double alpha, double cos_
     mf_status st = texel_magnitude(m, alpha, wo, ws, t);
     if (st != MF_OK)
         return st;
-    double sum = 0.0;
-    mf_vec3 mean = {0.0, 0.0, 0.0};
     for (int j = 0; j < ws->n; ++j)
         mf_sobol2((uint32_t)j, scr[0], scr[1], ws->u + 2 * j);
     model_sample_weights(m, alpha, wo, ws->n, ws->u, ws->dir, ws->pdf, ws->w);
-    for (int j = 0; j < ws->n; ++j) {
-        mf_vec3 wi = ws->dir[j];
-        double w = ws->w[j];
-        if (ws->pdf[j] > 0.0 && wi.z > 0.0 && mf_vec3_isfinite(wi)) {
-            if (!isfinite(w))
-                return MF_ERR_DOMAIN;
-        } else {
-            ws->pdf[j] = 0.0;
-        }
-        sum += w;
-        mean = mf_vec3_add(mean, mf_vec3_scale(wi, w));
-    }
+    double sum;
+    mf_vec3 mean;
+    if ((st = ws_weight_sums(ws, &sum, &mean)) != MF_OK)
+        return st;
     /* rescale the weights so that their mean is the quadrature albedo */
     double scale = sum > 0.0 ? t->magnitude * ws->n / sum : 0.0;
     double ml = mf_vec3_length(mean);

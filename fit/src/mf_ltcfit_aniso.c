@@ -252,20 +252,11 @@ static mf_status atexel_prepare(const mf_brdf_model *m, mf_brdf_params prm, doub
     for (int j = 0; j < ws->n; ++j)
         mf_sobol2((uint32_t)j, scr[0], scr[1], ws->u + 2 * j);
     mf_model_sample_weights(m, &prm, wo, ws->n, ws->u, ws->dir, ws->pdf, ws->w);
-    double sum = 0.0;
-    mf_vec3 mean = {0.0, 0.0, 0.0};
-    for (int j = 0; j < ws->n; ++j) {
-        mf_vec3 wi = ws->dir[j];
-        double w = ws->w[j];
-        if (ws->pdf[j] > 0.0 && wi.z > 0.0 && mf_vec3_isfinite(wi)) {
-            if (!isfinite(w))
-                return MF_ERR_DOMAIN;
-        } else {
-            ws->pdf[j] = 0.0;
-        }
-        sum += w;
-        mean = mf_vec3_add(mean, mf_vec3_scale(wi, w));
-    }
+    double sum;
+    mf_vec3 mean;
+    mf_status sw = ws_weight_sums(ws, &sum, &mean);
+    if (sw != MF_OK)
+        return sw;
     double scale = sum > 0.0 ? t->magnitude * ws->n / sum : 0.0;
     double ml = mf_vec3_length(mean);
     mf_vec3 md = ml > 0.0 ? mf_vec3_scale(mean, 1.0 / ml) : mf_vec3_make(0.0, 0.0, 1.0);

@@ -412,6 +412,31 @@ static inline void light_sums_cv(const light *l, const workspace *ws, int live, 
     out[3] = sxy;
 }
 
+/* After the model's sample_weights filled ws->dir, ws->pdf, ws->w for ws->n directions: marks the
+ * directions that are not valid samples (pdf 0), and sums the weights and the weighted directions
+ * in sample order (the bits both fitters had).  MF_ERR_DOMAIN for a valid sample with a non-finite
+ * weight. */
+static inline mf_status ws_weight_sums(workspace *ws, double *sum_out, mf_vec3 *mean_out)
+{
+    double sum = 0.0;
+    mf_vec3 mean = {0.0, 0.0, 0.0};
+    for (int j = 0; j < ws->n; ++j) {
+        mf_vec3 wi = ws->dir[j];
+        double w = ws->w[j];
+        if (ws->pdf[j] > 0.0 && wi.z > 0.0 && mf_vec3_isfinite(wi)) {
+            if (!isfinite(w))
+                return MF_ERR_DOMAIN;
+        } else {
+            ws->pdf[j] = 0.0;
+        }
+        sum += w;
+        mean = mf_vec3_add(mean, mf_vec3_scale(wi, w));
+    }
+    *sum_out = sum;
+    *mean_out = mean;
+    return MF_OK;
+}
+
 static inline void sobol_scramble(uint64_t seed, uint32_t scr[2])
 {
     mf_pcg32 rng;
