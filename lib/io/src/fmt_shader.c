@@ -8,21 +8,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-/* The shortest decimal literal that reads back as the double v (so a shader compiled in double
- * precision, or the C++ twin test, sees the axis bounds exactly), with a '.' or an exponent. */
-static void shader_literal(mf_buf *b, double v)
-{
-    char s[64];
-    for (int p = 9; p <= 17; ++p) {
-        snprintf(s, sizeof s, "%.*g", p, v);
-        if (strtod(s, NULL) == v)
-            break;
-    }
-    mf_buf_puts(b, s);
-    if (!strpbrk(s, ".eEn"))
-        mf_buf_puts(b, ".0");
-}
-
 /* The lookup functions of a snippet (everything between its include guard): see io_internal.h. */
 void io_shader_lookup_functions(mf_buf *b, const mf_table *t, const char *prefix, int hlsl)
 {
@@ -54,7 +39,7 @@ void io_shader_lookup_functions(mf_buf *b, const mf_table *t, const char *prefix
         mf_buf_printf(b, "float %s_param%d(float %s)\n{\n", prefix, k, in[k]);
         if (isfinite(a->physical_min)) {
             mf_buf_printf(b, "    %s = max(%s, ", in[k], in[k]);
-            shader_literal(b, a->physical_min);
+            io_shader_literal(b, a->physical_min);
             mf_buf_puts(b, ");\n");
         }
         switch (a->mapping) {
@@ -75,22 +60,22 @@ void io_shader_lookup_functions(mf_buf *b, const mf_table *t, const char *prefix
                 continue;
             }
             mf_buf_printf(b, "    %s = clamp(%s, ", a->name, a->name);
-            shader_literal(b, lo);
+            io_shader_literal(b, lo);
             mf_buf_puts(b, ", ");
-            shader_literal(b, hi);
+            io_shader_literal(b, hi);
             mf_buf_printf(b, ");\n    return (%s - (", a->name);
-            shader_literal(b, a->lo);
+            io_shader_literal(b, a->lo);
             mf_buf_puts(b, ")) / (");
-            shader_literal(b, a->hi - a->lo);
+            io_shader_literal(b, a->hi - a->lo);
             mf_buf_printf(b, ") * %d.0 / %d.0 + 0.5 / %d.0;\n}\n\n", a->size - 1, a->size, a->size);
         } else if (a->size > 1) {
             /* parameter -> continuous texel index in [0, n - 1] (the manual lerp across tiles) */
             mf_buf_printf(b, "// axis %d: the texel position of %s in [0, %d] (clamped to the table)\n", k, a->name,
                           a->size - 1);
             mf_buf_printf(b, "float %s_pos%d(float %s)\n{\n    return clamp((%s - (", prefix, k, a->name, a->name);
-            shader_literal(b, a->lo);
+            io_shader_literal(b, a->lo);
             mf_buf_puts(b, ")) / (");
-            shader_literal(b, a->hi - a->lo);
+            io_shader_literal(b, a->hi - a->lo);
             mf_buf_printf(b, ") * %d.0, 0.0, %d.0);\n}\n\n", a->size - 1, a->size - 1);
         }
     }

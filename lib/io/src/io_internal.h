@@ -152,6 +152,8 @@ const char *io_generator(const mf_table *t);
  * prefixed <prefix>_ (and <PREFIX>_ATLAS_* for an atlas): <prefix>_param<k>, _coord0/1, _pos<k>,
  * _tile, _lookup_params(table, p0, ...) (one texture of 4 fields), _lookup(table, physical ...). */
 void io_shader_lookup_functions(mf_buf *b, const mf_table *t, const char *prefix, int hlsl);
+/* The shortest float literal that reads back as v exactly (io_source.c). */
+void io_shader_literal(mf_buf *b, double v);
 /* %.9g with a '.' or an exponent, then the suffix ("f" for C). */
 void io_float_literal(mf_buf *b, double v, const char *suffix);
 

@@ -3,6 +3,7 @@
 
 #include <ctype.h>
 #include <stdio.h>
+#include <stdlib.h>
 
 /* Appends text with every line prefixed by `lead`, and "*" "/" or "/" "*" pairs broken apart so
  * that the text can sit in a C block comment. */
@@ -79,3 +80,19 @@ void io_float_literal(mf_buf *b, double v, const char *suffix)
     mf_buf_puts(b, suffix);
 }
 
+
+/* The shortest decimal literal that reads back as the double v (so a shader compiled in double
+ * precision, or the C++ twin tests, see the values exactly), with a '.' or an exponent so that
+ * GLSL and HLSL read it as a floating-point literal. */
+void io_shader_literal(mf_buf *b, double v)
+{
+    char s[64];
+    for (int p = 9; p <= 17; ++p) {
+        snprintf(s, sizeof s, "%.*g", p, v);
+        if (strtod(s, NULL) == v)
+            break;
+    }
+    mf_buf_puts(b, s);
+    if (!strpbrk(s, ".eEn"))
+        mf_buf_puts(b, ".0");
+}

@@ -16,20 +16,6 @@ const int mf_ltc_aniso_shader_fields[3][4] = {
     {MF_LTCA_F_M00 + 4, MF_LTCA_F_M00 + 5, MF_LTCA_F_M00 + 6, MF_LTCA_F_M00 + 7},
     {MF_LTCA_F_M00 + 8, MF_LTCA_F_MAGNITUDE, MF_LTCA_F_FRESNEL, MF_LTCA_F_RESIDUAL}};
 
-/* The shortest decimal that reads back as v, with a '.' or an exponent (a float literal). */
-static void put_literal(mf_buf *b, double v)
-{
-    char s[64];
-    for (int p = 9; p <= 17; ++p) {
-        snprintf(s, sizeof s, "%.*g", p, v);
-        if (strtod(s, NULL) == v)
-            break;
-    }
-    mf_buf_puts(b, s);
-    if (!strpbrk(s, ".eEn"))
-        mf_buf_puts(b, ".0");
-}
-
 static int valid_prefix(const char *p)
 {
     if (!p || !p[0] || strlen(p) > 64 || isdigit((unsigned char)p[0]))
@@ -119,21 +105,21 @@ mf_status mf_ltc_aniso_shader_build(mf_buf *out, const mf_table *t, mf_shader_la
                   p, p, texp);
     /* the fold of mf_ltc_aniso_lookup: phi mod 2 pi in [0, 2 pi), then the quadrant */
     mf_buf_puts(out, "    float ph = phi - ");
-    put_literal(out, 2.0 * MF_PI);
+    io_shader_literal(out, 2.0 * MF_PI);
     mf_buf_puts(out, " * floor(phi / ");
-    put_literal(out, 2.0 * MF_PI);
+    io_shader_literal(out, 2.0 * MF_PI);
     mf_buf_puts(out, ");\n    float sx = 1.0;\n    float sy = 1.0;\n    if (ph > ");
-    put_literal(out, 1.5 * MF_PI);
+    io_shader_literal(out, 1.5 * MF_PI);
     mf_buf_puts(out, ") {\n        ph = ");
-    put_literal(out, 2.0 * MF_PI);
+    io_shader_literal(out, 2.0 * MF_PI);
     mf_buf_puts(out, " - ph;\n        sy = -1.0;\n    } else if (ph > ");
-    put_literal(out, MF_PI);
+    io_shader_literal(out, MF_PI);
     mf_buf_puts(out, ") {\n        ph = ph - ");
-    put_literal(out, MF_PI);
+    io_shader_literal(out, MF_PI);
     mf_buf_puts(out, ";\n        sx = -1.0;\n        sy = -1.0;\n    } else if (ph > ");
-    put_literal(out, 0.5 * MF_PI);
+    io_shader_literal(out, 0.5 * MF_PI);
     mf_buf_puts(out, ") {\n        ph = ");
-    put_literal(out, MF_PI);
+    io_shader_literal(out, MF_PI);
     mf_buf_puts(out, " - ph;\n        sx = -1.0;\n    }\n");
     if (lambda)
         mf_buf_puts(out, "    float p1 = alpha_x > 0.0 ? alpha_y / alpha_x : 0.0; // lambda\n");
