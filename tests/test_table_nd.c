@@ -30,6 +30,7 @@
 #include <mfkit/mf_rng.h>
 #include <mfkit/mf_table.h>
 
+#include "glsl_cxx_shim.h"
 #include "mf_test.h"
 #include "test_tables.h"
 #include "test_files.h"
@@ -328,35 +329,6 @@ static void test_c_header(void)
 
 /* ---- the shader snippets -------------------------------------------------------------------- */
 
-/* A C++ stand-in for the GLSL the snippets use: float/int math, vec2/vec4, and textureLod as
- * the bilinear filter with clamp-to-edge of a texture whose texel centres are at (i + 0.5)/n. */
-static const char k_shim[] =
-    "#include <cmath>\n#include <cstdio>\n#include <cstdlib>\n#include <vector>\n"
-    "#ifdef TWIN_DOUBLE\n#define float double\n#endif\n"
-    "struct vec2 { float x, y; vec2(float a, float b) : x(a), y(b) {} };\n"
-    "struct vec4 { float v[4];\n"
-    "  explicit vec4(float a) { for (int i = 0; i < 4; ++i) v[i] = a; }\n"
-    "  vec4 &operator+=(const vec4 &o) { for (int i = 0; i < 4; ++i) v[i] += o.v[i]; return *this; } };\n"
-    "static vec4 operator*(float s, vec4 a) { for (int i = 0; i < 4; ++i) a.v[i] = s * a.v[i]; return a; }\n"
-    "static float clamp(float x, float a, float b) { return std::fmin(std::fmax(x, a), b); }\n"
-    "static float max(float a, float b) { return std::fmax(a, b); }\n"
-    "static int min(int a, int b) { return a < b ? a : b; }\n"
-    "using std::floor; using std::sqrt; using std::acos;\n"
-    "struct texture { int w, h; std::vector<float> t; };\n"
-    "typedef const texture &sampler2D;\n"
-    "static vec4 textureLod(sampler2D s, vec2 uv, float) {\n"
-    "  float xf = uv.x * float(s.w) - 0.5, yf = uv.y * float(s.h) - 0.5;\n"
-    "  float x0 = floor(xf), y0 = floor(yf), fx = xf - x0, fy = yf - y0;\n"
-    "  vec4 r(0.0);\n"
-    "  for (int c = 0; c < 4; ++c) {\n"
-    "    int dx = c & 1, dy = c >> 1;\n"
-    "    float w = (dx ? fx : 1.0 - fx) * (dy ? fy : 1.0 - fy);\n"
-    "    int x = int(x0) + dx, y = int(y0) + dy;\n"
-    "    x = x < 0 ? 0 : (x >= s.w ? s.w - 1 : x); y = y < 0 ? 0 : (y >= s.h ? s.h - 1 : y);\n"
-    "    for (int f = 0; f < 4; ++f) r.v[f] += w * s.t[(size_t(y) * size_t(s.w) + size_t(x)) * 4 + size_t(f)];\n"
-    "  }\n"
-    "  return r;\n"
-    "}\n";
 
 /* main: argv = width height image.txt points.txt naxes; prints the lookup of every point. */
 static const char k_twin_main[] =
@@ -374,7 +346,7 @@ static const char k_twin_main[] =
     "  for (;;) {\n"
     "    for (int k = 0; k < n; ++k) if (fscanf(p, \"%lf\", &q[k]) != 1) { fclose(p); return 0; }\n"
     "    vec4 r = LOOKUP(tex, q);\n"
-    "    printf(\"%.17g %.17g %.17g %.17g\\n\", double(r.v[0]), double(r.v[1]), double(r.v[2]), double(r.v[3]));\n"
+    "    printf(\"%.17g %.17g %.17g %.17g\\n\", double(r.x), double(r.y), double(r.z), double(r.w));\n"
     "  }\n"
     "}\n";
 
@@ -511,7 +483,7 @@ static void test_shader_twin(void)
             for (int k = 0; k < naxes; ++k)
                 snprintf(args + strlen(args), sizeof args - strlen(args), ", float(q[%d])", k);
             snprintf(body, sizeof body, "%s#include \"twin%d.glsl\"\n#define LOOKUP(tex, q) twin%d_lookup_params(tex%s)\n%s",
-                     k_shim, naxes, naxes, args, k_twin_main);
+                     k_glsl_cxx_shim, naxes, naxes, args, k_twin_main);
             CHECK(spit(src, body) == 0);
             snprintf(cmd, sizeof cmd,
                      "c++ -std=c++17 -O1 -ffp-contract=off %s -I%s %s -o %s/twin%d_%d && %s/twin%d_%d %d %d %s %s %d "
