@@ -317,6 +317,7 @@ typedef struct {
     const mf_prefilter_options *o;
     const pf_plan *plans;
     long ntiles;
+    int ranks;
 } pf_assembly;
 
 static int pf_open_tile(const char *dir, long k, int rec, FILE **f, pf_rec *r, char *msg, size_t msg_size)
@@ -602,10 +603,10 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
                       "\"channels\": [[\"M00\", \"M01\", \"M02\", \"M10\"], [\"M11\", \"M12\", \"M20\", \"M21\"], "
                       "[\"M22\", \"magnitude\", \"0\", \"0\"]], \"lookup\": [\"prefilter_lookup.glsl\", "
                       "\"prefilter_lookup.hlsl\"]},\n"
-                      "  \"tiling\": {\"tile\": %d, \"tiles\": %ld, \"resumed_tiles\": %ld},\n"
+                      "  \"tiling\": {\"tile\": %d, \"tiles\": %ld},\n"
                       "  \"levels\": [\n",
                       MF_PREFILTER_REVISION, MFKIT_VERSION, o->samples, o->max_iterations, (unsigned long long)o->seed,
-                      A->T, A->ntiles, resumed);
+                      A->T, A->ntiles);
         for (int li = 0; li < nl; ++li) {
             const pf_plan *P = &A->plans[li];
             const pf_stats *S = &stats[li];
@@ -620,12 +621,12 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
                           li + 1 < nl ? "," : "");
         }
         mf_buf_printf(&b,
-                      "  ],\n  \"lobes\": %ld,\n  \"seconds\": %.3f,\n"
+                      "  ],\n  \"lobes\": %ld,\n"
                       "  \"gate\": {\"passed\": %s, \"checked\": [\"every matrix entry and magnitude finite\", "
                       "\"magnitudes in [0, 1]\"], \"nonfinite\": %ld, \"magnitude_outside_0_1\": %ld, "
                       "\"worst_albedo_quadrature_err\": %.6g, \"not_checked\": \"lobe albedo against the effective "
                       "BRDF's, continuity across texels, views and levels (not implemented yet)\"}\n}\n",
-                      lobes, secs, gate_ok ? "true" : "false", nonfinite, magout, worst_alb);
+                      lobes, gate_ok ? "true" : "false", nonfinite, magout, worst_alb);
         ok = begin_file(files, &nf, dir, "prefilter.json", msg, sizeof msg) && put_file(files[nf - 1].file, &b);
     }
     int rc = 0;
@@ -639,8 +640,11 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
     } else if (mf_io_atomic_commit_all(files, (size_t)nf, msg, sizeof msg) != MF_OK) {
         rc = cli_error(k_cmd, "%s", msg) * 0 + CLI_EXIT_IO;
     } else {
-        fprintf(stderr, "mfkit prefilter: %ld lobes in %ld tiles (%ld resumed), %.3f s fitting (%.3f ms per lobe)\n", lobes,
-                A->ntiles, resumed, secs, lobes ? 1e3 * secs / lobes : 0.0);
+        fprintf(stderr,
+                "mfkit prefilter: %ld lobes in %ld tiles (%ld resumed) on %d rank%s x %d thread%s, %.3f s fitting wall "
+                "(%.3f ms per lobe)\n",
+                lobes, A->ntiles, resumed, A->ranks, A->ranks > 1 ? "s" : "", o->threads, o->threads > 1 ? "s" : "", secs,
+                lobes ? 1e3 * secs / lobes : 0.0);
     }
     mf_buf_free(&b);
     free(files), free(stats), free(rm), free(ra), free(tf);
@@ -700,6 +704,32 @@ static int pf_mpi_max(const pf_mpi *m, int v)
     if (m->active) {
         int r = v;
         MPI_Allreduce(&v, &r, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+        return r;
+    }
+#endif
+    (void)m;
+    return v;
+}
+
+static long pf_mpi_sum(const pf_mpi *m, long v)
+{
+#ifdef MFKIT_CLI_HAVE_MPI
+    if (m->active) {
+        long r = v;
+        MPI_Allreduce(&v, &r, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
+        return r;
+    }
+#endif
+    (void)m;
+    return v;
+}
+
+static double pf_mpi_maxd(const pf_mpi *m, double v)
+{
+#ifdef MFKIT_CLI_HAVE_MPI
+    if (m->active) {
+        double r = v;
+        MPI_Allreduce(&v, &r, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
         return r;
     }
 #endif
@@ -902,6 +932,8 @@ static int pf_main(int argc, char **argv, const pf_mpi *mpi)
     double secs = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
     rc = pf_mpi_max(mpi, rc);
     stopped = pf_mpi_max(mpi, stopped);
+    resumed = pf_mpi_sum(mpi, resumed);
+    secs = pf_mpi_maxd(mpi, secs);
     if (!rc && stopped) {
         long done_tiles = 0;
         for (long k = 0; k < ntiles && mpi->rank == 0; ++k) {
@@ -918,7 +950,7 @@ static int pf_main(int argc, char **argv, const pf_mpi *mpi)
     if (rc)
         goto done;
     if (mpi->rank == 0) {
-        pf_assembly A = {dir, input, W, H, nl, T, &o, plans, ntiles};
+        pf_assembly A = {dir, input, W, H, nl, T, &o, plans, ntiles, mpi->size};
         rc = pf_assemble(&A, secs, resumed);
         if (!rc)
             pf_remove_work(dir);
