@@ -13,9 +13,9 @@
  *           checkpoint: a rerun of the same command (same map, options and fitter revision,
  *           recorded in run.txt there) skips the tiles present.  SIGINT/SIGTERM and --max-tiles
  *           stop between tiles and keep the checkpoint.
- *   ranks   under mpirun (built with MFKIT_WITH_MPI) rank r of K fits the tiles k = r mod K; after
- *           a barrier rank 0 assembles.  One process and K ranks fit the same tiles with the same
- *           code: the same bits.
+ *   ranks   under mpirun (built with MFKIT_WITH_MPI) rank r of K fits every K-th tile from the
+ *           r-th, largest footprints first; after a barrier rank 0 assembles.  One process and K
+ *           ranks fit the same tiles with the same code: the same bits.
  *   output  rank 0 streams every level's .npy (header first, then rows, read tile by tile) and
  *           its three EXR view atlases, writes the lookup snippets and prefilter.json, and commits
  *           them all together (mf_io_atomic_commit_all); then removes the work directory.
@@ -908,7 +908,10 @@ static int pf_main(int argc, char **argv, const pf_mpi *mpi)
     clock_gettime(CLOCK_MONOTONIC, &t0);
     long fitted = 0, resumed = 0;
     int stopped = 0;
-    for (long k = mpi->rank; k < ntiles && !rc; k += mpi->size) {
+    /* the largest footprints (the last tiles) first: the longest jobs start first, and --max-tiles
+     * slices reach the memory peak (the largest footprint's tile) in the first slice */
+    for (long i = mpi->rank; i < ntiles && !rc; i += mpi->size) {
+        long k = ntiles - 1 - i;
         char path[4400];
         tile_path(path, sizeof path, dir, k);
         if (access(path, F_OK) == 0) {
