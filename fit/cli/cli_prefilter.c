@@ -99,6 +99,7 @@ int cli_prefilter(int argc, char **argv)
 
 #include <dirent.h>
 #include <errno.h>
+#include <pthread.h>
 #include <signal.h>
 #include <time.h>
 #include <unistd.h>
@@ -237,6 +238,61 @@ static int pf_run_tile(const double *normals, int W, const mf_prefilter_options 
     }
     mf_prefilter_levels_free(lv, nl);
     return ok ? 0 : cli_error(k_cmd, "%s", msg) * 0 + CLI_EXIT_IO;
+}
+
+/* The tiles of this rank still to fit, shared by `workers` threads. */
+typedef struct {
+    const double *normals;
+    int W;
+    mf_prefilter_options o; /* o.threads: per tile */
+    const pf_tile *tiles;
+    const char *dir, *input;
+    long *todo, ntodo, next, max_tiles;
+    int rc, stopped;
+    pthread_mutex_t lock;
+} pf_queue;
+
+static void *pf_worker(void *arg)
+{
+    pf_queue *q = arg;
+    for (;;) {
+        long k = -1;
+        pthread_mutex_lock(&q->lock);
+        if (!q->rc && !q->stopped && q->next < q->ntodo) {
+            if (g_pf_cancel)
+                q->stopped = CLI_EXIT_INTERRUPTED;
+            else if (q->max_tiles >= 0 && q->next >= q->max_tiles)
+                q->stopped = PF_EXIT_INCOMPLETE;
+            else
+                k = q->todo[q->next++];
+        }
+        pthread_mutex_unlock(&q->lock);
+        if (k < 0)
+            return NULL;
+        char path[4400];
+        tile_path(path, sizeof path, q->dir, k);
+        int r = pf_run_tile(q->normals, q->W, &q->o, &q->tiles[k], path, q->input);
+        if (r) {
+            pthread_mutex_lock(&q->lock);
+            if (!q->rc)
+                q->rc = r;
+            pthread_mutex_unlock(&q->lock);
+        }
+    }
+}
+
+static void pf_run_queue(pf_queue *q, int workers)
+{
+    pthread_t th[256];
+    int started = 0;
+    pthread_mutex_init(&q->lock, NULL);
+    for (; started < workers - 1; ++started)
+        if (pthread_create(&th[started], NULL, pf_worker, q) != 0)
+            break;
+    pf_worker(q);
+    for (int i = 0; i < started; ++i)
+        pthread_join(th[i], NULL);
+    pthread_mutex_destroy(&q->lock);
 }
 
 /* ---- streaming writers --------------------------------------------------------------------------- */
@@ -898,6 +954,28 @@ static int pf_main(int argc, char **argv, const pf_mpi *mpi)
         goto done;
     pf_unmute(); /* a tile's error is its rank's own */
 
+    /* this rank's tiles not in the checkpoint, largest footprints (the last tiles) first: the
+     * longest jobs start first, and a first --max-tiles slice meets the memory peak */
+    long resumed = 0;
+    pf_queue q;
+    memset(&q, 0, sizeof q);
+    q.todo = malloc(sizeof(long) * (size_t)(ntiles / mpi->size + 1));
+    if (!q.todo)
+        rc = CLI_EXIT_IO, cli_error(k_cmd, "out of memory");
+    for (long i = mpi->rank; i < ntiles && q.todo; i += mpi->size) {
+        char path[4400];
+        tile_path(path, sizeof path, dir, ntiles - 1 - i);
+        if (access(path, F_OK) == 0)
+            ++resumed;
+        else
+            q.todo[q.ntodo++] = ntiles - 1 - i;
+    }
+    q.normals = normals, q.W = W, q.tiles = tiles, q.dir = dir, q.input = input, q.max_tiles = max_tiles;
+    /* several tiles at once when there are enough (a footprint tile is one fit job: threads inside it
+     * would idle), else the threads inside the tiles; the bits depend on neither */
+    int workers = q.ntodo < o.threads ? (int)(q.ntodo > 0 ? q.ntodo : 1) : o.threads;
+    q.o = o;
+    q.o.threads = o.threads / workers > 0 ? o.threads / workers : 1;
     struct sigaction sa, old_int, old_term;
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = pf_on_signal;
@@ -906,32 +984,15 @@ static int pf_main(int argc, char **argv, const pf_mpi *mpi)
     sigaction(SIGTERM, &sa, &old_term);
     struct timespec t0, t1;
     clock_gettime(CLOCK_MONOTONIC, &t0);
-    long fitted = 0, resumed = 0;
-    int stopped = 0;
-    /* the largest footprints (the last tiles) first: the longest jobs start first, and --max-tiles
-     * slices reach the memory peak (the largest footprint's tile) in the first slice */
-    for (long i = mpi->rank; i < ntiles && !rc; i += mpi->size) {
-        long k = ntiles - 1 - i;
-        char path[4400];
-        tile_path(path, sizeof path, dir, k);
-        if (access(path, F_OK) == 0) {
-            ++resumed;
-            continue;
-        }
-        if (g_pf_cancel) {
-            stopped = CLI_EXIT_INTERRUPTED;
-            break;
-        }
-        if (max_tiles >= 0 && fitted >= max_tiles) {
-            stopped = PF_EXIT_INCOMPLETE;
-            break;
-        }
-        rc = pf_run_tile(normals, W, &o, &tiles[k], path, input);
-        fitted += !rc;
-    }
+    if (!rc)
+        pf_run_queue(&q, workers);
     clock_gettime(CLOCK_MONOTONIC, &t1);
     sigaction(SIGINT, &old_int, NULL);
     sigaction(SIGTERM, &old_term, NULL);
+    free(q.todo);
+    if (!rc)
+        rc = q.rc;
+    int stopped = q.stopped;
     double secs = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
     rc = pf_mpi_max(mpi, rc);
     stopped = pf_mpi_max(mpi, stopped);
