@@ -95,6 +95,7 @@ int cli_prefilter(int argc, char **argv)
 #include "mfkit/fit/mf_prefilter.h"
 #include "mfkit/io/mf_image.h"
 #include "mfkit/io/mf_io.h"
+#include "mfkit/io/mf_json.h"
 #include "mfkit/mfkit.h"
 
 #include <dirent.h>
@@ -637,13 +638,15 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
     if (ok) {
         b.len = 0;
         mf_buf_printf(&b,
-                      "{\n  \"kind\": \"ltc_prefilter\",\n  \"map\": \"%s\",\n  \"width\": %d,\n  \"height\": %d,\n"
+                      "{\n  \"kind\": \"ltc_prefilter\",\n  \"map\": ");
+        mf_json_string(&b, A->input);
+        mf_buf_printf(&b, ",\n  \"width\": %d,\n  \"height\": %d,\n"
                       "  \"base_brdf\": {\"model\": \"ggx\", \"alpha\": %.17g},\n"
                       "  \"frame\": \"view-azimuth-aligned: normals rotated by -phi about z, view (sin theta, 0, cos "
                       "theta); M forward, divided by the norm of its last column\",\n"
                       "  \"below_horizon\": \"texel-frame view cosine clamped to %.17g at its azimuth (Nahmias 2022)\",\n"
                       "  \"axes\": {\"theta\": [",
-                      A->input, A->W, A->H, o->alpha, MF_PREFILTER_COS_MIN);
+                      A->W, A->H, o->alpha, MF_PREFILTER_COS_MIN);
         for (int a = 0; a < o->n_theta; ++a)
             mf_buf_printf(&b, "%s%.17g", a ? ", " : "", mf_prefilter_theta(o, a));
         mf_buf_printf(&b, "], \"phi\": [");
