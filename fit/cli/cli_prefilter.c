@@ -21,8 +21,9 @@
  *           them all together (mf_io_atomic_commit_all); then removes the work directory.
  * Memory: the map's normals, one tile's fit (its footprint's albedo cache and lobes) and one row
  * of a level.
- * Exit 0 success, 2 usage or input error (one line, no output), 3 I/O error, 4 fit failure,
- * 75 stopped by --max-tiles and 130 interrupted (both resumable: rerun the same command).
+ * Exit 0 success, 1 gate failed (nothing written), 2 usage or input error (one line, no output),
+ * 3 I/O error, 4 fit failure, 75 stopped by --max-tiles and 130 interrupted (both resumable: rerun
+ * the same command).
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
@@ -55,7 +56,7 @@ static const cli_opt k_opts[P_NOPTS] = {
     {.name = "--samples", .metavar = "N", .kind = CLI_OPT_INT, .lo = 64, .hi = 1 << 20, .pow2 = 1, .def = "4096",
      .help = "directions per fit"},
     {.name = "--tile", .metavar = "T", .kind = CLI_OPT_INT, .lo = 2, .hi = 4096, .pow2 = 1, .def = "64",
-     .help = "tile side in level-0 texels (the output does not depend on it; memory and resume granularity do)"},
+     .help = "tile side in level-0 texels (the lobes do not depend on it; memory and resume granularity do)"},
     {.name = "--max-tiles", .metavar = "N", .kind = CLI_OPT_INT, .lo = 0, .hi = 1 << 30, .def = "all",
      .help = "fit at most N new tiles in this process, then stop (exit 75; rerun to resume)"},
 };
@@ -77,8 +78,9 @@ static const cli_command k_prefilter_cmd = {
         "and write the same bits as one process.\n",
     .opts = k_opts,
     .nopts = P_NOPTS,
-    .epilog = "exit status: 0 success, 2 usage or input error, 3 I/O error, 4 fit failure, 75 stopped by --max-tiles,\n"
-              "130 interrupted (75 and 130 keep the checkpoint: rerun the same command to resume)\n",
+    .epilog = "exit status: 0 success, 1 gate failed, 2 usage or input error, 3 I/O error, 4 fit failure,\n"
+              "75 stopped by --max-tiles, 130 interrupted (75 and 130 keep the checkpoint: rerun the same command\n"
+              "to resume)\n",
 };
 
 #if !defined(MFKIT_CLI_HAVE_IMAGE) || !defined(MFKIT_CLI_HAVE_SOLVER)
