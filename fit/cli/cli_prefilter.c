@@ -19,8 +19,8 @@
  *   output  rank 0 streams every level's .npy (header first, then rows, read tile by tile) and
  *           its three EXR view atlases, writes the lookup snippets and prefilter.json, and commits
  *           them all together (mf_io_atomic_commit_all); then removes the work directory.
- * Memory: the map's normals, one tile's fit (its footprint's albedo cache and lobes) and one row
- * of a level.
+ * Memory: the map's normals, the fits of the tiles in flight (--threads N fits N tiles at once
+ * when there are enough: each its footprints' albedo cache and lobes) and one row of a level.
  * Exit 0 success, 1 gate failed (nothing written), 2 usage or input error (one line, no output),
  * 3 I/O error, 4 fit failure, 75 stopped by --max-tiles and 130 interrupted (both resumable: rerun
  * the same command).
