@@ -3,8 +3,27 @@
  * >= 1 and per tabulated view, fitted to the effective BRDF of the texel's footprint
  * (mf_prefilter.h) [Nahmias 2022, Ch. 3].  Level 0 is not stored: there a texel's effective BRDF
  * is the base BRDF about its own normal, shaded with the base BRDF's own (isotropic) LTC table.
- * Exit 0 success, 2 usage or input error (one line, no output), 3 I/O error, 4 fit failure.
- * All files are committed together (mf_io_atomic_commit_all): a failure leaves no output.
+ *
+ * The pipeline (docs/prefilter.md):
+ *   tiles   the map is cut into --tile x --tile regions, each fitted for the levels whose
+ *           footprints lie inside it; every texel of a higher level is a tile of its own (its
+ *           footprint).  mf_prefilter_run_from fits a tile; a footprint's lobes depend only on its
+ *           normals and the options, so the tiling does not change a bit of the output.
+ *   work    each finished tile is written atomically to DIR/.prefilter-work/tile_<k>.bin, the
+ *           checkpoint: a rerun of the same command (same map, options and fitter revision,
+ *           recorded in run.txt there) skips the tiles present.  SIGINT/SIGTERM and --max-tiles
+ *           stop between tiles and keep the checkpoint.
+ *   ranks   under mpirun (built with MFKIT_WITH_MPI) rank r of K fits every K-th tile from the
+ *           r-th, largest footprints first; after a barrier rank 0 assembles.  One process and K
+ *           ranks fit the same tiles with the same code: the same bits.
+ *   output  rank 0 streams every level's .npy (header first, then rows, read tile by tile) and
+ *           its three EXR view atlases, writes the lookup snippets and prefilter.json, and commits
+ *           them all together (mf_io_atomic_commit_all); then removes the work directory.
+ * Memory: the map's normals, the fits of the tiles in flight (--threads N fits N tiles at once
+ * when there are enough: each its footprints' albedo cache and lobes) and one row of a level.
+ * Exit 0 success, 1 gate failed (nothing written), 2 usage or input error (one line, no output),
+ * 3 I/O error, 4 fit failure, 75 stopped by --max-tiles and 130 interrupted (both resumable: rerun
+ * the same command).
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
@@ -18,7 +37,7 @@ static const char *const k_cmd = "prefilter";
 static const char *const k_green_names[] = {"up", "down", NULL};
 static const char *const k_encoding_names[] = {"auto", "unorm", "raw", NULL};
 
-enum { P_OUT, P_ROUGHNESS, P_VIEWS, P_GREEN, P_ENCODING, P_TOLERANCE, P_THREADS, P_SAMPLES, P_NOPTS };
+enum { P_OUT, P_ROUGHNESS, P_VIEWS, P_GREEN, P_ENCODING, P_TOLERANCE, P_THREADS, P_SAMPLES, P_TILE, P_MAX_TILES, P_NOPTS };
 static const cli_opt k_opts[P_NOPTS] = {
     {.name = "--out", .metavar = "DIR", .kind = CLI_OPT_STRING, .required = 1,
      .help = "output directory (created if missing)"},
@@ -36,6 +55,10 @@ static const cli_opt k_opts[P_NOPTS] = {
      .help = "worker threads (the output does not depend on it)"},
     {.name = "--samples", .metavar = "N", .kind = CLI_OPT_INT, .lo = 64, .hi = 1 << 20, .pow2 = 1, .def = "4096",
      .help = "directions per fit"},
+    {.name = "--tile", .metavar = "T", .kind = CLI_OPT_INT, .lo = 2, .hi = 4096, .pow2 = 1, .def = "64",
+     .help = "tile side in level-0 texels (the lobes do not depend on it; memory and resume granularity do)"},
+    {.name = "--max-tiles", .metavar = "N", .kind = CLI_OPT_INT, .lo = 0, .hi = 1 << 30, .def = "all",
+     .help = "fit at most N new tiles in this process, then stop (exit 75; rerun to resume)"},
 };
 static const cli_command k_prefilter_cmd = {
     .name = "prefilter",
@@ -48,10 +71,16 @@ static const cli_command k_prefilter_cmd = {
         "average of the base GGX rotated to each texel's normal, Nahmias 2022, Eq. 2.36, over all texels)\n"
         "in the view-azimuth-aligned frame.  Level 0: shade each texel with the isotropic GGX LTC table.\n"
         "Writes DIR/prefilter.json and per level DIR/ltc_mip<k>.npy (h, w, n_theta, n_phi, 3, 3) float32\n"
-        "forward matrices and DIR/magnitude_mip<k>.npy (h, w, n_theta, n_phi) float32 albedos.\n",
+        "forward matrices and DIR/magnitude_mip<k>.npy (h, w, n_theta, n_phi) float32 albedos, the EXR view\n"
+        "atlases DIR/prefilter_mip<k>_{0,1,2}.exr and the lookup DIR/prefilter_lookup.{glsl,hlsl}\n"
+        "(docs/prefilter.md).  Works tile by tile with a checkpoint in DIR/.prefilter-work: rerunning an\n"
+        "interrupted command resumes it.  Under mpirun (MFKIT_WITH_MPI builds) the ranks share the tiles\n"
+        "and write the same bits as one process.\n",
     .opts = k_opts,
     .nopts = P_NOPTS,
-    .epilog = "exit status: 0 success, 2 usage or input error, 3 I/O error, 4 fit failure\n",
+    .epilog = "exit status: 0 success, 1 gate failed, 2 usage or input error, 3 I/O error, 4 fit failure,\n"
+              "75 stopped by --max-tiles, 130 interrupted (75 and 130 keep the checkpoint: rerun the same command\n"
+              "to resume)\n",
 };
 
 #if !defined(MFKIT_CLI_HAVE_IMAGE) || !defined(MFKIT_CLI_HAVE_SOLVER)
@@ -64,12 +93,35 @@ int cli_prefilter(int argc, char **argv)
 
 #else
 
+
 #include "mfkit/fit/mf_prefilter.h"
 #include "mfkit/io/mf_image.h"
 #include "mfkit/io/mf_io.h"
+#include "mfkit/io/mf_json.h"
 #include "mfkit/mfkit.h"
 
+#include <dirent.h>
+#include <errno.h>
+#include <pthread.h>
+#include <signal.h>
 #include <time.h>
+#include <unistd.h>
+
+#ifdef MFKIT_CLI_HAVE_MPI
+#include <mpi.h>
+#endif
+
+enum { PF_EXIT_INCOMPLETE = 75 };
+#define PF_WORK ".prefilter-work"
+#define PF_TILE_MAGIC "MFPFTIL1"
+
+/* set by the handler; an int is written atomically on every platform mfkit builds on */
+static volatile int g_pf_cancel = 0;
+static void pf_on_signal(int sig)
+{
+    (void)sig;
+    g_pf_cancel = 1;
+}
 
 static int uint_bits(const char *type)
 {
@@ -79,6 +131,174 @@ static int uint_bits(const char *type)
     }
     return 0;
 }
+
+/* ---- the tiling ------------------------------------------------------------------------------- */
+
+/* A tile: the level-0 texels [x0, x0 + w) x [y0, y0 + h), fitted for levels first..last. */
+typedef struct { int x0, y0, w, h, first, last; } pf_tile;
+
+/* Level l of the output: tiles base + gy * nx + gx (gy < ny, gx < nx), each covering tw x th
+ * texels of the level; the level is record `rec` of each of them. */
+typedef struct { int level, w, h, nx, ny, tw, th, rec; long base; } pf_plan;
+
+/* One level of a tile file (native byte order: the work files stay on the machines that wrote them). */
+typedef struct {
+    int32_t level, w, h, not_converged;
+    int64_t iterations, lobes, off_m, off_mag;
+    double worst_residual, worst_albedo_err;
+} pf_rec;
+
+static int ilog2_levels(int w, int h)
+{
+    int n = 0;
+    while ((w >> n) > 1 || (h >> n) > 1)
+        ++n;
+    return n;
+}
+
+/* plans[l - 1] for l = 1..nl; *tiles allocated. */
+static long pf_make_tiles(int W, int H, int T, pf_plan *plans, pf_tile **tiles)
+{
+    int nl = ilog2_levels(W, H);
+    int rw = W < T ? W : T, rh = H < T ? H : T, lr = ilog2_levels(rw, rh);
+    int ntx = W / rw, nty = H / rh;
+    long n = (long)ntx * nty;
+    for (int l = lr + 1; l <= nl; ++l)
+        n += (long)(W >> l > 0 ? W >> l : 1) * (H >> l > 0 ? H >> l : 1);
+    pf_tile *t = malloc(sizeof *t * (size_t)n);
+    if (!t)
+        return -1;
+    long k = 0;
+    for (int cy = 0; cy < nty; ++cy)
+        for (int cx = 0; cx < ntx; ++cx)
+            t[k++] = (pf_tile){cx * rw, cy * rh, rw, rh, 1, lr};
+    for (int l = 1; l <= lr; ++l)
+        plans[l - 1] = (pf_plan){l, W >> l > 0 ? W >> l : 1, H >> l > 0 ? H >> l : 1, ntx, nty,
+                                 rw >> l > 0 ? rw >> l : 1, rh >> l > 0 ? rh >> l : 1, l - 1, 0};
+    for (int l = lr + 1; l <= nl; ++l) {
+        int lw = W >> l > 0 ? W >> l : 1, lh = H >> l > 0 ? H >> l : 1, fw = W / lw, fh = H / lh;
+        plans[l - 1] = (pf_plan){l, lw, lh, lw, lh, 1, 1, 0, k};
+        for (int r = 0; r < lh; ++r)
+            for (int c = 0; c < lw; ++c)
+                t[k++] = (pf_tile){c * fw, r * fh, fw, fh, l, l};
+    }
+    *tiles = t;
+    return n;
+}
+
+static void tile_path(char *out, size_t size, const char *dir, long k)
+{
+    snprintf(out, size, "%s/" PF_WORK "/tile_%07ld.bin", dir, k);
+}
+
+/* Fits tile t and writes its file atomically.  Returns a CLI exit code (0 ok), message printed. */
+static int pf_run_tile(const double *normals, int W, const mf_prefilter_options *o, const pf_tile *t,
+                       const char *path, const char *input)
+{
+    char msg[1024];
+    double *sub = malloc(sizeof(double) * 3 * (size_t)t->w * t->h);
+    if (!sub)
+        return CLI_EXIT_IO + 0 * cli_error(k_cmd, "out of memory");
+    for (int y = 0; y < t->h; ++y)
+        memcpy(sub + 3 * (size_t)y * t->w, normals + 3 * ((size_t)(t->y0 + y) * W + t->x0), sizeof(double) * 3 * t->w);
+    mf_prefilter_level *lv = NULL;
+    int nl = 0;
+    mf_status st = mf_prefilter_run_from(sub, t->w, t->h, o, t->first, &lv, &nl, msg, sizeof msg);
+    free(sub);
+    if (st != MF_OK) {
+        int rc = cli_error(k_cmd, "%s: tile at texel (%d, %d), %d x %d: %s", input, t->x0, t->y0, t->w, t->h,
+                           msg[0] ? msg : mf_status_str(st));
+        return st == MF_ERR_DOMAIN ? rc : st == MF_ERR_ALLOC ? CLI_EXIT_IO : CLI_EXIT_FIT;
+    }
+    size_t nv = (size_t)o->n_theta * o->n_phi;
+    int nrec = t->last - t->first + 1;
+    pf_rec rec[16];
+    int64_t off = 8 + 4 + (int64_t)sizeof(pf_rec) * nrec;
+    for (int i = 0; i < nrec; ++i) {
+        const mf_prefilter_level *L = &lv[t->first - 1 + i];
+        size_t n = (size_t)L->width * L->height * nv;
+        rec[i] = (pf_rec){L->level, L->width, L->height, L->not_converged, L->iterations, L->lobes, off,
+                          off + (int64_t)(9 * n * sizeof(float)), L->worst_residual, L->worst_albedo_err};
+        off = rec[i].off_mag + (int64_t)(n * sizeof(float));
+    }
+    mf_io_atomic a;
+    int ok = mf_io_atomic_begin(&a, path, msg, sizeof msg) == MF_OK;
+    if (ok) {
+        int32_t n32 = nrec;
+        ok = fwrite(PF_TILE_MAGIC, 1, 8, a.file) == 8 && fwrite(&n32, 4, 1, a.file) == 1 &&
+             fwrite(rec, sizeof(pf_rec), (size_t)nrec, a.file) == (size_t)nrec;
+        for (int i = 0; i < nrec && ok; ++i) {
+            const mf_prefilter_level *L = &lv[t->first - 1 + i];
+            size_t n = (size_t)L->width * L->height * nv;
+            ok = fwrite(L->m, sizeof(float), 9 * n, a.file) == 9 * n && fwrite(L->magnitude, sizeof(float), n, a.file) == n;
+        }
+        if (!ok) {
+            snprintf(msg, sizeof msg, "%.900s: write failed", path);
+            mf_io_atomic_abort(&a);
+        } else {
+            ok = mf_io_atomic_commit(&a, msg, sizeof msg) == MF_OK;
+        }
+    }
+    mf_prefilter_levels_free(lv, nl);
+    return ok ? 0 : cli_error(k_cmd, "%s", msg) * 0 + CLI_EXIT_IO;
+}
+
+/* The tiles of this rank still to fit, shared by `workers` threads. */
+typedef struct {
+    const double *normals;
+    int W;
+    mf_prefilter_options o; /* o.threads: per tile */
+    const pf_tile *tiles;
+    const char *dir, *input;
+    long *todo, ntodo, next, max_tiles;
+    int rc, stopped;
+    pthread_mutex_t lock;
+} pf_queue;
+
+static void *pf_worker(void *arg)
+{
+    pf_queue *q = arg;
+    for (;;) {
+        long k = -1;
+        pthread_mutex_lock(&q->lock);
+        if (!q->rc && !q->stopped && q->next < q->ntodo) {
+            if (g_pf_cancel)
+                q->stopped = CLI_EXIT_INTERRUPTED;
+            else if (q->max_tiles >= 0 && q->next >= q->max_tiles)
+                q->stopped = PF_EXIT_INCOMPLETE;
+            else
+                k = q->todo[q->next++];
+        }
+        pthread_mutex_unlock(&q->lock);
+        if (k < 0)
+            return NULL;
+        char path[4400];
+        tile_path(path, sizeof path, q->dir, k);
+        int r = pf_run_tile(q->normals, q->W, &q->o, &q->tiles[k], path, q->input);
+        if (r) {
+            pthread_mutex_lock(&q->lock);
+            if (!q->rc)
+                q->rc = r;
+            pthread_mutex_unlock(&q->lock);
+        }
+    }
+}
+
+static void pf_run_queue(pf_queue *q, int workers)
+{
+    pthread_t th[256];
+    int started = 0;
+    pthread_mutex_init(&q->lock, NULL);
+    for (; started < workers - 1; ++started)
+        if (pthread_create(&th[started], NULL, pf_worker, q) != 0)
+            break;
+    pf_worker(q);
+    for (int i = 0; i < started; ++i)
+        pthread_join(th[i], NULL);
+    pthread_mutex_destroy(&q->lock);
+}
+
+/* ---- streaming writers --------------------------------------------------------------------------- */
 
 static void npy_header(mf_buf *b, const char *shape)
 {
@@ -93,25 +313,530 @@ static void npy_header(mf_buf *b, const char *shape)
     mf_buf_put(b, "\n", 1);
 }
 
-static int write_file(mf_io_atomic *a, const char *path, const mf_buf *b, char *msg, size_t msg_size)
+static void put_i32(mf_buf *b, int32_t v) { mf_buf_u32le(b, (uint32_t)v); }
+static void put_attr(mf_buf *b, const char *name, const char *type, int32_t size)
 {
-    if (mf_io_atomic_begin(a, path, msg, msg_size) != MF_OK)
-        return 0;
-    if (fwrite(b->data, 1, b->len, a->file) != b->len) {
-        snprintf(msg, msg_size, "%.900s: write failed", path);
+    mf_buf_put(b, name, strlen(name) + 1);
+    mf_buf_put(b, type, strlen(type) + 1);
+    put_i32(b, size);
+}
+
+/* An uncompressed scanline OpenEXR file, RGBA float32, width x height, written by chunks in any
+ * order (each chunk's offset is known in advance): the header and the offset table here. */
+static void exr_header(mf_buf *b, int width, int height, int64_t *data_start)
+{
+    static const unsigned char magic[4] = {0x76, 0x2f, 0x31, 0x01};
+    mf_buf_put(b, magic, 4);
+    put_i32(b, 2); /* version 2, scanline, short names */
+    put_attr(b, "channels", "chlist", 4 * 18 + 1);
+    for (const char *c = "ABGR"; *c; ++c) { /* alphabetical, as the format stores them */
+        mf_buf_put(b, c, 1);
+        mf_buf_put(b, "", 1);
+        put_i32(b, 2);                     /* FLOAT */
+        mf_buf_put(b, "\0\0\0\0", 4);      /* pLinear, reserved */
+        put_i32(b, 1), put_i32(b, 1);      /* sampling */
+    }
+    mf_buf_put(b, "", 1);
+    put_attr(b, "compression", "compression", 1);
+    mf_buf_put(b, "", 1); /* NO_COMPRESSION */
+    for (int w = 0; w < 2; ++w) {
+        put_attr(b, w ? "displayWindow" : "dataWindow", "box2i", 16);
+        put_i32(b, 0), put_i32(b, 0), put_i32(b, width - 1), put_i32(b, height - 1);
+    }
+    put_attr(b, "lineOrder", "lineOrder", 1);
+    mf_buf_put(b, "", 1);
+    put_attr(b, "pixelAspectRatio", "float", 4);
+    mf_buf_f32le(b, 1.0f);
+    put_attr(b, "screenWindowCenter", "v2f", 8);
+    mf_buf_f32le(b, 0.0f), mf_buf_f32le(b, 0.0f);
+    put_attr(b, "screenWindowWidth", "float", 4);
+    mf_buf_f32le(b, 1.0f);
+    mf_buf_put(b, "", 1);
+    int64_t start = (int64_t)b->len + 8 * (int64_t)height, chunk = 8 + 16 * (int64_t)width;
+    for (int y = 0; y < height; ++y) {
+        uint64_t v = (uint64_t)(start + y * chunk);
+        mf_buf_u32le(b, (uint32_t)v), mf_buf_u32le(b, (uint32_t)(v >> 32));
+    }
+    *data_start = start;
+}
+
+/* ---- assembly (rank 0) --------------------------------------------------------------------------- */
+
+typedef struct {
+    long lobes, iterations;
+    int not_converged;
+    double worst_residual, worst_albedo_err;
+    long nonfinite, magnitude_out;
+    double mag_min, mag_max;
+} pf_stats;
+
+typedef struct {
+    const char *dir, *input;
+    int W, H, nl, T;
+    const mf_prefilter_options *o;
+    const pf_plan *plans;
+    long ntiles;
+    int ranks;
+} pf_assembly;
+
+static int pf_open_tile(const char *dir, long k, int rec, FILE **f, pf_rec *r, char *msg, size_t msg_size)
+{
+    char path[4096], magic[8];
+    int32_t n = 0;
+    tile_path(path, sizeof path, dir, k);
+    *f = fopen(path, "rb");
+    if (!*f || fread(magic, 1, 8, *f) != 8 || memcmp(magic, PF_TILE_MAGIC, 8) || fread(&n, 4, 1, *f) != 1 ||
+        rec >= n || fseek(*f, (long)(12 + sizeof(pf_rec) * (size_t)rec), SEEK_SET) || fread(r, sizeof *r, 1, *f) != 1) {
+        snprintf(msg, msg_size, "%.900s: %s", path, *f ? "not a tile of this run (truncated or corrupt)" : strerror(errno));
+        if (*f)
+            fclose(*f), *f = NULL;
         return 0;
     }
     return 1;
 }
 
-int cli_prefilter(int argc, char **argv)
+static const char *const k_lookup_doc =
+    "textures t0, t1, t2: 2D array textures, layer i_theta * N_PHI + i_phi, MIP level k - 1 = prefilter\n"
+    " * level k (from prefilter_mip<k>_<t>.exr: the tile of view (i_theta, i_phi) at column i_phi * w_k,\n"
+    " * row i_theta * h_k), filter LINEAR_MIPMAP_LINEAR, wrap REPEAT.  t0 = (M00, M01, M02, M10),\n"
+    " * t1 = (M11, M12, M20, M21), t2 = (M22, magnitude, 0, 0); M the forward LTC in the view-azimuth-\n"
+    " * aligned frame (rotate the polygon by -phi about the normal, then apply inverse(M)), uv the map's\n"
+    " * texture coordinate, lod the map's level of detail (>= 1; below, shade with the base LTC table),\n"
+    " * theta, phi the view's elevation and azimuth in the tangent frame (radians).";
+
+static void write_glsl(mf_buf *b, const mf_prefilter_options *o)
+{
+    mf_buf_printf(b,
+        "// mfkit prefilter lookup (GLSL 4.50), generated by `mfkit prefilter`; docs/prefilter.md.\n"
+        "/* %s */\n"
+        "const int MFPF_N_THETA = %d;\nconst int MFPF_N_PHI = %d;\nconst float MFPF_THETA_MAX = %.9g;\n"
+        "void mfpfLookup(sampler2DArray t0, sampler2DArray t1, sampler2DArray t2, vec2 uv, float lod, float theta,\n"
+        "                float phi, out mat3 M, out float magnitude)\n"
+        "{\n"
+        "    float ft = clamp(theta / MFPF_THETA_MAX, 0.0, 1.0) * float(MFPF_N_THETA - 1);\n"
+        "    int i0 = min(int(ft), MFPF_N_THETA - 2);\n"
+        "    float wt = ft - float(i0);\n"
+        "    float fp = phi * (float(MFPF_N_PHI) / 6.28318530717958648);\n"
+        "    fp -= float(MFPF_N_PHI) * floor(fp / float(MFPF_N_PHI));\n"
+        "    int j0 = min(int(fp), MFPF_N_PHI - 1);\n"
+        "    float wp = fp - float(j0);\n"
+        "    int j1 = (j0 + 1) %% MFPF_N_PHI;\n"
+        "    float l = max(lod - 1.0, 0.0);\n"
+        "    vec4 a = vec4(0.0), b = vec4(0.0), c = vec4(0.0);\n"
+        "    for (int k = 0; k < 4; ++k) {\n"
+        "        int di = k & 1, dj = k >> 1;\n"
+        "        float w = (di == 1 ? wt : 1.0 - wt) * (dj == 1 ? wp : 1.0 - wp);\n"
+        "        vec3 s = vec3(uv, float((i0 + di) * MFPF_N_PHI + (dj == 1 ? j1 : j0)));\n"
+        "        a += w * textureLod(t0, s, l);\n"
+        "        b += w * textureLod(t1, s, l);\n"
+        "        c += w * textureLod(t2, s, l);\n"
+        "    }\n"
+        "    M = mat3(a.x, a.w, b.z, a.y, b.x, b.w, a.z, b.y, c.x); // columns of the row-major M\n"
+        "    magnitude = c.y;\n"
+        "}\n",
+        k_lookup_doc, o->n_theta, o->n_phi, MF_PREFILTER_THETA_MAX);
+}
+
+static void write_hlsl(mf_buf *b, const mf_prefilter_options *o)
+{
+    mf_buf_printf(b,
+        "// mfkit prefilter lookup (HLSL, shader model 5), generated by `mfkit prefilter`; docs/prefilter.md.\n"
+        "/* %s */\n"
+        "static const int MFPF_N_THETA = %d;\nstatic const int MFPF_N_PHI = %d;\nstatic const float MFPF_THETA_MAX = %.9g;\n"
+        "void mfpfLookup(Texture2DArray t0, Texture2DArray t1, Texture2DArray t2, SamplerState s, float2 uv, float lod,\n"
+        "                float theta, float phi, out float3x3 M, out float magnitude)\n"
+        "{\n"
+        "    float ft = clamp(theta / MFPF_THETA_MAX, 0.0, 1.0) * float(MFPF_N_THETA - 1);\n"
+        "    int i0 = min(int(ft), MFPF_N_THETA - 2);\n"
+        "    float wt = ft - float(i0);\n"
+        "    float fp = phi * (float(MFPF_N_PHI) / 6.28318530717958648);\n"
+        "    fp -= float(MFPF_N_PHI) * floor(fp / float(MFPF_N_PHI));\n"
+        "    int j0 = min(int(fp), MFPF_N_PHI - 1);\n"
+        "    float wp = fp - float(j0);\n"
+        "    int j1 = (j0 + 1) %% MFPF_N_PHI;\n"
+        "    float l = max(lod - 1.0, 0.0);\n"
+        "    float4 a = 0.0, b = 0.0, c = 0.0;\n"
+        "    for (int k = 0; k < 4; ++k) {\n"
+        "        int di = k & 1, dj = k >> 1;\n"
+        "        float w = (di == 1 ? wt : 1.0 - wt) * (dj == 1 ? wp : 1.0 - wp);\n"
+        "        float3 p = float3(uv, float((i0 + di) * MFPF_N_PHI + (dj == 1 ? j1 : j0)));\n"
+        "        a += w * t0.SampleLevel(s, p, l);\n"
+        "        b += w * t1.SampleLevel(s, p, l);\n"
+        "        c += w * t2.SampleLevel(s, p, l);\n"
+        "    }\n"
+        "    M = float3x3(a.x, a.y, a.z, a.w, b.x, b.y, b.z, b.w, c.x); // rows of M\n"
+        "    magnitude = c.y;\n"
+        "}\n",
+        k_lookup_doc, o->n_theta, o->n_phi, MF_PREFILTER_THETA_MAX);
+}
+
+static int begin_file(mf_io_atomic *files, int *nf, const char *dir, const char *name, char *msg, size_t msg_size)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    if (mf_io_atomic_begin(&files[*nf], path, msg, msg_size) != MF_OK)
+        return 0;
+    ++*nf;
+    return 1;
+}
+
+static int put_file(FILE *f, const mf_buf *b) { return !b->failed && fwrite(b->data, 1, b->len, f) == b->len; }
+
+/* Streams the levels from the tile files, writes the manifest and snippets, commits all. */
+static int pf_assemble(const pf_assembly *A, double secs, long resumed)
+{
+    const mf_prefilter_options *o = A->o;
+    const char *dir = A->dir;
+    const int nv = o->n_theta * o->n_phi, nl = A->nl;
+    char msg[1024] = "";
+    int nfiles_max = 5 * nl + 3, nf = 0, ok = 1;
+    mf_io_atomic *files = calloc((size_t)nfiles_max, sizeof *files);
+    pf_stats *stats = calloc((size_t)nl, sizeof *stats);
+    FILE **tf = NULL;
+    float *rm = NULL, *ra = NULL;
+    mf_buf b = {0};
+    if (!files || !stats)
+        ok = 0, snprintf(msg, sizeof msg, "out of memory");
+    for (int li = 0; li < nl && ok; ++li) {
+        const pf_plan *P = &A->plans[li];
+        pf_stats *S = &stats[li];
+        S->mag_min = INFINITY, S->mag_max = -INFINITY;
+        char name[64], shape[128];
+        int f0 = nf;
+        snprintf(name, sizeof name, "ltc_mip%d.npy", P->level);
+        ok = begin_file(files, &nf, dir, name, msg, sizeof msg);
+        snprintf(name, sizeof name, "magnitude_mip%d.npy", P->level);
+        ok = ok && begin_file(files, &nf, dir, name, msg, sizeof msg);
+        for (int t = 0; t < 3 && ok; ++t) {
+            snprintf(name, sizeof name, "prefilter_mip%d_%d.exr", P->level, t);
+            ok = begin_file(files, &nf, dir, name, msg, sizeof msg);
+        }
+        if (!ok)
+            break;
+        int64_t exr_data = 0;
+        const int aw = P->w * o->n_phi, ah = P->h * o->n_theta;
+        b.len = 0;
+        snprintf(shape, sizeof shape, "(%d, %d, %d, %d, 3, 3)", P->h, P->w, o->n_theta, o->n_phi);
+        npy_header(&b, shape);
+        ok = put_file(files[f0].file, &b);
+        b.len = 0;
+        snprintf(shape, sizeof shape, "(%d, %d, %d, %d)", P->h, P->w, o->n_theta, o->n_phi);
+        npy_header(&b, shape);
+        ok = ok && put_file(files[f0 + 1].file, &b);
+        b.len = 0;
+        exr_header(&b, aw, ah, &exr_data);
+        for (int t = 0; t < 3 && ok; ++t)
+            ok = put_file(files[f0 + 2 + t].file, &b);
+        if (!ok) {
+            snprintf(msg, sizeof msg, "%.900s: write failed", files[f0].path);
+            break;
+        }
+        size_t row = (size_t)P->w * nv;
+        free(rm), free(ra), free(tf);
+        rm = malloc(sizeof(float) * 9 * row);
+        ra = malloc(sizeof(float) * row);
+        tf = calloc((size_t)P->nx, sizeof *tf);
+        if (!rm || !ra || !tf) {
+            ok = 0, snprintf(msg, sizeof msg, "out of memory");
+            break;
+        }
+        pf_rec *recs = malloc(sizeof(pf_rec) * (size_t)P->nx);
+        if (!recs) {
+            ok = 0, snprintf(msg, sizeof msg, "out of memory");
+            break;
+        }
+        for (int r = 0; r < P->h && ok; ++r) {
+            int gy = r / P->th, rr = r % P->th;
+            if (rr == 0) { /* the next band of tiles */
+                for (int gx = 0; gx < P->nx; ++gx)
+                    if (tf[gx])
+                        fclose(tf[gx]), tf[gx] = NULL;
+                for (int gx = 0; gx < P->nx && ok; ++gx) {
+                    long k = P->base + (long)gy * P->nx + gx;
+                    ok = pf_open_tile(dir, k, P->rec, &tf[gx], &recs[gx], msg, sizeof msg);
+                    if (ok && (recs[gx].level != P->level || recs[gx].w != P->tw || recs[gx].h != P->th))
+                        ok = 0, snprintf(msg, sizeof msg, "%s/" PF_WORK ": tile %ld does not hold level %d", dir, k, P->level);
+                    if (ok) {
+                        S->lobes += recs[gx].lobes, S->iterations += recs[gx].iterations;
+                        S->not_converged += recs[gx].not_converged;
+                        S->worst_residual = fmax(S->worst_residual, recs[gx].worst_residual);
+                        S->worst_albedo_err = fmax(S->worst_albedo_err, recs[gx].worst_albedo_err);
+                    }
+                }
+            }
+            size_t seg = (size_t)P->tw * nv;
+            for (int gx = 0; gx < P->nx && ok; ++gx) {
+                FILE *f = tf[gx];
+                ok = fseek(f, (long)(recs[gx].off_m + (int64_t)(rr * seg * 9 * sizeof(float))), SEEK_SET) == 0 &&
+                     fread(rm + gx * seg * 9, sizeof(float), 9 * seg, f) == 9 * seg &&
+                     fseek(f, (long)(recs[gx].off_mag + (int64_t)(rr * seg * sizeof(float))), SEEK_SET) == 0 &&
+                     fread(ra + gx * seg, sizeof(float), seg, f) == seg;
+                if (!ok)
+                    snprintf(msg, sizeof msg, "%s/" PF_WORK ": tile %ld truncated", dir, P->base + (long)gy * P->nx + gx);
+            }
+            if (!ok)
+                break;
+            /* gate counts, then the rows */
+            for (size_t i = 0; i < 9 * row; ++i)
+                S->nonfinite += !isfinite(rm[i]);
+            for (size_t i = 0; i < row; ++i) {
+                S->nonfinite += !isfinite(ra[i]);
+                S->magnitude_out += !(ra[i] >= 0.0f && ra[i] <= 1.0f);
+                S->mag_min = fmin(S->mag_min, ra[i]), S->mag_max = fmax(S->mag_max, ra[i]);
+            }
+            b.len = 0;
+            for (size_t i = 0; i < 9 * row; ++i)
+                mf_buf_f32le(&b, rm[i]);
+            ok = put_file(files[f0].file, &b);
+            b.len = 0;
+            for (size_t i = 0; i < row; ++i)
+                mf_buf_f32le(&b, ra[i]);
+            ok = ok && put_file(files[f0 + 1].file, &b);
+            /* EXR rows y = i_theta * h + r: x = i_phi * w + column; channels A, B, G, R planes */
+            for (int t = 0; t < 3 && ok; ++t) {
+                FILE *f = files[f0 + 2 + t].file;
+                for (int a = 0; a < o->n_theta && ok; ++a) {
+                    int y = a * P->h + r;
+                    b.len = 0;
+                    put_i32(&b, y);
+                    put_i32(&b, 16 * aw);
+                    for (int ch = 3; ch >= 0; --ch) { /* A B G R */
+                        int q = 4 * t + ch;
+                        for (int p = 0; p < o->n_phi; ++p)
+                            for (int c = 0; c < P->w; ++c) {
+                                size_t idx = ((size_t)c * o->n_theta + a) * o->n_phi + p;
+                                float v = q < 9 ? rm[9 * idx + q] : q == 9 ? ra[idx] : 0.0f;
+                                mf_buf_f32le(&b, v);
+                            }
+                    }
+                    ok = fseek(f, (long)(exr_data + (int64_t)y * (8 + 16 * (int64_t)aw)), SEEK_SET) == 0 && put_file(f, &b);
+                }
+            }
+            if (!ok && !msg[0])
+                snprintf(msg, sizeof msg, "%.900s: write failed", files[f0].path);
+        }
+        free(recs);
+        for (int gx = 0; gx < P->nx; ++gx)
+            if (tf[gx])
+                fclose(tf[gx]), tf[gx] = NULL;
+    }
+    /* the snippets and the manifest */
+    long lobes = 0, nonfinite = 0, magout = 0;
+    double worst_alb = 0.0;
+    for (int li = 0; li < nl; ++li)
+        lobes += stats[li].lobes, nonfinite += stats[li].nonfinite, magout += stats[li].magnitude_out,
+            worst_alb = fmax(worst_alb, stats[li].worst_albedo_err);
+    int gate_ok = nonfinite == 0 && magout == 0;
+    if (ok) {
+        b.len = 0;
+        write_glsl(&b, o);
+        ok = begin_file(files, &nf, dir, "prefilter_lookup.glsl", msg, sizeof msg) && put_file(files[nf - 1].file, &b);
+    }
+    if (ok) {
+        b.len = 0;
+        write_hlsl(&b, o);
+        ok = begin_file(files, &nf, dir, "prefilter_lookup.hlsl", msg, sizeof msg) && put_file(files[nf - 1].file, &b);
+    }
+    if (ok) {
+        b.len = 0;
+        mf_buf_printf(&b,
+                      "{\n  \"kind\": \"ltc_prefilter\",\n  \"map\": ");
+        mf_json_string(&b, A->input);
+        mf_buf_printf(&b, ",\n  \"width\": %d,\n  \"height\": %d,\n"
+                      "  \"base_brdf\": {\"model\": \"ggx\", \"alpha\": %.17g},\n"
+                      "  \"frame\": \"view-azimuth-aligned: normals rotated by -phi about z, view (sin theta, 0, cos "
+                      "theta); M forward, divided by the norm of its last column\",\n"
+                      "  \"below_horizon\": \"texel-frame view cosine clamped to %.17g at its azimuth (Nahmias 2022)\",\n"
+                      "  \"axes\": {\"theta\": [",
+                      A->W, A->H, o->alpha, MF_PREFILTER_COS_MIN);
+        for (int a = 0; a < o->n_theta; ++a)
+            mf_buf_printf(&b, "%s%.17g", a ? ", " : "", mf_prefilter_theta(o, a));
+        mf_buf_printf(&b, "], \"phi\": [");
+        for (int p = 0; p < o->n_phi; ++p)
+            mf_buf_printf(&b, "%s%.17g", p ? ", " : "", mf_prefilter_phi(o, p));
+        mf_buf_printf(&b,
+                      "]},\n  \"fit\": {\"fitter\": \"mf_ltcfit_aniso general entry, 7-parameter lobe chart\", "
+                      "\"fitter_revision\": %d, \"mfkit\": \"%s\", \"samples\": %d, \"max_iterations\": %d, \"seed\": %llu},\n"
+                      "  \"level0\": \"not stored: isotropic GGX LTC per texel\",\n"
+                      "  \"textures\": {\"layout\": \"per level k: prefilter_mip<k>_<t>.exr, t = 0, 1, 2, RGBA float32, an "
+                      "atlas of n_theta x n_phi view tiles of w_k x h_k texels, view (i_theta, i_phi) at column i_phi * w_k, "
+                      "row i_theta * h_k; upload as layer i_theta * n_phi + i_phi of a 2D array texture, MIP level k - 1\", "
+                      "\"channels\": [[\"M00\", \"M01\", \"M02\", \"M10\"], [\"M11\", \"M12\", \"M20\", \"M21\"], "
+                      "[\"M22\", \"magnitude\", \"0\", \"0\"]], \"lookup\": [\"prefilter_lookup.glsl\", "
+                      "\"prefilter_lookup.hlsl\"]},\n"
+                      "  \"tiling\": {\"tile\": %d, \"tiles\": %ld},\n"
+                      "  \"levels\": [\n",
+                      MF_PREFILTER_REVISION, MFKIT_VERSION, o->samples, o->max_iterations, (unsigned long long)o->seed,
+                      A->T, A->ntiles);
+        for (int li = 0; li < nl; ++li) {
+            const pf_plan *P = &A->plans[li];
+            const pf_stats *S = &stats[li];
+            mf_buf_printf(&b,
+                          "    {\"level\": %d, \"width\": %d, \"height\": %d, \"matrices\": \"ltc_mip%d.npy\", "
+                          "\"magnitude\": \"magnitude_mip%d.npy\", \"textures\": [\"prefilter_mip%d_0.exr\", "
+                          "\"prefilter_mip%d_1.exr\", \"prefilter_mip%d_2.exr\"], \"lobes\": %ld, \"iterations\": %ld, "
+                          "\"worst_residual\": %.6g, \"worst_albedo_err\": %.6g, \"not_converged\": %d, "
+                          "\"magnitude_range\": [%.9g, %.9g]}%s\n",
+                          P->level, P->w, P->h, P->level, P->level, P->level, P->level, P->level, S->lobes, S->iterations,
+                          S->worst_residual, S->worst_albedo_err, S->not_converged, S->mag_min, S->mag_max,
+                          li + 1 < nl ? "," : "");
+        }
+        mf_buf_printf(&b,
+                      "  ],\n  \"lobes\": %ld,\n"
+                      "  \"gate\": {\"passed\": %s, \"checked\": [\"every matrix entry and magnitude finite\", "
+                      "\"magnitudes in [0, 1]\"], \"nonfinite\": %ld, \"magnitude_outside_0_1\": %ld, "
+                      "\"worst_albedo_quadrature_err\": %.6g, \"not_checked\": \"lobe albedo against the effective "
+                      "BRDF's, continuity across texels, views and levels (not implemented yet)\"}\n}\n",
+                      lobes, gate_ok ? "true" : "false", nonfinite, magout, worst_alb);
+        ok = begin_file(files, &nf, dir, "prefilter.json", msg, sizeof msg) && put_file(files[nf - 1].file, &b);
+    }
+    int rc = 0;
+    if (ok && !gate_ok) {
+        rc = cli_error(k_cmd, "%s: gate failed: %ld non-finite values, %ld magnitudes outside [0, 1]; nothing written",
+                       A->input, nonfinite, magout), rc = CLI_EXIT_CHECK_FAILED;
+        mf_io_atomic_abort_all(files, (size_t)nf);
+    } else if (!ok) {
+        mf_io_atomic_abort_all(files, (size_t)nf);
+        rc = cli_error(k_cmd, "%s", msg[0] ? msg : "write failed") * 0 + CLI_EXIT_IO;
+    } else if (mf_io_atomic_commit_all(files, (size_t)nf, msg, sizeof msg) != MF_OK) {
+        rc = cli_error(k_cmd, "%s", msg) * 0 + CLI_EXIT_IO;
+    } else {
+        fprintf(stderr,
+                "mfkit prefilter: %ld lobes in %ld tiles (%ld resumed) on %d rank%s x %d thread%s, %.3f s fitting wall "
+                "(%.3f ms per lobe)\n",
+                lobes, A->ntiles, resumed, A->ranks, A->ranks > 1 ? "s" : "", o->threads, o->threads > 1 ? "s" : "", secs,
+                lobes ? 1e3 * secs / lobes : 0.0);
+    }
+    mf_buf_free(&b);
+    free(files), free(stats), free(rm), free(ra), free(tf);
+    return rc;
+}
+
+static void pf_remove_work(const char *dir)
+{
+    char wd[4096], path[4400];
+    snprintf(wd, sizeof wd, "%s/" PF_WORK, dir);
+    DIR *d = opendir(wd);
+    if (!d)
+        return;
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL)
+        if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..")) {
+            snprintf(path, sizeof path, "%s/%s", wd, e->d_name);
+            remove(path);
+        }
+    closedir(d);
+    rmdir(wd);
+}
+
+static uint64_t fnv1a(uint64_t h, const void *data, size_t n)
+{
+    const unsigned char *p = data;
+    for (size_t i = 0; i < n; ++i)
+        h = (h ^ p[i]) * 1099511628211ull;
+    return h;
+}
+
+/* ---- MPI ---------------------------------------------------------------------------------------- */
+
+typedef struct { int rank, size, active; } pf_mpi;
+
+static void pf_mpi_init(pf_mpi *m)
+{
+    m->rank = 0, m->size = 1, m->active = 0;
+#ifdef MFKIT_CLI_HAVE_MPI
+    /* only when started by a launcher (OpenMPI, PMIx or MPICH's hydra): a plain run stays serial */
+    if (getenv("OMPI_COMM_WORLD_SIZE") || getenv("PMIX_RANK") || getenv("PMI_SIZE")) {
+        int inited = 0;
+        MPI_Initialized(&inited);
+        if (inited || MPI_Init(NULL, NULL) == MPI_SUCCESS) {
+            MPI_Comm_rank(MPI_COMM_WORLD, &m->rank);
+            MPI_Comm_size(MPI_COMM_WORLD, &m->size);
+            m->active = 1;
+        }
+    }
+#endif
+}
+
+/* The largest of every rank's v (v itself when serial). */
+static int pf_mpi_max(const pf_mpi *m, int v)
+{
+#ifdef MFKIT_CLI_HAVE_MPI
+    if (m->active) {
+        int r = v;
+        MPI_Allreduce(&v, &r, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+        return r;
+    }
+#endif
+    (void)m;
+    return v;
+}
+
+static long pf_mpi_sum(const pf_mpi *m, long v)
+{
+#ifdef MFKIT_CLI_HAVE_MPI
+    if (m->active) {
+        long r = v;
+        MPI_Allreduce(&v, &r, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
+        return r;
+    }
+#endif
+    (void)m;
+    return v;
+}
+
+static double pf_mpi_maxd(const pf_mpi *m, double v)
+{
+#ifdef MFKIT_CLI_HAVE_MPI
+    if (m->active) {
+        double r = v;
+        MPI_Allreduce(&v, &r, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+        return r;
+    }
+#endif
+    (void)m;
+    return v;
+}
+
+static int pf_mpi_bcast(const pf_mpi *m, int v)
+{
+#ifdef MFKIT_CLI_HAVE_MPI
+    if (m->active)
+        MPI_Bcast(&v, 1, MPI_INT, 0, MPI_COMM_WORLD);
+#endif
+    (void)m;
+    return v;
+}
+
+static int pf_mpi_finish(const pf_mpi *m, int rc)
+{
+#ifdef MFKIT_CLI_HAVE_MPI
+    if (m->active)
+        MPI_Finalize();
+#endif
+    (void)m;
+    return rc;
+}
+
+/* ---- the command ---------------------------------------------------------------------------------- */
+
+/* stderr of the ranks > 0 while they read the arguments and the map (restored for the tiles) */
+static int g_pf_saved_stderr = -1;
+static void pf_unmute(void)
+{
+    if (g_pf_saved_stderr >= 0)
+        fflush(stderr), dup2(g_pf_saved_stderr, 2), close(g_pf_saved_stderr), g_pf_saved_stderr = -1;
+}
+
+static int pf_main(int argc, char **argv, const pf_mpi *mpi)
 {
     cli_val v[P_NOPTS];
     const char *pos[1];
     int npos = 0;
     int prc = cli_opt_parse(&k_prefilter_cmd, argc - 1, argv + 1, ~0u, k_cmd, v, pos, &npos);
     if (prc == CLI_PARSE_HELP) {
-        cli_opt_usage(&k_prefilter_cmd, stdout);
+        if (mpi->rank == 0)
+            cli_opt_usage(&k_prefilter_cmd, stdout);
         return 0;
     }
     if (prc)
@@ -125,6 +850,8 @@ int cli_prefilter(int argc, char **argv)
         o.threads = (int)v[P_THREADS].i;
     if (v[P_SAMPLES].set)
         o.samples = (int)v[P_SAMPLES].i;
+    int T = v[P_TILE].set ? (int)v[P_TILE].i : 64;
+    long max_tiles = v[P_MAX_TILES].set ? (long)v[P_MAX_TILES].i : -1;
     if (v[P_VIEWS].set) {
         char tail;
         if (sscanf(v[P_VIEWS].s, "%dx%d%c", &o.n_theta, &o.n_phi, &tail) != 2 || o.n_theta < 2 || o.n_theta > 256 ||
@@ -144,8 +871,7 @@ int cli_prefilter(int argc, char **argv)
     }
     int rc = 0;
     double *normals = NULL;
-    mf_prefilter_level *levels = NULL;
-    int nlevels = 0;
+    pf_tile *tiles = NULL;
     if (img.channels != 3 && img.channels != 4) {
         rc = cli_error(k_cmd, "%s: a normal map needs 3 channels (R, G, B = n.x, n.y, n.z, or 4 with alpha), it has %d",
                        input, img.channels);
@@ -192,97 +918,136 @@ int cli_prefilter(int argc, char **argv)
             for (int c = 0; c < 3; ++c)
                 normals[3 * t + c] = n[c] / len;
         }
-    if (mf_io_make_dirs(dir, msg, sizeof msg) != MF_OK) {
-        rc = CLI_EXIT_IO, cli_error(k_cmd, "--out %s: %s", dir, msg);
+    const int W = img.width, H = img.height, nl = ilog2_levels(W, H);
+    pf_plan plans[16];
+    long ntiles = pf_make_tiles(W, H, T, plans, &tiles);
+    if (ntiles < 0) {
+        rc = CLI_EXIT_IO, cli_error(k_cmd, "out of memory");
         goto done;
     }
-    struct timespec t0, t1;
-    clock_gettime(CLOCK_MONOTONIC, &t0);
-    st = mf_prefilter_run(normals, img.width, img.height, &o, &levels, &nlevels, msg, sizeof msg);
-    clock_gettime(CLOCK_MONOTONIC, &t1);
-    if (st != MF_OK) {
-        rc = cli_error(k_cmd, "%s: %s", input, msg[0] ? msg : mf_status_str(st));
-        if (st != MF_ERR_DOMAIN)
-            rc = st == MF_ERR_ALLOC ? CLI_EXIT_IO : CLI_EXIT_FIT;
-        goto done;
-    }
-    double secs = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
-    {
-        int nf = 2 * nlevels + 1;
-        mf_io_atomic *files = calloc((size_t)nf, sizeof *files);
-        mf_buf man = {0};
-        long lobes = 0;
-        int ok = files != NULL;
-        mf_buf_printf(&man,
-                      "{\n  \"kind\": \"ltc_prefilter\",\n  \"map\": \"%s\",\n  \"width\": %d,\n  \"height\": %d,\n"
-                      "  \"base_brdf\": {\"model\": \"ggx\", \"alpha\": %.17g},\n"
-                      "  \"frame\": \"view-azimuth-aligned: normals rotated by -phi about z, view (sin theta, 0, cos "
-                      "theta); M forward, divided by the norm of its last column\",\n"
-                      "  \"below_horizon\": \"texel-frame view cosine clamped to %.17g at its azimuth (Nahmias 2022)\",\n"
-                      "  \"theta\": [",
-                      input, img.width, img.height, o.alpha, MF_PREFILTER_COS_MIN);
-        for (int a = 0; a < o.n_theta; ++a)
-            mf_buf_printf(&man, "%s%.17g", a ? ", " : "", mf_prefilter_theta(&o, a));
-        mf_buf_printf(&man, "],\n  \"phi\": [");
-        for (int b = 0; b < o.n_phi; ++b)
-            mf_buf_printf(&man, "%s%.17g", b ? ", " : "", mf_prefilter_phi(&o, b));
-        mf_buf_printf(&man, "],\n  \"fit\": {\"fitter\": \"mf_ltcfit_aniso general entry, 7-parameter lobe chart\", "
-                            "\"samples\": %d, \"seed\": 1},\n  \"level0\": \"not stored: isotropic GGX LTC per texel\",\n"
-                            "  \"levels\": [\n",
-                      o.samples);
-        for (int l = 0; l < nlevels && ok; ++l) {
-            mf_prefilter_level *lv = &levels[l];
-            char path[4096], shape[128], mname[64], aname[64];
-            snprintf(mname, sizeof mname, "ltc_mip%d.npy", lv->level);
-            snprintf(aname, sizeof aname, "magnitude_mip%d.npy", lv->level);
-            size_t n = (size_t)lv->width * lv->height * o.n_theta * o.n_phi;
-            mf_buf b = {0};
-            snprintf(shape, sizeof shape, "(%d, %d, %d, %d, 3, 3)", lv->height, lv->width, o.n_theta, o.n_phi);
-            npy_header(&b, shape);
-            for (size_t i = 0; i < 9 * n; ++i)
-                mf_buf_f32le(&b, lv->m[i]);
-            snprintf(path, sizeof path, "%s/%s", dir, mname);
-            ok = write_file(&files[2 * l], path, &b, msg, sizeof msg);
-            mf_buf_free(&b);
-            if (!ok)
-                break;
-            snprintf(shape, sizeof shape, "(%d, %d, %d, %d)", lv->height, lv->width, o.n_theta, o.n_phi);
-            npy_header(&b, shape);
-            for (size_t i = 0; i < n; ++i)
-                mf_buf_f32le(&b, lv->magnitude[i]);
-            snprintf(path, sizeof path, "%s/%s", dir, aname);
-            ok = write_file(&files[2 * l + 1], path, &b, msg, sizeof msg);
-            mf_buf_free(&b);
-            mf_buf_printf(&man,
-                          "    {\"level\": %d, \"width\": %d, \"height\": %d, \"matrices\": \"%s\", \"magnitude\": \"%s\", "
-                          "\"lobes\": %ld, \"worst_residual\": %.6g, \"worst_albedo_err\": %.6g, \"not_converged\": %d}%s\n",
-                          lv->level, lv->width, lv->height, mname, aname, lv->lobes, lv->worst_residual,
-                          lv->worst_albedo_err, lv->not_converged, l + 1 < nlevels ? "," : "");
-            lobes += lv->lobes;
-        }
-        mf_buf_printf(&man, "  ],\n  \"lobes\": %ld\n}\n", lobes);
-        if (ok) {
-            char path[4096];
-            snprintf(path, sizeof path, "%s/prefilter.json", dir);
-            ok = write_file(&files[nf - 1], path, &man, msg, sizeof msg);
-        }
-        mf_buf_free(&man);
-        if (ok && mf_io_atomic_commit_all(files, (size_t)nf, msg, sizeof msg) == MF_OK) {
-            fprintf(stderr, "mfkit prefilter: %ld lobes in %.3f s (%.3f ms per lobe, %d thread%s)\n", lobes, secs,
-                    lobes ? 1e3 * secs / lobes : 0.0, o.threads, o.threads > 1 ? "s" : "");
-        } else {
-            if (files && !ok)
-                mf_io_atomic_abort_all(files, (size_t)nf);
+    /* the work directory and its run record (rank 0 checks it, the others wait) */
+    char wd[4096], runp[4400];
+    snprintf(wd, sizeof wd, "%s/" PF_WORK, dir);
+    snprintf(runp, sizeof runp, "%s/run.txt", wd);
+    if (mpi->rank == 0) {
+        mf_buf key = {0};
+        uint64_t h = fnv1a(1469598103934665603ull, normals, sizeof(double) * 3 * (size_t)W * H);
+        mf_buf_printf(&key,
+                      "mfkit prefilter work 1\nrevision %d\nmap %d x %d fnv1a64 %016llx\nalpha %.17g\nviews %d x %d\n"
+                      "samples %d\nmax_iterations %d\nseed %llu\ntile %d\n",
+                      MF_PREFILTER_REVISION, W, H, (unsigned long long)h, o.alpha, o.n_theta, o.n_phi, o.samples,
+                      o.max_iterations, (unsigned long long)o.seed, T);
+        unsigned char *old = NULL;
+        size_t oldlen = 0;
+        int missing = 0;
+        if (mf_io_make_dirs(wd, msg, sizeof msg) != MF_OK) {
+            rc = CLI_EXIT_IO, cli_error(k_cmd, "--out %s: %s", dir, msg);
+        } else if (mf_io_read_file(runp, runp, &old, &oldlen, &missing, msg, sizeof msg) == MF_OK) {
+            if (oldlen != key.len || memcmp(old, key.data, key.len))
+                rc = cli_error(k_cmd, "%s: the checkpoint of a run with another map, options or fitter revision; "
+                                      "remove it to start over", wd);
+        } else if (!missing) {
+            rc = CLI_EXIT_IO, cli_error(k_cmd, "%s", msg);
+        } else if (mf_io_write_buf_atomic(runp, &key, msg, sizeof msg) != MF_OK) {
             rc = CLI_EXIT_IO, cli_error(k_cmd, "%s", msg);
         }
-        free(files);
+        free(old);
+        mf_buf_free(&key);
     }
+    rc = pf_mpi_bcast(mpi, rc);
+    if (rc)
+        goto done;
+    pf_unmute(); /* a tile's error is its rank's own */
+
+    /* this rank's tiles not in the checkpoint, largest footprints (the last tiles) first: the
+     * longest jobs start first, and a first --max-tiles slice meets the memory peak */
+    long resumed = 0;
+    pf_queue q;
+    memset(&q, 0, sizeof q);
+    q.todo = malloc(sizeof(long) * (size_t)(ntiles / mpi->size + 1));
+    if (!q.todo)
+        rc = CLI_EXIT_IO, cli_error(k_cmd, "out of memory");
+    for (long i = mpi->rank; i < ntiles && q.todo; i += mpi->size) {
+        char path[4400];
+        tile_path(path, sizeof path, dir, ntiles - 1 - i);
+        if (access(path, F_OK) == 0)
+            ++resumed;
+        else
+            q.todo[q.ntodo++] = ntiles - 1 - i;
+    }
+    q.normals = normals, q.W = W, q.tiles = tiles, q.dir = dir, q.input = input, q.max_tiles = max_tiles;
+    /* several tiles at once when there are enough (a footprint tile is one fit job: threads inside it
+     * would idle), else the threads inside the tiles; the bits depend on neither */
+    int workers = q.ntodo < o.threads ? (int)(q.ntodo > 0 ? q.ntodo : 1) : o.threads;
+    q.o = o;
+    q.o.threads = o.threads / workers > 0 ? o.threads / workers : 1;
+    struct sigaction sa, old_int, old_term;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = pf_on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &old_int);
+    sigaction(SIGTERM, &sa, &old_term);
+    struct timespec t0, t1;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    if (!rc)
+        pf_run_queue(&q, workers);
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    sigaction(SIGINT, &old_int, NULL);
+    sigaction(SIGTERM, &old_term, NULL);
+    free(q.todo);
+    if (!rc)
+        rc = q.rc;
+    int stopped = q.stopped;
+    double secs = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+    rc = pf_mpi_max(mpi, rc);
+    stopped = pf_mpi_max(mpi, stopped);
+    resumed = pf_mpi_sum(mpi, resumed);
+    secs = pf_mpi_maxd(mpi, secs);
+    if (!rc && stopped) {
+        long done_tiles = 0;
+        for (long k = 0; k < ntiles && mpi->rank == 0; ++k) {
+            char path[4400];
+            tile_path(path, sizeof path, dir, k);
+            done_tiles += access(path, F_OK) == 0;
+        }
+        if (mpi->rank == 0)
+            fprintf(stderr, "mfkit prefilter: %s after %ld of %ld tiles; rerun the same command to resume from %s\n",
+                    stopped == CLI_EXIT_INTERRUPTED ? "interrupted" : "stopped (--max-tiles)", done_tiles, ntiles, wd);
+        rc = stopped;
+        goto done;
+    }
+    if (rc)
+        goto done;
+    if (mpi->rank == 0) {
+        pf_assembly A = {dir, input, W, H, nl, T, &o, plans, ntiles, mpi->size};
+        rc = pf_assemble(&A, secs, resumed);
+        if (!rc)
+            pf_remove_work(dir);
+    }
+    rc = pf_mpi_bcast(mpi, rc);
 done:
     free(normals);
-    mf_prefilter_levels_free(levels, nlevels);
+    free(tiles);
     mf_image_free(&img);
     mf_image_info_free(&info);
     return rc;
+}
+
+int cli_prefilter(int argc, char **argv)
+{
+    pf_mpi mpi;
+    pf_mpi_init(&mpi);
+    /* every rank sees the same arguments and map, hence the same usage and input errors: rank 0 alone reports them */
+    if (mpi.rank != 0) {
+        fflush(stderr);
+        g_pf_saved_stderr = dup(2);
+        FILE *null = fopen("/dev/null", "w");
+        if (null)
+            dup2(fileno(null), 2), fclose(null);
+    }
+    int rc = pf_main(argc, argv, &mpi);
+    pf_unmute();
+    return pf_mpi_finish(&mpi, rc);
 }
 
 #endif

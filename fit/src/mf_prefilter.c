@@ -434,6 +434,13 @@ static int is_pow2(int n) { return n > 0 && (n & (n - 1)) == 0; }
 mf_status mf_prefilter_run(const double *normals, int width, int height, const mf_prefilter_options *o,
                            mf_prefilter_level **levels, int *nlevels, char *msg, size_t msg_size)
 {
+    return mf_prefilter_run_from(normals, width, height, o, 1, levels, nlevels, msg, msg_size);
+}
+
+mf_status mf_prefilter_run_from(const double *normals, int width, int height, const mf_prefilter_options *o,
+                                int first_level, mf_prefilter_level **levels, int *nlevels, char *msg,
+                                size_t msg_size)
+{
     if (msg && msg_size)
         msg[0] = '\0';
 #define FAIL(...) (msg && msg_size ? (void)snprintf(msg, msg_size, __VA_ARGS__) : (void)0), MF_ERR_DOMAIN
@@ -463,6 +470,11 @@ mf_status mf_prefilter_run(const double *normals, int width, int height, const m
     int nl = 0;
     while ((width >> nl) > 1 || (height >> nl) > 1)
         ++nl;
+    if (first_level < 1 || first_level > nl) {
+        if (msg && msg_size)
+            snprintf(msg, msg_size, "first level %d not in 1..%d", first_level, nl);
+        return MF_ERR_DOMAIN;
+    }
     mf_prefilter_level *lv = calloc((size_t)nl, sizeof *lv);
     size_t ntex = (size_t)width * height, nv = (size_t)o->n_theta * o->n_phi;
     pjob j;
@@ -478,6 +490,10 @@ mf_status mf_prefilter_run(const double *normals, int width, int height, const m
         lv[l].height = height >> (l + 1) > 0 ? height >> (l + 1) : 1;
         lv[l].n_theta = o->n_theta;
         lv[l].n_phi = o->n_phi;
+        if (l + 1 < first_level) { /* skipped: no texels, so the fit pass passes over it */
+            lv[l].width = lv[l].height = 0;
+            continue;
+        }
         size_t n = (size_t)lv[l].width * lv[l].height * nv;
         lv[l].m = malloc(sizeof(float) * 9 * n);
         lv[l].magnitude = malloc(sizeof(float) * n);

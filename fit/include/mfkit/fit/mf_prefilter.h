@@ -54,6 +54,9 @@ extern "C" {
 #endif
 
 #define MF_PREFILTER_COS_MIN 0.001
+/* Names the fitted values: bump it whenever they change (objective, starts, constants), so that a
+ * resumed `mfkit prefilter` refuses tiles of another revision. */
+#define MF_PREFILTER_REVISION 1
 #define MF_PREFILTER_ALBEDO_N 128
 #define MF_PREFILTER_THETA_MAX (0.999 * 0.5 * MF_PI)
 
@@ -113,6 +116,15 @@ typedef struct mf_prefilter_level {
 mf_status mf_prefilter_run(const double *normals, int width, int height, const mf_prefilter_options *o,
                            mf_prefilter_level **levels, int *nlevels, char *msg, size_t msg_size) MF_WARN_UNUSED;
 void mf_prefilter_levels_free(mf_prefilter_level *levels, int nlevels);
+
+/* mf_prefilter_run for the levels first_level..log2(max(width, height)) only: the records of the
+ * levels below first_level have width = height = 0 and no arrays.  Each footprint's lobes depend
+ * only on its own normals and the options, so a tile of the map (a sub-map whose footprints are
+ * footprints of the whole map) gives bit for bit the whole map's lobes of those footprints: the
+ * `mfkit prefilter` pipeline fits the map tile by tile with it. */
+mf_status mf_prefilter_run_from(const double *normals, int width, int height, const mf_prefilter_options *o,
+                                int first_level, mf_prefilter_level **levels, int *nlevels, char *msg,
+                                size_t msg_size) MF_WARN_UNUSED;
 
 /* The view of table index (i_theta, i_phi). */
 double mf_prefilter_theta(const mf_prefilter_options *o, int i);

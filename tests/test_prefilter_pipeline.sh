@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# test_prefilter_pipeline.sh MFKIT SRC [MPIEXEC] -- the tiled `mfkit prefilter` pipeline on the shipped
+# 16 x 16 V-groove map with 2 x 1 views and 256 samples per fit (each run about 1.5 s of CPU):
+#   - tiling does not change a bit: --tile 4 (16 region tiles + 5 higher-level tiles) against --tile 16
+#     (one tile, the whole map in one library call), every .npy, .exr and snippet compared with cmp;
+#   - resume: --max-tiles stops (exit 75) with no output but the checkpoint; a rerun finishes and writes
+#     the same bits as an uninterrupted run (the manifest too); a checkpoint of other options is refused
+#     with one line and nothing written; SIGINT stops between tiles (exit 130) and resumes the same way;
+#   - with MPIEXEC (an MFKIT_WITH_MPI build; only the MPI checks then, test_prefilter_mpi): `MPIEXEC -n 2 mfkit prefilter`, through the front end
+#     bin/mfkit, writes the same bits as one process, and one process resumes a 2-rank run stopped
+#     by --max-tiles.
+mfkit="$1"; src="$2"; mpiexec="${3:-}"
+source "$(dirname "$0")/cli_test_lib.sh"
+map="$src/tests/data/normalmaps/vgroove_16.png"
+args=(prefilter "$map" --views 2x1 --samples 256)
+
+same() { # same DIR1 DIR2 [with-manifest]: every output file of DIR1 equal to DIR2's
+  local a="$1" b="$2" f n=0
+  for f in "$a"/*.npy "$a"/*.exr "$a"/*.glsl "$a"/*.hlsl ${3:+"$a"/prefilter.json}; do
+    n=$((n+1)); cmp -s "$f" "$b/$(basename "$f")" || { echo "differs: $(basename "$f")"; return 1; }
+  done
+  local want=22; [ -n "${3:-}" ] && want=23 # 4 levels x (2 .npy + 3 .exr), 2 snippets, the manifest
+  [ $n -eq $want ] || { echo "$n files"; return 1; }
+}
+
+"$mfkit" "${args[@]}" --tile 4 --threads 2 --out "$tmp/t4" 2>"$tmp/t4.log"; rc=$?
+ok '[ $rc -eq 0 ] && grep -q "in 21 tiles" "$tmp/t4.log"' "--tile 4 exits 0 with 21 tiles (rc=$rc): $(tail -2 "$tmp/t4.log")"
+ok '[ ! -e "$tmp/t4/.prefilter-work" ]' "the checkpoint is removed after the commit"
+
+if [ -z "$mpiexec" ]; then
+"$mfkit" "${args[@]}" --tile 16 --out "$tmp/one" 2>"$tmp/one.log"; rc=$?
+ok '[ $rc -eq 0 ]' "one tile exits 0 (rc=$rc): $(tail -2 "$tmp/one.log")"
+ok 'same "$tmp/one" "$tmp/t4"' "--tile 4 and --tile 16 write the same bits"
+
+# --max-tiles: stop, keep the checkpoint, no output
+"$mfkit" "${args[@]}" --tile 4 --max-tiles 5 --out "$tmp/r" 2>"$tmp/r1.log"; rc=$?
+ok '[ $rc -eq 75 ] && [ "$(wc -l <"$tmp/r1.log")" -eq 1 ] && grep -q "after 5 of 21 tiles" "$tmp/r1.log"' \
+   "--max-tiles 5 stops with exit 75 and one line (rc=$rc): $(cat "$tmp/r1.log")"
+ok '[ "$(ls "$tmp/r")" = "" ] && [ "$(ls "$tmp/r/.prefilter-work" | grep -c "^tile_.*\.bin$")" -eq 5 ]' \
+   "stopped: no output file, 5 tiles in the checkpoint: $(ls -A "$tmp/r" "$tmp/r/.prefilter-work" | tr '\n' ' ')"
+expect_error "a checkpoint of other options is refused" 2 "checkpoint of a run with another" \
+   "${args[@]}" --tile 4 --roughness 0.2 --out "$tmp/r"
+ok '[ "$(ls "$tmp/r")" = "" ]' "the refusal writes nothing"
+: >"$tmp/r/.prefilter-work/tile_0000006.bin.tmp-stale" # a temporary left by a killed write is ignored
+"$mfkit" "${args[@]}" --tile 4 --max-tiles 4 --out "$tmp/r" 2>"$tmp/r2.log"; rc=$?
+ok '[ $rc -eq 75 ] && grep -q "after 9 of 21 tiles" "$tmp/r2.log"' "a second slice adds 4 tiles (rc=$rc): $(cat "$tmp/r2.log")"
+"$mfkit" "${args[@]}" --tile 4 --out "$tmp/r" 2>"$tmp/r3.log"; rc=$?
+ok '[ $rc -eq 0 ] && grep -q "(9 resumed)" "$tmp/r3.log"' "the rerun finishes, 9 tiles resumed (rc=$rc): $(cat "$tmp/r3.log")"
+ok 'same "$tmp/t4" "$tmp/r" manifest' "the resumed run writes the same bits as the uninterrupted one, manifest included"
+
+# SIGINT between tiles
+"$mfkit" "${args[@]}" --tile 4 --out "$tmp/s" 2>"$tmp/s1.log" & pid=$!
+for _ in $(seq 600); do ls "$tmp/s/.prefilter-work"/tile_*.bin >/dev/null 2>&1 && break; sleep 0.1; done
+kill -INT $pid; wait $pid; rc=$?
+ok '[ $rc -eq 130 ] && grep -q "interrupted after" "$tmp/s1.log" && [ ! -e "$tmp/s/prefilter.json" ]' \
+   "SIGINT stops with exit 130, the checkpoint kept (rc=$rc): $(cat "$tmp/s1.log")"
+"$mfkit" "${args[@]}" --tile 4 --out "$tmp/s" 2>"$tmp/s2.log"; rc=$?
+ok '[ $rc -eq 0 ] && same "$tmp/t4" "$tmp/s" manifest' "resumed after SIGINT: the same bits (rc=$rc): $(cat "$tmp/s2.log")"
+
+else
+  mpi=("$mpiexec" -n 2); [ "$(id -u)" -eq 0 ] && mpi+=(--allow-run-as-root)
+  mpi+=(--oversubscribe)
+  "${mpi[@]}" "$mfkit" "${args[@]}" --tile 4 --out "$tmp/m" >"$tmp/m.log" 2>&1; rc=$?
+  ok '[ $rc -eq 0 ] && grep -q "on 2 ranks" "$tmp/m.log"' "mpirun -n 2 exits 0 on 2 ranks (rc=$rc): $(tail -3 "$tmp/m.log")"
+  ok 'same "$tmp/t4" "$tmp/m" manifest' "2 ranks write the same bits as one process, manifest included"
+  "${mpi[@]}" "$mfkit" "${args[@]}" --tile 4 --max-tiles 3 --out "$tmp/mr" >"$tmp/mr.log" 2>&1; rc=$?
+  ok '[ $rc -eq 75 ] && grep -q "after 6 of 21 tiles" "$tmp/mr.log"' "2 ranks x 3 tiles stop with exit 75 (rc=$rc): $(tail -3 "$tmp/mr.log")"
+  "$mfkit" "${args[@]}" --tile 4 --out "$tmp/mr" 2>"$tmp/mr2.log"; rc=$?
+  ok '[ $rc -eq 0 ] && same "$tmp/t4" "$tmp/mr" manifest' "one process finishes a 2-rank checkpoint: the same bits (rc=$rc)"
+  "${mpi[@]}" "$mfkit" "${args[@]}" --tile 3 --out "$tmp/mbad" >"$tmp/mb.log" 2>&1
+  ok '[ "$(grep -c "mfkit prefilter: --tile" "$tmp/mb.log")" -eq 1 ] && [ ! -e "$tmp/mbad" ]' \
+     "2 ranks: a usage error is reported once, nothing written: $(head -c 600 "$tmp/mb.log")"
+fi
+
+finish test_prefilter_pipeline
