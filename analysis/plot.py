@@ -455,6 +455,15 @@ def _diverging(ax, fig, xs, ys, z, xlabel, ylabel, title, cbar_label, limit=None
     return heatmap(ax, fig, xs, ys, z, xlabel, ylabel, title, cbar_label, vmin=-m, vmax=m, cmap="RdBu_r")
 
 
+def _texel_tables(d):
+    """The table files study_ltc_texels read (the last one or two paths of its provenance command,
+    not its --out file)."""
+    cmd = (d.header[0] if d.header else "").split(", mfkit=")[0] + " "
+    out = re.search(r"--out (\S+)", cmd)
+    found = re.findall(r"(\S+\.(?:csv|json|exr|npy|dds|ktx2))(?= )", cmd)
+    return [t for t in found if not (out and t == out.group(1))][-2:]
+
+
 def plot_ltc_texels(d, out_dir, made):
     # ltc_texels.csv -> ltc_texel_errors; ltc_texels_<x>.csv (one per BRDF) -> ltc_texel_errors_<x>
     stem = os.path.splitext(os.path.basename(d.path))[0]
@@ -519,7 +528,8 @@ def plot_ltc_texels(d, out_dir, made):
     note = ("%d texels, %d polygons each; MC = Monte Carlo; hatched: mean |LTC - MC| <= %g mean s.e. (what an exact "
             "table gives); log colour scales start at %g; any light's error <= (L1 albedo + |magnitude - albedo|) / 2"
             % (n, int(np.nanmax(d["polygons"])), MC_NOISE_RATIO, LTC_TEXEL_FLOOR))
-    gate = gates_in(d.header[0] if d.header else "")
+    tables = _texel_tables(d)
+    gate = gate_of(tables[0]) if tables else gates_in(d.header[0] if d.header else "")
     fig.suptitle("LTC table%s, error per texel (the first table of the command)\n%s"
                  % (" of " + suffix.lstrip("_") if suffix else "", gate), fontsize=10)
     finish(fig, d, out_dir, "ltc_texel_errors" + suffix, made, note=note)
@@ -532,9 +542,7 @@ def plot_ltc_texels(d, out_dir, made):
     za, zb = grid(d["poly_mean_rel"]), grid(d["second_poly_mean_rel"])
     both = np.concatenate([za[np.isfinite(za)], zb[np.isfinite(zb)]])
     hi = max(float(both.max()) if both.size else 1.0, LTC_TEXEL_FLOOR * 10)
-    cmd = d.header[0] if d.header else ""
-    tables = [t for t in re.findall(r"(\S+\.(?:csv|json|exr|npy|dds|ktx2))(?=[ ,])", cmd.split(", mfkit=")[0])
-              if not t.endswith(os.path.basename(d.path))][-2:]
+    tables = _texel_tables(d)
     for a, z, k in ((ax[0][0], za, 0), (ax[0][1], zb, 1)):
         label = gate_of(tables[k]) if len(tables) == 2 else ("first table" if k == 0 else "second table")
         heatmap(a, fig, xs, ys, z, th_label, r_label,

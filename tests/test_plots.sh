@@ -116,6 +116,9 @@ want = "command=x --out d.csv tests/data/reference/ltc_code_ggx_64.csv, seed=1"
 assert got == want, (got, want)
 assert plot.gate_of("/a/ltc_code_ggx_64.csv") == "ltc_code_ggx_64.csv: FAILED its gate (mfkit validate --quick)"
 assert plot.gate_of("x.json").startswith("x.json: gate not recorded")
+d = plot.Data.__new__(plot.Data)
+d.path, d.header = "/x/ltc_texels_ggx.csv", ["command=study_ltc_texels --stride 4 --out /x/ltc_texels.csv /r/a.csv /t/b.exr, mfkit=0.1.0"]
+assert plot._texel_tables(d) == ["/r/a.csv", "/t/b.exr"], plot._texel_tables(d)
 EOF
 MFKIT_FIGURE_GATES=$tmp/gates.tsv "$py" "$src/analysis/plot.py" "$tmp/data" "$tmp/fig" || fail "plot.py exited with $?"
 for name in smith_walter_g1 smith_gaussian_lambda furnace_microfacet furnace_curves furnace_models \
