@@ -64,6 +64,12 @@ if [ $plots -eq 1 ]; then
   ok 'png_ok "$tmp/self/compare_diff.png" && png_ok "$tmp/self/compare_shading.png"' "self: compare PNGs"
 fi
 
+# the same table as the other files users ship (KTX2, the legacy DDS pair): identical to its JSON
+for x in "$tmp/fit/ltc_ggx.ktx2" "$tmp/fit/ltc_ggx_legacy_1.dds+$tmp/fit/ltc_ggx_legacy_2.dds"; do
+  v=$("$mfkit" compare "$mf" "$x" --texels 2 --samples 256 | grep "^verdict: ")
+  ok 'echo "$v" | grep -q "^verdict: identical"' "compare JSON vs $x: $v"
+done
+
 # --- mfkit's table against the reference: mfkit's is better (the verdict's direction) -------------
 # mfkit's 32 x 32 table resampled onto the reference's 64 x 64 grid; 8 x 8 texels, 24 lights each, 2^15
 # samples: measured 0.43x, the paired difference 7 standard errors from 0 (the default settings, 16 x 16
