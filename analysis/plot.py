@@ -15,13 +15,19 @@ still plot; unknown CSV files are listed and skipped.  Known data (docs/figures.
   study_ltc_texels   ltc_texel_errors.*, and ltc_texel_pair.* with a SECOND_TABLE
 
 Each figure carries a caption line naming its data file and the file's provenance header
-(command, mfkit version, seed, date).  Exit status: 0 when every recognised file plotted,
-1 on a plotting error, 2 for bad usage, 3 when numpy or matplotlib is missing.
+(command, mfkit version, seed, date); paths in it are shown relative to the source tree, and files
+of temporary directories by their name only.  Figures of an LTC table say whether the table passed
+its gate: MFKIT_FIGURE_GATES (environment, set by make_figures.sh) names a file of lines
+"TABLE_FILE_NAME<TAB>verdict"; without it the figures say that the gate was not recorded.
+Exit status: 0 when every recognised file plotted, 1 on a plotting error, 2 for bad usage, 3 when
+numpy or matplotlib is missing.
 """
 import csv
 import math
 import os
+import re
 import sys
+import tempfile
 import textwrap
 
 try:
@@ -43,6 +49,49 @@ except ImportError as exc:  # pragma: no cover - depends on the interpreter
 
 ERR_FLOOR = 1e-17  # relative errors of exactly 0 are drawn at this floor on log scales
 FORMATS = ("png", "pdf")
+SOURCE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def clean_paths(text):
+    """Paths as a reader of the figure can use them: the source tree's relative to its root, files
+    in temporary directories (make_figures.sh's scratch fits) by their name alone."""
+    text = text.replace(SOURCE_DIR + "/", "")
+    temps = {"/tmp", "/var/tmp", tempfile.gettempdir(), os.environ.get("TMPDIR", "/tmp").rstrip("/")}
+    for t in sorted((t for t in temps if t), key=len, reverse=True):
+        text = re.sub(re.escape(t) + r"/[^\s,;]*", lambda m: os.path.basename(m.group(0)), text)
+    return text
+
+
+def _read_gates():
+    """{table file name: verdict} from the file named by MFKIT_FIGURE_GATES (make_figures.sh)."""
+    path = os.environ.get("MFKIT_FIGURE_GATES")
+    gates = {}
+    if path:
+        try:
+            with open(path) as f:
+                for ln in f:
+                    name, sep, verdict = ln.rstrip("\n").partition("\t")
+                    if sep:
+                        gates[os.path.basename(name)] = verdict
+        except OSError as exc:
+            sys.stderr.write("plot.py: MFKIT_FIGURE_GATES=%s: %s\n" % (path, exc))
+    return gates
+
+
+GATES = _read_gates()
+
+
+def gate_of(table):
+    """'NAME: passed its gate' (or failed, or not recorded) for a table path or name."""
+    name = os.path.basename(str(table))
+    return "%s: %s" % (name, GATES.get(name, "gate not recorded (make_figures.sh records it)"))
+
+
+def gates_in(text):
+    """The gate verdicts of the tables named in text (a provenance line), in order."""
+    names = [n for n in GATES if n in text]
+    names.sort(key=text.find)
+    return "; ".join("%s: %s" % (n, GATES[n]) for n in names) if names else "gate not recorded (make_figures.sh records it)"
 
 
 # ---- reading -------------------------------------------------------------------------------
@@ -88,7 +137,7 @@ class Data:
 
     def caption(self):
         prov = "; ".join(self.header[:2]) if self.header else "no provenance header in the file"
-        return "data: %s  |  %s" % (os.path.basename(self.path), prov)
+        return "data: %s  |  %s" % (os.path.basename(self.path), clean_paths(prov))
 
 
 def grid_of(d, xname, yname, zname):
@@ -121,7 +170,7 @@ def new_figure(ncols=1, nrows=1, width=6.4, height=4.6):
 
 
 def finish(fig, data, out_dir, name, made, note=None):
-    text = data.caption() if isinstance(data, Data) else data
+    text = data.caption() if isinstance(data, Data) else clean_paths(data)
     if note:
         text += "  |  " + note
     wrapped = "\n".join(textwrap.wrap(text, width=int(fig.get_figwidth() * 17)))
@@ -136,9 +185,12 @@ def finish(fig, data, out_dir, name, made, note=None):
 
 
 def heatmap(ax, fig, xs, ys, z, xlabel, ylabel, title, cbar_label, log_colour=False, xlog=False, ylog=False,
-            vmin=None, vmax=None, cmap="viridis", masked_label=None):
+            vmin=None, vmax=None, cmap="viridis", masked_label=None, norm=None):
     zz = np.array(z, dtype=float)
-    if log_colour:
+    if norm is not None:
+        if isinstance(norm, colors.LogNorm):
+            zz = np.where(zz <= 0, norm.vmin, zz)
+    elif log_colour:
         zz = np.where(zz <= 0, ERR_FLOOR, zz)
         finite = zz[np.isfinite(zz)]
         lo = vmin if vmin is not None else (finite.min() if finite.size else ERR_FLOOR)
@@ -260,30 +312,38 @@ def plot_furnace(d, out_dir, made):
             s = md.where(md["brdf"] == name)
             xs, ys, z = grid_of(s, "theta_deg", "alpha", "albedo")
             _, _, e = grid_of(s, "theta_deg", "alpha", "err")
+            # centred on 1, the threshold that matters: blue below (energy lost), red above (created)
             heatmap(a, fig, xs, ys, z, r"$\theta_o$ (deg)", r"roughness parameter $\alpha$",
                     "%s: [%.3f, %.3f], max s.e. %.1g" % (name, np.nanmin(z), np.nanmax(z), np.nanmax(e)),
-                    "albedo", vmin=0.0, vmax=max(top, 1.0), cmap="magma")
+                    "albedo (white: 1)", cmap="RdBu_r",
+                    norm=colors.TwoSlopeNorm(vcenter=1.0, vmin=0.0, vmax=max(top, 1.05)))
             # albedo above 1 by more than 3 standard errors (not Monte Carlo noise)
             excess = (z - 1.0) / np.maximum(e, 1e-300)
             if np.nanmax(excess) > 3.0 and np.nanmin(excess) < 3.0:
                 a.contour(xs, ys, excess, levels=[3.0], colors="c", linewidths=1.0)
         for k in range(len(names), nrows * ncols):
             ax[k // ncols][k % ncols].axis("off")
-        fig.suptitle("Directional albedo of the LTC target models (mf_model.h), F = 1; cyan line: albedo > 1 by 3 s.e. (inside)",
-                     fontsize=11)
+        fig.suptitle("Directional albedo of the LTC target models (mf_model.h), F = 1; colours centred on 1 (white); "
+                     "cyan line: albedo > 1 by 3 s.e. (inside)", fontsize=11)
         finish(fig, d, out_dir, "furnace_models", made, note="stratified Monte Carlo, s.e. = standard error")
 
 
 # ---- study_proxy ----------------------------------------------------------------------------
 def plot_proxy(d, out_dir, made):
     fig, ax = new_figure(2, 1, width=5.8, height=4.6)
+    # one colour scale for both panels (they are compared): from the smallest non-zero error of
+    # either to the largest of either
+    both = np.concatenate([d["rel_err_approx"], d["rel_err_fit"]])
+    both = both[np.isfinite(both) & (both > 0)]
+    lo = max(float(both.min()) if both.size else ERR_FLOOR, ERR_FLOOR)
+    hi = max(float(both.max()) if both.size else 1.0, lo * 10.0)
     for a, col, title in ((ax[0][0], "rel_err_approx", r"paper: $\sqrt{\alpha^2 + dh^2}$ (Kaplanyan Eq. 20)"),
                           (ax[0][1], "rel_err_fit", "mfkit fitted form (mf_proxy_alpha_fit)")):
         xs, ys, z = grid_of(d, "dh", "alpha", col)
         heatmap(a, fig, xs, ys, z, "filter width dh (slope units, full width)", r"GGX roughness $\alpha$",
                 title + "\nmax %.3g" % np.nanmax(z), r"relative error of $\alpha'$ vs exact (Eq. 19)",
-                log_colour=True, xlog=True, ylog=True)
-    finish(fig, d, out_dir, "proxy_alpha_error", made)
+                log_colour=True, xlog=True, ylog=True, vmin=lo, vmax=hi)
+    finish(fig, d, out_dir, "proxy_alpha_error", made, note="both panels share one colour scale")
 
     x = d["dh"] / d["alpha"]
     o = np.argsort(x)
@@ -345,24 +405,36 @@ def plot_leadr(d, out_dir, made):
 def plot_bench_ltc(d, out_dir, made):
     tables = list(dict.fromkeys(d["table"]))
     fig, ax = new_figure(len(tables), 1, width=5.6, height=4.6)
-    for k, t in enumerate(tables):
+    per = []
+    for t in tables:
         s = d.where(d["table"] == t)
         views = np.unique(s["view"])
         r = np.array([s["r"][s["view"] == v][0] for v in views])
         th = np.degrees(np.arccos(np.clip([s["cos_theta"][s["view"] == v][0] for v in views], -1, 1)))
         err = np.array([np.mean(s["rel_error"][s["view"] == v]) for v in views])
+        per.append((t, th, r, np.maximum(err, ERR_FLOOR)))
+    # one colour scale for every table (the reference beside mfkit's)
+    allerr = np.concatenate([p[3] for p in per])
+    norm = colors.LogNorm(vmin=float(allerr.min()), vmax=max(float(allerr.max()), float(allerr.min()) * 10))
+    for k, (t, th, r, err) in enumerate(per):
         a = ax[0][k]
-        sc = a.scatter(th, r, c=np.maximum(err, ERR_FLOOR), s=14, cmap="viridis", norm=colors.LogNorm())
+        sc = a.scatter(th, r, c=err, s=14, cmap="viridis", norm=norm)
         cb = fig.colorbar(sc, ax=a)
-        cb.set_label("mean relative polygon error per view")
+        cb.set_label("mean relative polygon error per view (shared scale)")
         a.set_xlabel(r"view zenith angle $\theta_o$ (deg)")
         a.set_ylabel(r"table roughness r ($\alpha = r^2$)")
-        a.set_title("%s\nmean %.3g, worst view %.3g" % (os.path.basename(t), np.mean(err), np.max(err)), fontsize=9)
+        a.set_title("%s\nmean %.3g, worst view %.3g" % (gate_of(t), np.mean(err), np.max(err)), fontsize=9)
     finish(fig, d, out_dir, "ltc_polygon_error", made,
-           note="|LTC - MC| / max(MC, 0.01 albedo), averaged over the random polygons of each view")
+           note="|LTC - MC| / max(MC, 0.01 albedo), averaged over the random polygons of each view; the same "
+                "views and polygons for every table")
 
 
 # ---- study_ltc_texels ---------------------------------------------------------------------------
+MC_NOISE_RATIO = 1.5  # mean |LTC - MC| <= 1.5 mean standard errors: Monte Carlo noise.  An exact table
+                      # gives E|N(0, se)| = 0.80 se per polygon; over 16 polygons the mean spreads by
+                      # about 0.6 se / 4 = 0.15 se, so 1.5 is 4.7 spreads above what noise alone gives
+ALBEDO_ROUNDING = 1e-12  # relative albedo differences below this are rounding (the quadrature's own error
+                         # estimate is ~1e-15 for smooth lobes): the colour limit never goes below it
 LTC_TEXEL_FLOOR = 1e-4  # log colour scales start here: the r = 0 row (alpha 1e-4 or 1e-5, a near-delta
                         # lobe) is ~1e-8 and would squeeze every other texel into one colour
 
@@ -381,6 +453,15 @@ def _diverging(ax, fig, xs, ys, z, xlabel, ylabel, title, cbar_label, limit=None
         m = 1.0  # every value exactly 0 (or missing): any symmetric range shows them white
         title += "\n(every value exactly 0)" if np.isfinite(z).any() else ""
     return heatmap(ax, fig, xs, ys, z, xlabel, ylabel, title, cbar_label, vmin=-m, vmax=m, cmap="RdBu_r")
+
+
+def _texel_tables(d):
+    """The table files study_ltc_texels read (the last one or two paths of its provenance command,
+    not its --out file)."""
+    cmd = (d.header[0] if d.header else "").split(", mfkit=")[0] + " "
+    out = re.search(r"--out (\S+)", cmd)
+    found = re.findall(r"(\S+\.(?:csv|json|exr|npy|dds|ktx2))(?= )", cmd)
+    return [t for t in found if not (out and t == out.group(1))][-2:]
 
 
 def plot_ltc_texels(d, out_dir, made):
@@ -407,18 +488,28 @@ def plot_ltc_texels(d, out_dir, made):
 
     n = len(d["ir"])
     fig, ax = new_figure(2, 2, width=6.2, height=4.8)
-    z = grid(d["poly_mean_rel"])
-    heatmap(ax[0][0], fig, xs, ys, z, th_label, r_label,
-            "polygon shading: mean |LTC - MC| / max(MC, 0.01 albedo)\nmean %.3g, worst %.3g at %s"
-            % (np.nanmean(z), np.nanmax(z), where(z, np.nanargmax)),
-            "mean relative error over the polygons (log)", log_colour=True, vmin=LTC_TEXEL_FLOOR)
+    # Monte Carlo noise is shown as noise: a texel whose mean |LTC - MC| is within MC_NOISE_RATIO
+    # mean standard errors is drawn as "noise" (hatched), not as an error of the table (an exact
+    # table, e.g. Lambert's, is all noise)
     with np.errstate(divide="ignore", invalid="ignore"):
-        z = grid(np.where(d["mc_mean_se"] > 0, d["poly_mean_abs"] / d["mc_mean_se"], np.nan))
+        q = np.where(d["mc_mean_se"] > 0, d["poly_mean_abs"] / d["mc_mean_se"], np.nan)
+    noise = np.isfinite(q) & (q <= MC_NOISE_RATIO)
+    z = grid(np.where(noise, np.nan, d["poly_mean_rel"]))
+    zn = grid(np.where(noise, 1.0, np.nan))
+    shown = z[np.isfinite(z)]
+    heatmap(ax[0][0], fig, xs, ys, z, th_label, r_label,
+            "polygon shading: mean |LTC - MC| / max(MC, 0.01 albedo)\n%s\nhatched: within Monte Carlo noise (%d of %d texels)"
+            % ("mean %.3g, worst %.3g at %s" % (np.nanmean(z), np.nanmax(z), where(z, np.nanargmax)) if shown.size
+               else "every texel within Monte Carlo noise", int(noise.sum()), n),
+            "mean relative error over the polygons (log)", log_colour=True, vmin=LTC_TEXEL_FLOOR)
+    if noise.any():
+        ax[0][0].pcolor(edges(xs), edges(ys), np.ma.masked_invalid(zn), hatch="///", alpha=0.0, shading="flat")
+    z = grid(q)
     heatmap(ax[0][1], fig, xs, ys, z, th_label, r_label,
-            "mean |LTC - MC| in units of the mean MC standard error, median %.2g\n(about 1 or less: the error is "
-            "Monte Carlo noise; colour clipped at 100)" % np.nanmedian(z),
-            "mean |LTC - MC| / mean s.e. (log)", log_colour=True, vmax=100.0,
-            masked_label="MC standard error 0 (a delta-like lobe)")
+            "mean |LTC - MC| in units of the mean MC standard error, median %.2g\n(white, about 1: Monte Carlo noise; "
+            "red: a real error; clipped at 1/100 and 100)" % np.nanmedian(z),
+            "mean |LTC - MC| / mean s.e. (log, centred on 1)", cmap="RdBu_r",
+            norm=colors.LogNorm(vmin=1e-2, vmax=1e2), masked_label="MC standard error 0 (a delta-like lobe)")
     z = grid(d["lobe_l1"])
     heatmap(ax[1][0], fig, xs, ys, z, th_label, r_label,
             "lobe: L1 distance over the sphere, relative to the albedo\nmean %.3g, worst %.3g at %s"
@@ -426,21 +517,41 @@ def plot_ltc_texels(d, out_dir, made):
             r"$\int |m\,D_{LTC} - f\,\cos\theta_i|\,d\omega_i$ / albedo (log)", log_colour=True,
             vmin=LTC_TEXEL_FLOOR)
     z = grid(d["albedo_rel_diff"])
-    lim = _clip_limit(z)
+    lim = max(_clip_limit(z), ALBEDO_ROUNDING)
     _diverging(ax[1][1], fig, xs, ys, z, th_label, r_label,
-               "albedo: (magnitude - quadrature) / quadrature\nworst %+.3g at %s; colour clipped at +-%.2g"
+               "albedo: (magnitude - quadrature) / quadrature\nworst %+.3g at %s; colour clipped at +-%.2g (>= 1e-12: "
+               "less is rounding)"
                % (z.flat[int(np.nanargmax(np.abs(z)))], where(np.abs(z), np.nanargmax), lim),
                "relative albedo error (signed)", limit=lim)
     for a in ax.flat:
         axes_0_90(a)
-    note = ("%d texels, %d polygons each; MC = Monte Carlo; log colour scales start at %g; any light's error "
-            "<= (L1 albedo + |magnitude - albedo|) / 2" % (n, int(np.nanmax(d["polygons"])), LTC_TEXEL_FLOOR))
-    if suffix:
-        fig.suptitle("LTC table of %s, error per texel" % suffix.lstrip("_"), fontsize=10)
+    note = ("%d texels, %d polygons each; MC = Monte Carlo; hatched: mean |LTC - MC| <= %g mean s.e. (what an exact "
+            "table gives); log colour scales start at %g; any light's error <= (L1 albedo + |magnitude - albedo|) / 2"
+            % (n, int(np.nanmax(d["polygons"])), MC_NOISE_RATIO, LTC_TEXEL_FLOOR))
+    tables = _texel_tables(d)
+    gate = gate_of(tables[0]) if tables else gates_in(d.header[0] if d.header else "")
+    fig.suptitle("LTC table%s, error per texel (the first table of the command)\n%s"
+                 % (" of " + suffix.lstrip("_") if suffix else "", gate), fontsize=10)
     finish(fig, d, out_dir, "ltc_texel_errors" + suffix, made, note=note)
 
     if not d.has("d_poly_mean_rel", "d_poly_mean_abs", "d_poly_mean_abs_se", "d_minv_00", "d_magnitude"):
         return
+    # the two tables side by side on one colour scale (e.g. the reference beside mfkit's table), so a
+    # reader can judge a number of one against the other
+    fig, ax = new_figure(2, 1, width=6.2, height=4.8)
+    za, zb = grid(d["poly_mean_rel"]), grid(d["second_poly_mean_rel"])
+    both = np.concatenate([za[np.isfinite(za)], zb[np.isfinite(zb)]])
+    hi = max(float(both.max()) if both.size else 1.0, LTC_TEXEL_FLOOR * 10)
+    tables = _texel_tables(d)
+    for a, z, k in ((ax[0][0], za, 0), (ax[0][1], zb, 1)):
+        label = gate_of(tables[k]) if len(tables) == 2 else ("first table" if k == 0 else "second table")
+        heatmap(a, fig, xs, ys, z, th_label, r_label,
+                "%s\nmean relative polygon error: mean %.3g, worst %.3g" % (label, np.nanmean(z), np.nanmax(z)),
+                "mean |LTC - MC| / max(MC, 0.01 albedo) (log, shared)",
+                norm=colors.LogNorm(vmin=LTC_TEXEL_FLOOR, vmax=hi))
+        axes_0_90(a)
+    finish(fig, d, out_dir, "ltc_texel_side" + suffix, made,
+           note="same texels, polygons and Monte Carlo values for both tables; one colour scale")
     fig, ax = new_figure(2, 2, width=6.2, height=4.8)
     z = grid(d["d_poly_mean_rel"])
     lim = _clip_limit(z)
@@ -584,9 +695,9 @@ def plot_half(d, out_dir, made):
             xs, ys, z = grid_of(s, "theta_o_deg", "p0", "shade_rel_worst")
             i = int(np.nanargmax(s["shade_rel_worst"]))
             heatmap(ax[0][k], fig, xs, ys, z, r"view zenith angle $\theta_o$ (deg)", r"roughness r ($\alpha = r^2$)",
-                    "%s: half-float export, change of LTC polygon shading\n"
+                    "%s\nhalf-float export, change of LTC polygon shading: "
                     "worst %.3g at %.2f deg, r = %.3f; mean over the texels %.3g" % (
-                        os.path.basename(t), s["shade_rel_worst"][i], s["theta_o_deg"][i], s["p0"][i],
+                        gate_of(t), s["shade_rel_worst"][i], s["theta_o_deg"][i], s["p0"][i],
                         np.nanmean(s["shade_rel_worst"])),
                     r"worst $|m_h\,E(M_h, P) - m\,E(M, P)|\ /\ m$ over the polygons P", log_colour=True, vmin=1e-7,
                     masked_label="not shaded (singular matrix or magnitude <= 0)")

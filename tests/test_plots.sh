@@ -56,7 +56,7 @@ else
     ! ls "$tmp"/bad.csv* >/dev/null 2>&1 || fail "study_ltc_texels left output behind after an error"
     # a per-BRDF file (make_figures.sh writes ltc_texels_<brdf>.csv) gets suffixed figure names
     cp "$lt" "$tmp/data/ltc_texels_ggx.csv"
-    ltc_figs="ltc_texel_errors ltc_texel_pair ltc_texel_errors_ggx ltc_texel_pair_ggx"
+    ltc_figs="ltc_texel_errors ltc_texel_pair ltc_texel_side ltc_texel_errors_ggx ltc_texel_pair_ggx ltc_texel_side_ggx"
 fi
 # study_sh_irradiance (always built; MFKIT_STUDY_SH_IRRADIANCE is set by tests/CMakeLists.txt, else
 # it is looked up beside study_smith) on a 6 x 12 grid of normals, and study_half (only with the C++
@@ -103,7 +103,24 @@ else
     ! ls "$tmp"/bad.csv* >/dev/null 2>&1 || fail "study_half left output behind after an error"
     half_figs="half_shading_error half_rounding_error"
 fi
-"$py" "$src/analysis/plot.py" "$tmp/data" "$tmp/fig" || fail "plot.py exited with $?"
+# captions: no temporary paths, source paths relative; gate verdicts from MFKIT_FIGURE_GATES
+printf 'ltc_code_ggx_64.csv\tFAILED its gate (mfkit validate --quick)\n' >"$tmp/gates.tsv"
+MFKIT_FIGURE_GATES=$tmp/gates.tsv "$py" - "$src" <<'EOF' || fail "plot.py: clean_paths / gate_of"
+import os, sys, tempfile
+sys.path.insert(0, os.path.join(sys.argv[1], "analysis"))
+import plot
+t = tempfile.gettempdir()
+got = plot.clean_paths("command=x --out %s/mfkit_figures.AbC/d.csv %s/tests/data/reference/ltc_code_ggx_64.csv, seed=1"
+                       % (t, plot.SOURCE_DIR))
+want = "command=x --out d.csv tests/data/reference/ltc_code_ggx_64.csv, seed=1"
+assert got == want, (got, want)
+assert plot.gate_of("/a/ltc_code_ggx_64.csv") == "ltc_code_ggx_64.csv: FAILED its gate (mfkit validate --quick)"
+assert plot.gate_of("x.json").startswith("x.json: gate not recorded")
+d = plot.Data.__new__(plot.Data)
+d.path, d.header = "/x/ltc_texels_ggx.csv", ["command=study_ltc_texels --stride 4 --out /x/ltc_texels.csv /r/a.csv /t/b.exr, mfkit=0.1.0"]
+assert plot._texel_tables(d) == ["/r/a.csv", "/t/b.exr"], plot._texel_tables(d)
+EOF
+MFKIT_FIGURE_GATES=$tmp/gates.tsv "$py" "$src/analysis/plot.py" "$tmp/data" "$tmp/fig" || fail "plot.py exited with $?"
 for name in smith_walter_g1 smith_gaussian_lambda furnace_microfacet furnace_curves furnace_models \
     proxy_alpha_error proxy_alpha_curves ggx_rect_error leadr_grid_convergence $ltc_figs $sh_figs $half_figs; do
     for ext in png pdf; do

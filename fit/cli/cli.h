@@ -14,4 +14,6 @@ int cli_maps(int argc, char **argv);     /* argv[0] = "maps"; an error without O
 int cli_sh(int argc, char **argv);       /* argv[0] = "sh"; an error without OpenImageIO */
 int cli_prefilter(int argc, char **argv); /* argv[0] = "prefilter"; needs Ceres and OpenImageIO */
 
+int cli_compare(int argc, char **argv);  /* argv[0] = "compare"; EXR needs the image backend */
+
 #endif /* MF_CLI_H */

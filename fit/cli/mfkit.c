@@ -106,7 +106,13 @@ static const cli_entry k_commands[] = {
     {"table", cli_table, needs_exr_args,
      "table convert IN OUT | table info FILE\n"
      "                  convert lookup-table files (.exr .dds .json .npy -> also .h .glsl .hlsl\n"
-     "                  .csv) and describe them"},
+     "                  .csv) and describe them\n"
+     "  table plot TABLE --out DIR | table lobe TABLE --at R,U --out DIR\n"
+     "                  heat maps of every field; the fitted lobe beside the BRDF (needs python3 +\n"
+     "                  matplotlib for the PNGs)"},
+    {"compare", cli_compare, needs_exr_args,
+     "compare A B     two tables of the same kind: difference maps, the polygon-shading error of both\n"
+     "                  against Monte Carlo on the same lights (LTC tables), a one-line verdict"},
     {"fit", cli_fit, needs_fit,
      "fit ltc         fit an LTC table to a BRDF, gate it and export it (needs the Ceres build)\n"
      "  fit ltc-aniso   fit the 4-D anisotropic GGX LTC table, gate it and export it (Ceres build)\n"
