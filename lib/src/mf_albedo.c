@@ -5,8 +5,14 @@
 #include <float.h>
 #include <stddef.h>
 
-#define N_LO 8            /* points per panel of the estimate rule */
-#define N_HI 12           /* points per panel of the value rule */
+/* The target of the bound: every albedo's error bound is driven below this (absolute), with a
+ * quarter of it for the inner (ray) integrals and three quarters for the outer one. */
+#define ALBEDO_TOL 2e-10
+#define RAY_SEGMENTS 96   /* segments of one ray's adaptive rule, at most */
+#define OUTER_SEGMENTS 96 /* segments of the outer (phi) adaptive rule, at most */
+/* the initial outer panels are graded towards the exit jump down to OUTER_FACTOR cot(theta_o) / 2
+ * (the adaptive rule refines further; 4 measured fastest among 0.5, 2, 4 on a 30 x 30 grid) */
+#define OUTER_FACTOR 4.0
 #define GRADE 0.2        /* geometric ratio of graded panels */
 #define MAX_LEVELS 48     /* graded panels per interval, at most */
 #define BECKMANN_R_CUT 7.0 /* exp(-49) r^2 (1 + |k| r) < 1e-17 for tan(theta_o) < 1e4 */
@@ -14,15 +20,9 @@
  * integral is then within the rule's error anyway. */
 #define LAYER_NEGLIGIBLE 1e-15
 /* The layer where G1(wi) turns over is ~alpha wide in wi.z; in the ray's coordinate its width
- * is alpha / |d wi.z / dx| at the end only where wi.z is close to linear over it.  It is not
- * (the curvature of wi.z(x) at the exit is large at grazing views): measured on a 100 x 100 grid
- * the linear estimate is up to ~100 times too wide, so the grading goes 100 times further. */
-#define LAYER_FACTOR 0.01
-
-typedef struct {
-    double x[N_HI], w[N_HI];
-    int n;
-} gl_rule;
+ * is ~alpha / |d wi.z / dx| at the end.  The initial panels are graded down to LAYER_FACTOR times
+ * that; the adaptive rule refines further where the linear estimate is too wide (grazing views). */
+#define LAYER_FACTOR 1.0
 
 typedef struct {
     mf_ndf ndf;
@@ -32,14 +32,7 @@ typedef struct {
     mf_vec3 wo;
     double lambda_o;
     double layer;  /* width of the G1 turnover in wi.z: min(alpha_x, alpha_y, 1) */
-    gl_rule lo, hi;
 } actx;
-
-static int make_rule(gl_rule *r, int n)
-{
-    r->n = n;
-    return mf_quad_gauss_legendre(n, r->x, r->w) == MF_OK ? 0 : -1;
-}
 
 /* Breakpoints of [a, b] graded towards b: panels [a, b - L g], [b - L g, b - L g^2], ...,
  * [b - L g^K, b] with L = b - a and K the smallest with L g^K <= delta (K = 0: one panel),
@@ -109,14 +102,112 @@ static void integrand(const actx *c, double x, double sx, double sy, double k, d
     }
 }
 
-/* The integral along the ray of angle phi (per unit phi), by rule r on graded panels. */
-static void ray(const actx *c, double phi, const gl_rule *r, double *acc)
+/* QUADPACK's 15-point Kronrod rule (positive half, descending) and its embedded 7-point Gauss rule
+ * (the nodes xgk[1], xgk[3], xgk[5], xgk[7]) [Piessens et al. 1983, QK15]. */
+static const double xgk[8] = {
+    0.991455371120812639206854697526329, 0.949107912342758524526189684047851,
+    0.864864423359769072789712788640926, 0.741531185599394439863864773280788,
+    0.586087235467691130294144845693013, 0.405845151377397166906606412076961,
+    0.207784955007898467600689403773245, 0.000000000000000000000000000000000};
+static const double wgk[8] = {
+    0.022935322010529224963732008058970, 0.063092092629978553290700663189204,
+    0.104790010322250183839876322541518, 0.140653259715525918745189590510238,
+    0.169004726639267902826583426598550, 0.190350578064785409913256402421014,
+    0.204432940075298892414161999234649, 0.209482141084727828012999174891714};
+static const double wg[4] = {
+    0.129484966168869693270611432679082, 0.279705391489276667901467771423780,
+    0.381830050505118944950369775488975, 0.417959183673469387755102040816327};
+
+/* A segment of an adaptive rule: its K15 values (two components) and |K15 - G7| (plus, for the
+ * outer rule, the propagated inner bounds). */
+typedef struct {
+    double a, b, v[2], e[2];
+} seg;
+
+/* The 15 nodes of [a, b] in the order xgk[0] left, right, ..., centre (index 14). */
+static double node(double a, double b, int j)
+{
+    double c = 0.5 * (a + b), h = 0.5 * (b - a);
+    return j == 14 ? c : (j & 1 ? c + h * xgk[j >> 1] : c - h * xgk[j >> 1]);
+}
+
+/* Combines the 15 node values f[j][0..1] of [a, b] into the segment's K15 value and |K15 - G7|. */
+static void combine(seg *s, double f[15][2])
+{
+    double h = 0.5 * (s->b - s->a);
+    for (int q = 0; q < 2; ++q) {
+        double k = f[14][q] * wgk[7], g = f[14][q] * wg[3];
+        for (int j = 0; j < 7; ++j) {
+            double p = f[2 * j][q] + f[2 * j + 1][q];
+            k += wgk[j] * p;
+            if (j & 1)
+                g += wg[j >> 1] * p;
+        }
+        s->v[q] = h * k;
+        s->e[q] = fabs(h * (k - g));
+    }
+}
+
+/* The ray of angle phi: geometry hoisted out of the integrand. */
+typedef struct {
+    double sx, sy, k;
+} rayc;
+
+static void ray_segment(const actx *c, const rayc *rc, seg *s)
+{
+    double f[15][2];
+    for (int j = 0; j < 15; ++j) {
+        f[j][0] = f[j][1] = 0.0;
+        integrand(c, node(s->a, s->b, j), rc->sx, rc->sy, rc->k, 1.0, f[j]);
+    }
+    combine(s, f);
+}
+
+/* Global adaptive bisection of the segments sg[0..n) (the worst first) until the summed bound of
+ * both components is <= tol or cap segments are used; eval fills a new segment.  Sums in segment
+ * order, so the result does not depend on the order of the splits beyond the segments themselves. */
+typedef void (*seg_eval)(const actx *c, const void *ctx, seg *s);
+
+static void adapt(const actx *c, const void *ctx, seg_eval eval, seg *sg, int n, int cap, double tol, double v[2],
+                  double e[2])
+{
+    for (;;) {
+        double ev[2] = {0.0, 0.0};
+        int worst = 0;
+        for (int i = 0; i < n; ++i) {
+            ev[0] += sg[i].e[0];
+            ev[1] += sg[i].e[1];
+            if (sg[i].e[0] + sg[i].e[1] > sg[worst].e[0] + sg[worst].e[1])
+                worst = i;
+        }
+        double mid = 0.5 * (sg[worst].a + sg[worst].b);
+        if ((ev[0] <= tol && ev[1] <= tol) || n >= cap || !(mid > sg[worst].a && mid < sg[worst].b))
+            break;
+        seg l = {sg[worst].a, mid, {0, 0}, {0, 0}}, r = {mid, sg[worst].b, {0, 0}, {0, 0}};
+        eval(c, ctx, &l);
+        eval(c, ctx, &r);
+        sg[worst] = l;
+        sg[n++] = r;
+    }
+    v[0] = v[1] = e[0] = e[1] = 0.0;
+    for (int i = 0; i < n; ++i)
+        for (int q = 0; q < 2; ++q)
+            v[q] += sg[i].v[q], e[q] += sg[i].e[q];
+}
+
+static void ray_eval(const actx *c, const void *ctx, seg *s) { ray_segment(c, ctx, s); }
+
+/* The integral along the ray of angle phi (per unit phi) to the absolute tolerance tol: adaptive
+ * K15 on panels first graded towards the end of the ray. */
+static void ray(const actx *c, double phi, double tol, double v[2], double e[2])
 {
     const mf_ndf n = c->ndf;
     const mf_vec3 wo = c->wo;
+    rayc rc;
     double sx = n.alpha_x * cos(phi), sy = n.alpha_y * sin(phi);
     double q = sx * sx + sy * sy;
     double k = (sx * wo.x + sy * wo.y) / wo.z;
+    rc.sx = sx, rc.sy = sy, rc.k = k;
     double root = sqrt(k * k + q);
     /* the ray leaves the disk of wi.z > 0 at r_max: the positive root of q r^2 - 2 k r - 1 */
     double rmax = k >= 0.0 ? (k + root) / q : 1.0 / (root - k);
@@ -147,54 +238,63 @@ static void ray(const actx *c, double phi, const gl_rule *r, double *acc)
             delta = fmin(delta, (0.5 * MF_PI - end) + sqrt(q));
         double negligible = LAYER_NEGLIGIBLE / (2.0 * MF_PI * wmag + 1e-300);
         delta = fmax(delta, negligible);
-    } else {
-        delta = end;
     }
     double bp[MAX_LEVELS + 8];
-    int base = ggx ? 2 : (int)ceil(end / 0.5); /* measured: 1-wide panels left 7.5e-7 at alpha 1 */
+    int base = ggx ? 1 : (int)ceil(end / 1.5);
     int nb = graded(0.0, end, delta, base, bp, MAX_LEVELS + 8);
-    for (int p = 0; p + 1 < nb; ++p) {
-        double a = bp[p], h = 0.5 * (bp[p + 1] - bp[p]);
-        for (int j = 0; j < r->n; ++j)
-            integrand(c, a + h * (1.0 + r->x[j]), sx, sy, k, h * r->w[j], acc);
+    seg sg[RAY_SEGMENTS];
+    int ns = 0;
+    for (int p = 0; p + 1 < nb && ns < RAY_SEGMENTS; ++p) {
+        sg[ns] = (seg){bp[p], bp[p + 1], {0, 0}, {0, 0}};
+        ray_segment(c, &rc, &sg[ns++]);
+    }
+    adapt(c, &rc, ray_eval, sg, ns, RAY_SEGMENTS, tol, v, e);
+}
+
+/* An outer segment in phi: K15 over 15 rays, each to tol_ray; its bound adds the rays' bounds
+ * weighted by the K15 weights (the value is the K15 sum of the rays' values). */
+typedef struct {
+    double tol_ray;
+} outc;
+
+static void outer_eval(const actx *c, const void *ctx, seg *s)
+{
+    const outc *o = ctx;
+    double f[15][2], fe[15][2];
+    for (int j = 0; j < 15; ++j)
+        ray(c, node(s->a, s->b, j), o->tol_ray, f[j], fe[j]);
+    combine(s, f);
+    double h = 0.5 * (s->b - s->a);
+    for (int q = 0; q < 2; ++q) {
+        double ie = fe[14][q] * wgk[7];
+        for (int j = 0; j < 7; ++j)
+            ie += wgk[j] * (fe[2 * j][q] + fe[2 * j + 1][q]);
+        s->e[q] += h * ie;
     }
 }
 
-/* The outer integral over [a, b] in phi on the given panels, both rules. */
-static void outer_panels(const actx *c, const double *bp, int nb, double mult, double *lo, double *hi)
+/* Appends the segments between consecutive breakpoints to sg (evaluated). */
+static int add_segments(const actx *c, const outc *o, const double *bp, int nb, seg *sg, int ns, int cap)
 {
-    for (int p = 0; p + 1 < nb; ++p) {
-        double a = bp[p], h = 0.5 * (bp[p + 1] - bp[p]);
-        for (int j = 0; j < c->hi.n; ++j) {
-            double acc[2] = {0.0, 0.0};
-            ray(c, a + h * (1.0 + c->hi.x[j]), &c->hi, acc);
-            hi[0] += mult * h * c->hi.w[j] * acc[0];
-            hi[1] += mult * h * c->hi.w[j] * acc[1];
-        }
-        for (int j = 0; j < c->lo.n; ++j) {
-            double acc[2] = {0.0, 0.0};
-            ray(c, a + h * (1.0 + c->lo.x[j]), &c->lo, acc);
-            lo[0] += mult * h * c->lo.w[j] * acc[0];
-            lo[1] += mult * h * c->lo.w[j] * acc[1];
-        }
+    for (int p = 0; p + 1 < nb && ns < cap; ++p) {
+        sg[ns] = (seg){bp[p], bp[p + 1], {0, 0}, {0, 0}};
+        outer_eval(c, o, &sg[ns++]);
     }
+    return ns;
 }
 
-/* [a, b] graded towards a AND b (split in the middle). */
-static void outer_two_sided(const actx *c, double a, double b, double delta, double mult, double *lo, double *hi)
+/* Breakpoints of [a, b] graded towards a (the mirror image of graded()). */
+static int graded_start(double a, double b, double delta, int base, double *bp, int cap)
 {
-    double bp[MAX_LEVELS + 8], m = 0.5 * (a + b);
-    int nb = graded(m, b, delta, 1, bp, MAX_LEVELS + 8);
-    outer_panels(c, bp, nb, mult, lo, hi);
-    nb = graded(-m, -a, delta, 1, bp, MAX_LEVELS + 8); /* mirrored: graded towards a */
+    int nb = graded(-b, -a, delta, base, bp, cap);
+    for (int i = 0; i < nb; ++i)
+        bp[i] = -bp[i];
     for (int i = 0; i < nb / 2; ++i) {
         double t = bp[i];
         bp[i] = bp[nb - 1 - i];
         bp[nb - 1 - i] = t;
     }
-    for (int i = 0; i < nb; ++i)
-        bp[i] = -bp[i];
-    outer_panels(c, bp, nb, mult, lo, hi);
+    return nb;
 }
 
 static mf_status albedo(const mf_microfacet *m, mf_vec3 wo, int schlick, mf_result *out0, mf_result *out1)
@@ -211,52 +311,54 @@ static mf_status albedo(const mf_microfacet *m, mf_vec3 wo, int schlick, mf_resu
     c.wo = wo;
     c.lambda_o = mf_smith_lambda(m->ndf, wo);
     c.layer = fmin(1.0, fmin(m->ndf.alpha_x, m->ndf.alpha_y));
-    if (make_rule(&c.lo, N_LO) || make_rule(&c.hi, N_HI))
-        return MF_ERR_INTERNAL;
-    double lo[2] = {0.0, 0.0}, hi[2] = {0.0, 0.0};
+    double v[2], e[2], mult;
     double sxy = hypot(wo.x, wo.y);
     int iso = m->ndf.alpha_x == m->ndf.alpha_y;
     /* the azimuthal width of the jump of the ray's exit (where k ~ +-sqrt(q)) */
     double aniso = iso ? 1.0 : fmin(m->ndf.alpha_x / m->ndf.alpha_y, m->ndf.alpha_y / m->ndf.alpha_x);
-    double dphi = sxy > 0.0 ? 0.5 * aniso * wo.z / sxy : INFINITY;
+    double dphi = sxy > 0.0 ? OUTER_FACTOR * aniso * wo.z / sxy : INFINITY;
     if (iso && sxy == 0.0) {
         /* normal incidence, isotropic: the rays are all alike */
-        double a_lo[2] = {0.0, 0.0}, a_hi[2] = {0.0, 0.0};
-        ray(&c, 0.0, &c.lo, a_lo);
-        ray(&c, 0.0, &c.hi, a_hi);
-        for (int i = 0; i < 2; ++i)
-            lo[i] = 2.0 * MF_PI * a_lo[i], hi[i] = 2.0 * MF_PI * a_hi[i];
-    } else if (iso) {
-        /* symmetric about the view's azimuth: [phi_o, phi_o + pi] twice; the exit jumps at
-         * phi_o + pi/2 */
-        double po = atan2(wo.y, wo.x);
-        double bp[MAX_LEVELS + 8];
-        /* [po, po + pi/2] graded towards its end, [po + pi/2, po + pi] towards its start */
-        int nb = graded(po, po + 0.5 * MF_PI, dphi, 2, bp, MAX_LEVELS + 8);
-        outer_panels(&c, bp, nb, 2.0, lo, hi);
-        nb = graded(-(po + MF_PI), -(po + 0.5 * MF_PI), dphi, 2, bp, MAX_LEVELS + 8);
-        for (int i = 0; i < nb; ++i)
-            bp[i] = -bp[i];
-        for (int i = 0; i < nb / 2; ++i) {
-            double t = bp[i];
-            bp[i] = bp[nb - 1 - i];
-            bp[nb - 1 - i] = t;
-        }
-        outer_panels(&c, bp, nb, 2.0, lo, hi);
+        ray(&c, 0.0, ALBEDO_TOL / (2.0 * MF_PI), v, e);
+        mult = 2.0 * MF_PI;
     } else {
-        /* anisotropic: the full circle from a direction where k = 0, the exit jumping there and
-         * half a turn later */
-        double p0 = sxy > 0.0 ? atan2(-m->ndf.alpha_x * wo.x, m->ndf.alpha_y * wo.y) : 0.0;
-        for (int h = 0; h < 2; ++h)
-            outer_two_sided(&c, p0 + h * MF_PI, p0 + (h + 1) * MF_PI, dphi, 1.0, lo, hi);
+        /* the rays' bounds add at most (length of phi) * mult * tol_ray = ALBEDO_TOL / 4 */
+        outc o = {ALBEDO_TOL / (4.0 * 2.0 * MF_PI)};
+        seg sg[OUTER_SEGMENTS];
+        double bp[MAX_LEVELS + 8];
+        int ns = 0, nb;
+        if (iso) {
+            /* symmetric about the view's azimuth: [phi_o, phi_o + pi] twice; the exit jumps at
+             * phi_o + pi/2 */
+            double po = atan2(wo.y, wo.x);
+            nb = graded(po, po + 0.5 * MF_PI, dphi, 1, bp, MAX_LEVELS + 8);
+            ns = add_segments(&c, &o, bp, nb, sg, ns, OUTER_SEGMENTS);
+            nb = graded_start(po + 0.5 * MF_PI, po + MF_PI, dphi, 1, bp, MAX_LEVELS + 8);
+            ns = add_segments(&c, &o, bp, nb, sg, ns, OUTER_SEGMENTS);
+            mult = 2.0;
+        } else {
+            /* anisotropic: the full circle from a direction where k = 0, the exit jumping there and
+             * half a turn later; each half graded towards both ends */
+            double p0 = sxy > 0.0 ? atan2(-m->ndf.alpha_x * wo.x, m->ndf.alpha_y * wo.y) : 0.0;
+            for (int h = 0; h < 2; ++h) {
+                double a = p0 + h * MF_PI, b = a + MF_PI, mid = 0.5 * (a + b);
+                nb = graded_start(a, mid, dphi, 1, bp, MAX_LEVELS + 8);
+                ns = add_segments(&c, &o, bp, nb, sg, ns, OUTER_SEGMENTS);
+                nb = graded(mid, b, dphi, 1, bp, MAX_LEVELS + 8);
+                ns = add_segments(&c, &o, bp, nb, sg, ns, OUTER_SEGMENTS);
+            }
+            mult = 1.0;
+        }
+        adapt(&c, &o, outer_eval, sg, ns, OUTER_SEGMENTS, (0.75 * ALBEDO_TOL) / mult, v, e);
     }
     int nout = schlick ? 2 : 1;
     mf_result *outs[2] = {out0, out1};
     for (int i = 0; i < nout; ++i) {
-        if (!isfinite(hi[i]) || !isfinite(lo[i]))
+        double val = mult * v[i];
+        if (!isfinite(val) || !isfinite(e[i]))
             return MF_ERR_DOMAIN;
-        outs[i]->val = hi[i];
-        outs[i]->err = fabs(hi[i] - lo[i]) + 64.0 * DBL_EPSILON * fabs(hi[i]);
+        outs[i]->val = val;
+        outs[i]->err = mult * e[i] + 64.0 * DBL_EPSILON * fabs(val);
     }
     return MF_OK;
 }
@@ -271,6 +373,124 @@ mf_status mf_albedo_microfacet_schlick(const mf_microfacet *m, mf_vec3 wo, mf_re
 {
     scale->val = scale->err = bias->val = bias->err = NAN;
     return albedo(m, wo, 1, scale, bias);
+}
+
+/* ---- the independent reference in half-vector polar coordinates ------------------------------ */
+
+/* In the polar angles (theta, phi) of the micro-normal h about the normal, with
+ * f wi.z dwi = f wi.z 4 (wo.h) dh [Walter 2007, Eq. 14] and dh = sin(theta) dtheta dphi.  The lobe's
+ * peak is the pole theta = 0 (no 1/alpha magnification of the inner integrals), and for wo =
+ * (s, 0, c) the horizon of wi = 2 (wo.h) h - wo is, on each azimuth, the single angle
+ *   wi.z = s sin(2 theta) cos(phi) + c cos(2 theta) = 0  <=>  theta_k(phi) = atan2(c, -s cos phi) / 2,
+ * so the inner integral ends exactly on the kink.  The integrand is D(h) G2(wo, wi) F(wo.h) (wo.h) /
+ * wo.z [Walter 2007, Eq. 20 with Eq. 14] through mf_ndf_d and mf_smith_g2: it shares no code with
+ * the panel rule above (slopes, P22, its own Lambda calls) beyond the NDF, Lambda and Fresnel. */
+typedef struct {
+    const mf_microfacet *m;
+    mf_vec3 wo;
+    double phi, cp, sp;
+    double tol_density; /* absolute tolerance of an inner integral, per unit phi */
+    int fail;
+} href_ctx;
+
+static double href_inner(double theta, void *user)
+{
+    const href_ctx *r = user;
+    double st = sin(theta), ct = cos(theta);
+    mf_vec3 h = mf_vec3_make(st * r->cp, st * r->sp, ct);
+    double oh = mf_vec3_dot(r->wo, h);
+    mf_vec3 wi = mf_vec3_sub(mf_vec3_scale(h, 2.0 * oh), r->wo);
+    if (!(oh > 0.0) || !(wi.z > 0.0))
+        return 0.0;
+    /* D G2 F (wo.h) / wo.z sin(theta), D of h itself: going through mf_brdf_microfacet (which
+     * rebuilds h from wo + wi) puts a relative noise ~ 1e-16 / alpha on D, which stalls the
+     * adaptive rule at alpha 1e-4 */
+    return mf_ndf_d(r->m->ndf, h) * mf_smith_g2(r->m->ndf, r->m->g2, r->wo, wi) * mf_fresnel_eval(r->m->fresnel, oh) * oh
+           / r->wo.z * st;
+}
+
+/* Breakpoints of [0, tk]: alpha 2^j (j >= -2) from the pole outwards, and tk - alpha 2^j towards the
+ * kink (the layer where G1(wi) turns over); the adaptive rule refines between them. */
+static int href_breaks(double tk, double alpha, double *bp, int cap)
+{
+    int n = 0;
+    bp[n++] = 0.0;
+    for (double x = 0.25 * alpha; x < 0.5 * tk && n < cap / 2 - 1; x *= 2.0)
+        bp[n++] = x;
+    double tmp[64];
+    int nt = 0;
+    for (double d = 0.25 * alpha; d < 0.5 * tk && nt < 64 && n + nt < cap - 2; d *= 2.0)
+        tmp[nt++] = tk - d;
+    for (int i = nt - 1; i >= 0; --i)
+        if (tmp[i] > bp[n - 1])
+            bp[n++] = tmp[i];
+    bp[n++] = tk;
+    return n;
+}
+
+static double href_outer(double phi, void *user)
+{
+    href_ctx *r = user;
+    r->phi = phi;
+    r->cp = cos(phi);
+    r->sp = sin(phi);
+    double tk = 0.5 * atan2(r->wo.z, -r->wo.x * r->cp);
+    if (!(tk > 0.0))
+        return 0.0;
+    double bp[140], sum = 0.0;
+    int nb = href_breaks(tk, r->m->ndf.alpha_x, bp, 140);
+    for (int i = 0; i + 1 < nb; ++i) {
+        mf_result q;
+        /* relative 1e-13: the inner values are O(1/pi) at most, so this only guards rounding */
+        if (mf_quad_adaptive(href_inner, r, bp[i], bp[i + 1], r->tol_density / nb, 1e-13, MF_QUAD_MAX_INTERVALS, &q)
+            != MF_OK) {
+            r->fail = 1;
+        }
+        sum += q.val;
+    }
+    return 2.0 * sum; /* phi in [0, pi] covers half of the symmetric integral */
+}
+
+mf_status mf_albedo_microfacet_reference(const mf_microfacet *m, mf_vec3 wo, double tol, mf_result *out)
+{
+    out->val = out->err = NAN;
+    if (!m || !mf_ndf_valid(m->ndf) || m->ndf.alpha_x != m->ndf.alpha_y || !mf_vec3_isfinite(wo) || !(wo.z > 0.0)
+        || wo.y != 0.0 || wo.x < 0.0 || !(tol > 0.0))
+        return MF_ERR_DOMAIN;
+    /* the inner integrals' errors add at most 2 pi tol_density = tol / 4 to the outer one */
+    href_ctx r = {m, wo, 0.0, 0.0, 0.0, tol / (8.0 * MF_PI), 0};
+    /* azimuth breaks: theta_k(phi) swings from ~pi/2 to ~theta_o' across phi = pi/2 over a width
+     * ~ cot(theta_o) = c / s, so grade geometrically on both sides of pi/2 down to that width / 8 */
+    double bp[140];
+    int nb = 0;
+    bp[nb++] = 0.0;
+    double w = wo.x > 0.0 ? fmin(1.0, wo.z / wo.x) : 1.0;
+    double ds[64];
+    int nd = 0;
+    for (double d = 0.125 * w; d < 0.5 * MF_PI && nd < 60; d *= 2.0)
+        ds[nd++] = d;
+    for (int i = nd - 1; i >= 0; --i)
+        bp[nb++] = 0.5 * MF_PI - ds[i];
+    bp[nb++] = 0.5 * MF_PI;
+    for (int i = 0; i < nd; ++i)
+        bp[nb++] = 0.5 * MF_PI + ds[i];
+    bp[nb++] = MF_PI;
+    double sum = 0.0, err = 0.0;
+    mf_status worst = MF_OK;
+    for (int i = 0; i + 1 < nb; ++i) {
+        mf_result q;
+        mf_status st = mf_quad_adaptive(href_outer, &r, bp[i], bp[i + 1], tol / nb, 0.0, MF_QUAD_MAX_INTERVALS, &q);
+        if (st != MF_OK) {
+            worst = st;
+        }
+        sum += q.val;
+        err += q.err;
+    }
+    if (r.fail && worst == MF_OK)
+        worst = MF_ERR_NO_CONVERGENCE;
+    out->val = sum;
+    out->err = err + 0.25 * tol + 1e-13 * fabs(sum);
+    return worst;
 }
 
 /* ---- the independent reference: nested adaptive Gauss-Kronrod over wi's spherical angles ---- */
@@ -332,7 +552,7 @@ static double ref_outer(double theta, void *user)
     return 2.0 * sum;
 }
 
-mf_status mf_albedo_microfacet_reference(const mf_microfacet *m, mf_vec3 wo, double tol, mf_result *out)
+mf_status mf_albedo_microfacet_reference_wi(const mf_microfacet *m, mf_vec3 wo, double tol, mf_result *out)
 {
     out->val = out->err = NAN;
     if (!m || !mf_ndf_valid(m->ndf) || m->ndf.alpha_x != m->ndf.alpha_y || !mf_vec3_isfinite(wo) || !(wo.z > 0.0)
@@ -346,8 +566,9 @@ mf_status mf_albedo_microfacet_reference(const mf_microfacet *m, mf_vec3 wo, dou
     for (int i = 0; i + 1 < nb; ++i) {
         mf_result q;
         mf_status st = mf_quad_adaptive(ref_outer, &r, bp[i], bp[i + 1], tol / nb, 0.0, MF_QUAD_MAX_INTERVALS, &q);
-        if (st != MF_OK)
+        if (st != MF_OK) {
             worst = st;
+        }
         sum += q.val;
         err += q.err;
     }

@@ -56,14 +56,23 @@ mf_status mf_albedo_microfacet(const mf_microfacet *m, mf_vec3 wo, mf_result *ou
 mf_status mf_albedo_microfacet_schlick(const mf_microfacet *m, mf_vec3 wo, mf_result *scale,
                                        mf_result *bias) MF_WARN_UNUSED;
 
-/* The independent reference of the tests: nested adaptive Gauss-Kronrod (mf_quad_adaptive) over
- * the spherical coordinates of wi (theta_i with a break at the mirror direction's theta and at
- * +-8 alpha around it, phi_i over [0, pi] for an isotropic NDF with wo in the xz plane), of
- * mf_brdf_microfacet(m, wo, wi) wi.z sin(theta_i).  tol is the absolute tolerance of the outer
- * integral (the inner ones get tol / 4).  Slow (about 0.1 to 2 s): for tests and studies only.
- * Isotropic NDFs and wo.y = 0 only; MF_ERR_DOMAIN otherwise; MF_ERR_NO_CONVERGENCE if an
- * adaptive rule ran out of intervals. */
+/* The independent reference of the tests and gates: nested adaptive Gauss-Kronrod (mf_quad_adaptive)
+ * in the polar angles (theta, phi) of the micro-normal about the normal, of
+ * D(h) G2(wo, wi) F(wo.h) (wo.h) / wo.z sin(theta) [Walter 2007, Eq. 14, 20], the inner integral
+ * ending exactly on the horizon of wi (theta_k(phi) = atan2(wo.z, -wo.x cos phi) / 2), with
+ * breakpoints at alpha 2^j from the pole and towards theta_k.  The lobe's peak is the pole, so it
+ * converges for every alpha >= 1e-4 and view up to 89.99 deg (the whole table domain).  tol is the
+ * absolute tolerance; out->err = the outer rule's estimate + tol / 4 (the inner rules' share) +
+ * 1e-13 |val| (their relative guard).  About 0.01 to 0.5 s: for tests, gates and studies.
+ * Isotropic NDFs and wo.y = 0, wo.x >= 0 only; MF_ERR_DOMAIN otherwise; MF_ERR_NO_CONVERGENCE if an
+ * adaptive rule ran out of intervals (out keeps its estimate). */
 mf_status mf_albedo_microfacet_reference(const mf_microfacet *m, mf_vec3 wo, double tol, mf_result *out) MF_WARN_UNUSED;
+
+/* A second, older reference (for cross-checking the first): nested adaptive Gauss-Kronrod over the
+ * spherical angles of wi (theta_i broken at the mirror direction and graded around it, phi_i over
+ * [0, pi]).  Converges only for alpha >= ~0.01 and views below ~89 deg (measured: at alpha 1e-4
+ * off the normal it runs out of intervals after ~45 s).  Same domain and statuses. */
+mf_status mf_albedo_microfacet_reference_wi(const mf_microfacet *m, mf_vec3 wo, double tol, mf_result *out) MF_WARN_UNUSED;
 
 #ifdef __cplusplus
 }
