@@ -25,8 +25,30 @@ ok '"$mfkit" validate "$tmp/kc/kulla_conty.npy" >"$tmp/kcv.log" 2>&1 && grep -q 
 # DFG 4 x 4 (the gate's reference quadrature takes a few seconds): passes, and again from JSON
 "$mfkit" energy dfg --size 4 --out "$tmp/dfg" --quiet >"$tmp/dfg.log" 2>&1; rc=$?
 ok '[ $rc -eq 0 ]' "dfg 4 exits 0 (rc=$rc): $(tail -3 "$tmp/dfg.log")"
-ok '"$mfkit" validate "$tmp/dfg/dfg.json" >"$tmp/dv.log" 2>&1 && grep -q "^dfg_reference .* pass" "$tmp/dv.log"' \
+ok '"$mfkit" validate "$tmp/dfg/dfg.json" >"$tmp/dv.log" 2>&1 && grep -q "^dfg_reference .* pass" "$tmp/dv.log" && grep -q "^dfg_charlie_ref .* pass" "$tmp/dv.log"' \
    "dfg.json passes its gate when read back: $(cat "$tmp/dv.log")"
+info=$("$mfkit" table info "$tmp/dfg/dfg.dds" 2>&1)
+ok 'echo "$info" | grep -q "dds channels: R=dfg_scale G=dfg_bias B=dfg_charlie"' "dfg.dds holds scale, bias, Charlie: $info"
+# a corrupted Charlie entry at a gate texel must fail the gate (field 4 of texel (0, 0), 1 % off; the
+# gate reads the JSON's values as they are, which is also what catches the 1 %)
+python3 - "$tmp/dfg/dfg.json" "$tmp/dfg_bad.json" <<'PY'
+import json, sys
+t = json.load(open(sys.argv[1]))
+def walk(o):
+    if isinstance(o, dict):
+        for k, v in o.items():
+            if k == "data" and isinstance(v, list):
+                return o
+            r = walk(v)
+            if r is not None:
+                return r
+    return None
+d = walk(t)
+d["data"][0][4] *= 1.01  # texel (0, 0): alpha 0.0156, mu 0.125, Charlie ~1.4, bound ~1e-10
+json.dump(t, open(sys.argv[2], "w"))
+PY
+"$mfkit" validate "$tmp/dfg_bad.json" >"$tmp/dvb.log" 2>&1; rc=$?
+ok '[ $rc -ne 0 ] && grep -q "^dfg_charlie_ref .* FAIL" "$tmp/dvb.log"' "a corrupted Charlie entry fails the gate (rc=$rc): $(cat "$tmp/dvb.log")"
 info=$("$mfkit" table info "$tmp/dfg/dfg.json" 2>&1)
 ok 'echo "$info" | grep -q "^kind: dfg"' "table info names the kind: $(echo "$info" | head -2)"
 

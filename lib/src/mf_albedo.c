@@ -195,7 +195,7 @@ typedef void (*seg_eval)(const actx *c, const void *ctx, seg *s);
 static void adapt(const actx *c, const void *ctx, seg_eval eval, seg *sg, int n, int cap, double tol, double v[2],
                   double e[2])
 {
-    for (;;) {
+    for (; n > 0;) {
         double ev[2] = {0.0, 0.0};
         int worst = 0;
         for (int i = 0; i < n; ++i) {
@@ -600,5 +600,190 @@ mf_status mf_albedo_microfacet_reference_wi(const mf_microfacet *m, mf_vec3 wo, 
         worst = MF_ERR_NO_CONVERGENCE;
     out->val = sum;
     out->err = err;
+    return worst;
+}
+
+/* ---- the Charlie sheen albedo --------------------------------------------------------------- */
+
+/* D_charlie(h) = (2 + 1/a) sin(theta_h)^(1/a) / (2 pi) [Estevez and Kulla 2017, Eq. 2] and
+ * V(wo, wi) = 1 / (4 (wi.z + wo.z - wi.z wo.z)) [Neubelt and Pettineo 2013] (the V that folds
+ * 1 / (4 wo.z wi.z) in), F = 1: f = D V.  sin^(1/a) as exp(log(sin) / a) (0 at sin = 0). */
+static double charlie_dv(double inv_a, double sin_h, double nov, double nol)
+{
+    if (!(sin_h > 0.0))
+        return 0.0;
+    double d = (2.0 + inv_a) * exp(inv_a * log(fmin(1.0, sin_h))) * (0.5 * MF_INV_PI);
+    return d / (4.0 * (nol + nov - nol * nov));
+}
+
+typedef struct {
+    double inv_a, alpha;
+    mf_vec3 wo;
+    double cp, sp;  /* the current azimuth of h */
+    double tol_ray; /* inner tolerance per unit phi */
+} chctx;
+
+/* the inner integrand: theta_h at the azimuth (cp, sp); f wi.z dwi = D V wi.z 4 (wo.h) sin dtheta */
+static void charlie_inner_eval(const actx *unused, const void *vctx, seg *s)
+{
+    (void)unused;
+    const chctx *c = vctx;
+    double f[15][2];
+    for (int j = 0; j < 15; ++j) {
+        double t = node(s->a, s->b, j), st = sin(t), ct = cos(t);
+        double oh = c->wo.x * st * c->cp + c->wo.z * ct; /* wo.y = 0 */
+        double wz = 2.0 * oh * ct - c->wo.z;
+        f[j][0] = f[j][1] = 0.0;
+        if (oh > 0.0 && wz > 0.0)
+            f[j][0] = charlie_dv(c->inv_a, st, c->wo.z, wz) * wz * 4.0 * oh * st;
+    }
+    combine(s, f);
+}
+
+static void charlie_ray(const chctx *c0, double phi, double v[2], double e[2])
+{
+    chctx c = *c0;
+    c.cp = cos(phi);
+    c.sp = sin(phi);
+    /* the horizon of wi on this azimuth of h (see the reference above) */
+    double tk = 0.5 * atan2(c.wo.z, -c.wo.x * c.cp);
+    double bp[MAX_LEVELS + 8];
+    /* graded towards tk, where sin^(1/a) is largest, down to its decay length a tan(tk) */
+    int nb = graded(0.0, tk, fmax(1e-12, c.alpha * fmax(1.0, tan(tk))), 1, bp, MAX_LEVELS + 8);
+    seg sg[RAY_SEGMENTS];
+    int ns = 0;
+    for (int p = 0; p + 1 < nb && ns < RAY_SEGMENTS; ++p) {
+        sg[ns] = (seg){bp[p], bp[p + 1], {0, 0}, {0, 0}};
+        charlie_inner_eval(NULL, &c, &sg[ns++]);
+    }
+    adapt(NULL, &c, charlie_inner_eval, sg, ns, RAY_SEGMENTS, c.tol_ray, v, e);
+}
+
+static void charlie_outer_eval(const actx *unused, const void *vctx, seg *s)
+{
+    (void)unused;
+    double f[15][2], fe[15][2];
+    for (int j = 0; j < 15; ++j)
+        charlie_ray(vctx, node(s->a, s->b, j), f[j], fe[j]);
+    combine(s, f);
+    double h = 0.5 * (s->b - s->a), ie = fe[14][0] * wgk[7];
+    for (int j = 0; j < 7; ++j)
+        ie += wgk[j] * (fe[2 * j][0] + fe[2 * j + 1][0]);
+    s->e[0] += h * ie;
+}
+
+mf_status mf_albedo_charlie(double alpha, double mu, mf_result *out)
+{
+    out->val = out->err = NAN;
+    if (!(alpha > 0.0 && alpha <= 1.0) || !(mu > 0.0 && mu <= 1.0))
+        return MF_ERR_DOMAIN;
+    chctx c;
+    c.inv_a = 1.0 / alpha;
+    c.alpha = alpha;
+    c.wo = mf_vec3_make(sqrt(fmax(0.0, 1.0 - mu * mu)), 0.0, mu);
+    c.cp = 1.0, c.sp = 0.0;
+    /* symmetric about phi = 0: [0, pi] twice; the rays' bounds add at most ALBEDO_TOL / 4 */
+    c.tol_ray = ALBEDO_TOL / (4.0 * 2.0 * MF_PI);
+    double v[2], e[2];
+    seg sg[OUTER_SEGMENTS];
+    int ns = 0;
+    if (c.wo.x == 0.0) {
+        charlie_ray(&c, 0.0, v, e);
+        out->val = 2.0 * MF_PI * v[0];
+        out->err = 2.0 * MF_PI * e[0] + 64.0 * DBL_EPSILON * fabs(out->val);
+        return isfinite(out->val) ? MF_OK : MF_ERR_DOMAIN;
+    }
+    /* theta_k swings across phi = pi/2 over a width ~ cot(theta_o): graded there from both sides */
+    double dphi = OUTER_FACTOR * mu / c.wo.x, bp[MAX_LEVELS + 8];
+    int nb = graded(0.0, 0.5 * MF_PI, dphi, 2, bp, MAX_LEVELS + 8);
+    for (int p = 0; p + 1 < nb; ++p, ++ns) {
+        sg[ns] = (seg){bp[p], bp[p + 1], {0, 0}, {0, 0}};
+        charlie_outer_eval(NULL, &c, &sg[ns]);
+    }
+    nb = graded_start(0.5 * MF_PI, MF_PI, dphi, 1, bp, MAX_LEVELS + 8);
+    for (int p = 0; p + 1 < nb; ++p, ++ns) {
+        sg[ns] = (seg){bp[p], bp[p + 1], {0, 0}, {0, 0}};
+        charlie_outer_eval(NULL, &c, &sg[ns]);
+    }
+    adapt(NULL, &c, charlie_outer_eval, sg, ns, OUTER_SEGMENTS, 0.75 * ALBEDO_TOL / 2.0, v, e);
+    out->val = 2.0 * v[0];
+    out->err = 2.0 * e[0] + 64.0 * DBL_EPSILON * fabs(out->val);
+    return isfinite(out->val) && isfinite(out->err) ? MF_OK : MF_ERR_DOMAIN;
+}
+
+/* The Charlie reference: nested adaptive Gauss-Kronrod in the spherical angles of wi (no kink
+ * there: the hemisphere is the whole domain and D V is smooth in wi), theta_i graded towards the
+ * horizon and phi_i towards the view's azimuth, where h is closest to horizontal. */
+typedef struct {
+    double inv_a;
+    mf_vec3 wo;
+    double theta, tol_density;
+    int fail;
+} chref;
+
+static double chref_inner(double phi, void *user)
+{
+    const chref *r = user;
+    double st = sin(r->theta), ct = cos(r->theta);
+    double wx = st * cos(phi), wy = st * sin(phi);
+    double hx = r->wo.x + wx, hy = wy, hz = r->wo.z + ct;
+    double sin_h = hypot(hx, hy) / sqrt(hx * hx + hy * hy + hz * hz);
+    return charlie_dv(r->inv_a, sin_h, r->wo.z, ct) * ct * st;
+}
+
+/* [lo, hi] cut at gaps len 2^-j (j = 1..30) from the end it is graded towards; ascending */
+static int chref_breaks(double lo, double hi, int towards_hi, double *bp)
+{
+    int n = 0;
+    double len = hi - lo;
+    bp[n++] = lo;
+    if (towards_hi) {
+        for (int j = 1; j <= 30; ++j)
+            bp[n++] = hi - len * ldexp(1.0, -j);
+    } else {
+        for (int j = 30; j >= 1; --j)
+            bp[n++] = lo + len * ldexp(1.0, -j);
+    }
+    bp[n++] = hi;
+    return n;
+}
+
+static double chref_outer(double theta, void *user)
+{
+    chref *r = user;
+    r->theta = theta;
+    double bp[40], sum = 0.0;
+    int nb = chref_breaks(0.0, MF_PI, 0, bp);
+    for (int i = 0; i + 1 < nb; ++i) {
+        mf_result q;
+        if (mf_quad_adaptive(chref_inner, r, bp[i], bp[i + 1], r->tol_density / nb, 1e-13, MF_QUAD_MAX_INTERVALS, &q)
+            != MF_OK)
+            r->fail = 1;
+        sum += q.val;
+    }
+    return 2.0 * sum;
+}
+
+mf_status mf_albedo_charlie_reference(double alpha, double mu, double tol, mf_result *out)
+{
+    out->val = out->err = NAN;
+    if (!(alpha > 0.0 && alpha <= 1.0) || !(mu > 0.0 && mu <= 1.0) || !(tol > 0.0))
+        return MF_ERR_DOMAIN;
+    chref r = {1.0 / alpha, mf_vec3_make(sqrt(fmax(0.0, 1.0 - mu * mu)), 0.0, mu), 0.0, tol / (8.0 * MF_PI), 0};
+    double bp[40], sum = 0.0, err = 0.0;
+    int nb = chref_breaks(0.0, 0.5 * MF_PI, 1, bp);
+    mf_status worst = MF_OK;
+    for (int i = 0; i + 1 < nb; ++i) {
+        mf_result q;
+        mf_status st = mf_quad_adaptive(chref_outer, &r, bp[i], bp[i + 1], tol / nb, 0.0, MF_QUAD_MAX_INTERVALS, &q);
+        if (st != MF_OK)
+            worst = st;
+        sum += q.val;
+        err += q.err;
+    }
+    if (r.fail && worst == MF_OK)
+        worst = MF_ERR_NO_CONVERGENCE;
+    out->val = sum;
+    out->err = err + 0.25 * tol + 1e-13 * fabs(sum);
     return worst;
 }

@@ -133,6 +133,18 @@ static void fn_dfg(const eval_opts *o, const double *in, double *out)
     out[1] = b.val;
 }
 
+static void fn_dfg_charlie(const eval_opts *o, const double *in, double *out)
+{
+    (void)o;
+    /* the DFG table's Charlie channel (mf_albedo_charlie); NaN outside alpha in [1e-4, 1],
+     * cos_theta_o in (0, 1] */
+    mf_result r;
+    if (!(in[0] >= MF_ENERGY_ALPHA_MIN) || mf_albedo_charlie(in[0], in[1], &r) != MF_OK)
+        return;
+    out[0] = r.val;
+    out[1] = r.err;
+}
+
 /* A polygon from in[0] = n and in[1 + 3 i .. 3 + 3 i] = vertex i (NaN where unused); 0 if n is
  * not an integer in [3, MF_POLYGON_MAX_VERTICES] or a used vertex is missing or invalid. */
 static int read_polygon(const double *in, mf_polygon *p)
@@ -261,6 +273,8 @@ static const eval_function k_functions[] = {
      {"albedo", "albedo_err"}, {NULL}, fn_albedo, 0, OPT_NDF | OPT_G2 | OPT_POINTS},
     {"dfg", "split-sum DFG (Karis 2013): F0 dfg_scale + dfg_bias = the albedo with Schlick's Fresnel of o.h",
      {"alpha", "cos_theta_o"}, {"dfg_scale", "dfg_bias"}, {NULL}, fn_dfg, 0, OPT_NDF | OPT_G2},
+    {"dfg-charlie", "the DFG table's Charlie sheen channel: albedo of Charlie D with Neubelt V, F = 1, and its bound",
+     {"alpha", "cos_theta_o"}, {"dfg_charlie", "dfg_charlie_err"}, {NULL}, fn_dfg_charlie, 0, 0},
     {"polygon-cosine", "integral of max(0,z)/pi over a polygon (Lambert), and its solid angle (sr)", {"n"},
      {"E", "solid_angle"}, {NULL}, fn_polygon_cosine, 1, OPT_SIDED},
     {"ltc", "LTC density D(w) of the matrix M (row-major), per steradian", {LTC_M, "w_x", "w_y", "w_z"}, {"D"},

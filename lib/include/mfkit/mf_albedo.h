@@ -74,6 +74,18 @@ mf_status mf_albedo_microfacet_reference(const mf_microfacet *m, mf_vec3 wo, dou
  * off the normal it runs out of intervals after ~45 s).  Same domain and statuses. */
 mf_status mf_albedo_microfacet_reference_wi(const mf_microfacet *m, mf_vec3 wo, double tol, mf_result *out) MF_WARN_UNUSED;
 
+/* The directional albedo of the Charlie sheen lobe as engines tabulate it (Filament's DFG LUT, third
+ * channel): f = D V with D = (2 + 1/a) sin(theta_h)^(1/a) / (2 pi) [Estevez and Kulla 2017, Eq. 2]
+ * and V = 1 / (4 (wi.z + wo.z - wi.z wo.z)) [Neubelt and Pettineo 2013], F = 1, a = alpha in (0, 1],
+ * mu = wo.z in (0, 1].  Same method as mf_albedo_microfacet (adaptive K15 in the micro-normal's polar
+ * angles, split at the horizon of wi), same bound target.  Note: this is NOT the `charlie` model of
+ * the registry (whose G2 is the paper's Lambda fit); it is the sheen term engines ship. */
+mf_status mf_albedo_charlie(double alpha, double mu, mf_result *out) MF_WARN_UNUSED;
+/* Its independent reference: nested adaptive Gauss-Kronrod in the spherical angles of wi (no kink in
+ * those coordinates), graded towards the horizon and the view's azimuth; err as for
+ * mf_albedo_microfacet_reference.  About 0.05 to 1 s. */
+mf_status mf_albedo_charlie_reference(double alpha, double mu, double tol, mf_result *out) MF_WARN_UNUSED;
+
 #ifdef __cplusplus
 }
 #endif
