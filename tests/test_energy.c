@@ -91,6 +91,84 @@ static void charlie_vs_reference(void)
     printf("charlie vs reference: 20 points, worst |diff| / bounds %.3f; alpha 1 normal %.15f\n", worst, q.val);
 }
 
+/* 2 int_0^1 E_T(mu) mu dmu = 4 int_0^1 E_T(s^2) s^3 ds on [0, s_c], [s_c, 1] with an n-point rule
+ * (s_c^2 = the cosine of the critical angle on the dense side, where E_T turns over; 0.5 if none);
+ * *b gets the propagated bounds */
+static double transmit_avg(double alpha, double eta, int n, double *b)
+{
+    double x[32], w[32], sum = 0.0, sc = eta < 1.0 ? sqrt(sqrt(1.0 - eta * eta)) : 0.5;
+    CHECK(mf_quad_gauss_legendre(n, x, w) == MF_OK);
+    *b = 0.0;
+    for (int p = 0; p < 2; ++p) {
+        double a = p ? sc : 0.0, h = 0.5 * (p ? 1.0 - sc : sc);
+        for (int j = 0; j < n; ++j) {
+            double t = a + h * (1.0 + x[j]), wt = h * w[j] * 4.0 * t * t * t;
+            mf_result r, tr;
+            CHECK(mf_albedo_dielectric(mf_ndf_make(MF_NDF_GGX, alpha, alpha), MF_G2_JOINT, t * t, eta, &r, &tr) == MF_OK);
+            sum += wt * tr.val;
+            *b += wt * tr.err;
+        }
+    }
+    return sum;
+}
+
+/* the rough dielectric: three checks that share no code with its rule */
+static void dielectric(void)
+{
+    const double alphas[] = {1e-4, 0.01, 0.3, 1.0};
+    const double mus[] = {1.0, 0.5, 0.05, 1.745e-4};
+    for (int n = 0; n < 2; ++n)
+        for (int a = 0; a < 4; ++a)
+            for (int t = 0; t < 4; ++t)
+                for (int g = 0; g < 2; ++g) {
+                    /* eta = 1: no refraction (wt = -wo), F = 0, so E_R = 0 and E_T = (1 + Lambda_o) G2(wo, wo)
+                     * (int D (wo.h)_+ dh = wo.z (1 + Lambda_o)): 1 / (1 + 2 L) joint (times 1 + L), 1 / (1 + L)
+                     * separable */
+                    mf_ndf ndf = mf_ndf_make(n ? MF_NDF_BECKMANN : MF_NDF_GGX, alphas[a], alphas[a]);
+                    mf_g2_form g2 = g ? MF_G2_SEPARABLE : MF_G2_JOINT;
+                    double mu = mus[t];
+                    mf_result r, tr;
+                    CHECK(mf_albedo_dielectric(ndf, g2, mu, 1.0, &r, &tr) == MF_OK);
+                    double l = mf_smith_lambda(ndf, mf_vec3_make(sqrt(1.0 - mu * mu), 0.0, mu));
+                    double exact = g ? 1.0 / (1.0 + l) : (1.0 + l) / (1.0 + 2.0 * l);
+                    if (!(fabs(tr.val - exact) <= tr.err) || !(fabs(r.val) <= 1e-15) || !(tr.err <= 1e-9))
+                        printf("dielectric eta 1: ndf %d g2 %d alpha %g mu %g: E_T %.15f err %.1e vs %.15f, E_R %g\n", n, g,
+                               alphas[a], mu, tr.val, tr.err, exact, r.val);
+                    CHECK(fabs(tr.val - exact) <= tr.err);
+                    CHECK(tr.err <= 1e-9);
+                    CHECK(fabs(r.val) <= 1e-15); /* F(eta = 1) is 0 up to the rounding of its formula */
+                    /* eta 1.5 and 3 (no total internal reflection): E_R against mf_albedo_microfacet with the
+                     * dielectric Fresnel (the slope-space rule) within both bounds */
+                    for (int e = 0; e < 2; ++e) {
+                        double eta = e ? 3.0 : 1.5;
+                        mf_microfacet m = {ndf, g2, {MF_FRESNEL_DIELECTRIC, 0.0, eta, 0.0}};
+                        mf_result q;
+                        CHECK(mf_albedo_dielectric(ndf, g2, mu, eta, &r, &tr) == MF_OK);
+                        CHECK(mf_albedo_microfacet(&m, mf_vec3_make(sqrt(1.0 - mu * mu), 0.0, mu), &q) == MF_OK);
+                        if (!(fabs(r.val - q.val) <= r.err + q.err) || !(r.err <= 1e-9) || !(tr.err <= 1e-9))
+                            printf("dielectric eta %g: ndf %d g2 %d alpha %g mu %g: E_R %.15f (%.1e) vs albedo %.15f (%.1e), "
+                                   "E_T err %.1e\n",
+                                   eta, n, g, alphas[a], mu, r.val, r.err, q.val, q.err, tr.err);
+                        CHECK(fabs(r.val - q.val) <= r.err + q.err);
+                        CHECK(r.err <= 1e-9 && tr.err <= 1e-9);
+                    }
+                }
+    /* reciprocity: a uniform radiance L outside sends pi L T_avg(eta) into the dense side; in
+     * equilibrium the radiance inside is eta^2 L and sends pi eta^2 L T_avg(1/eta) back, so
+     * T_avg(eta) = eta^2 T_avg(1/eta) (the single-scattering BTDF is reciprocal and this G2 is symmetric).
+     * The two sides' integrals have different kinks (total internal reflection only inside).  Tolerance:
+     * each average's |Q24 - Q16| plus the propagated bounds. */
+    for (int a = 0; a < 2; ++a) {
+        double alpha = a ? 1.0 : 0.3, eta = 1.5, b1, b2, b3, b4;
+        double out = transmit_avg(alpha, eta, 24, &b1), out16 = transmit_avg(alpha, eta, 16, &b2);
+        double in = transmit_avg(alpha, 1.0 / eta, 24, &b3), in16 = transmit_avg(alpha, 1.0 / eta, 16, &b4);
+        double tol = fabs(out - out16) + b1 + b2 + eta * eta * (fabs(in - in16) + b3 + b4);
+        printf("dielectric reciprocity alpha %g: T_avg(1.5) %.12f, 1.5^2 T_avg(1/1.5) %.12f, diff %.2e, tolerance %.2e\n",
+               alpha, out, eta * eta * in, out - eta * eta * in, tol);
+        CHECK(fabs(out - eta * eta * in) <= tol);
+    }
+}
+
 static void dfg_identity(void)
 {
     const double f0s[] = {0.0, 0.04, 0.5, 1.0};
@@ -137,6 +215,7 @@ int main(void)
 {
     albedo_vs_reference();
     charlie_vs_reference();
+    dielectric();
     dfg_identity();
     furnace();
     MF_TEST_MAIN_END();

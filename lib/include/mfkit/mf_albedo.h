@@ -5,8 +5,10 @@
  *   [Walter 2007, Eq. 20],
  *
  * for a centred GGX or Beckmann NDF (anisotropic allowed), joint or separable G2, and any
- * Fresnel descriptor whose value is an analytic function of wo.wm (none, Schlick, conductor;
- * the dielectric's total internal reflection is a kink the rule does not split at).
+ * Fresnel descriptor whose value is an analytic function of wo.wm (none, Schlick, conductor, dielectric
+ * with eta >= 1).  A dielectric with eta < 1 (total internal reflection: a kink in F) is computed
+ * by mf_albedo_dielectric's rule, which ends its panels on the critical angle (isotropic NDFs only;
+ * MF_ERR_DOMAIN for anisotropic ones).
  *
  * Method (docs/math.md, "BRDFs and albedo").  With dwi = 4 (wo.wm) dwm [Walter 2007, Eq. 14]
  * and D(wm) wm.z dwm = P22(s) ds (s the slope of wm, wm ~ (s, 1)):
@@ -39,6 +41,7 @@
 #define MF_ALBEDO_H
 
 #include "mfkit/mf_brdf.h"
+#include "mfkit/mf_fresnel.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -85,6 +88,18 @@ mf_status mf_albedo_charlie(double alpha, double mu, mf_result *out) MF_WARN_UNU
  * those coordinates), graded towards the horizon and the view's azimuth; err as for
  * mf_albedo_microfacet_reference.  About 0.05 to 1 s. */
 mf_status mf_albedo_charlie_reference(double alpha, double mu, double tol, mf_result *out) MF_WARN_UNUSED;
+
+/* The reflection and transmission albedo of a rough dielectric interface (isotropic ndf, joint or
+ * separable G2, exact dielectric Fresnel), for the view mu = wo.z in (0, 1] and the relative index
+ * eta = eta_beyond / eta_view (eta < 1: seen from the denser side, with total internal
+ * reflection):
+ *   E_R = int f_r |wi.z| dwi over the upper hemisphere, E_T = int f_t |wi.z| dwi over the lower one,
+ * with Walter 2007's BSDFs (Eq. 20, 21), E_T the transmitted energy (without the 1 / eta^2 radiance
+ * scaling), G2 of the transmission 1 / (1 + Lambda_o + Lambda_t) (pbrt-v4's and Cycles' form).
+ * Same method and bound target as mf_albedo_microfacet, panels also ending on the critical angle and
+ * the transmission's horizon.  eta = 1 gives E_R = 0 and E_T = G2(wo, -wo mirrored) exactly. */
+mf_status mf_albedo_dielectric(mf_ndf ndf, mf_g2_form g2, double mu, double eta, mf_result *refl,
+                               mf_result *trans) MF_WARN_UNUSED;
 
 #ifdef __cplusplus
 }
