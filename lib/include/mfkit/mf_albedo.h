@@ -10,30 +10,18 @@
  * by mf_albedo_dielectric's rule, which ends its panels on the critical angle (isotropic NDFs only;
  * MF_ERR_DOMAIN for anisotropic ones).
  *
- * Method (docs/math.md, "BRDFs and albedo").  With dwi = 4 (wo.wm) dwm [Walter 2007, Eq. 14]
- * and D(wm) wm.z dwm = P22(s) ds (s the slope of wm, wm ~ (s, 1)):
- *   rho = integral F G2 P22(s) (wo.z + s . wo_xy) / wo.z ds,
- * over the slopes whose reflection wi = 2 (wo.wm) wm - wo is above the horizon.  That set is the
- * DISK |s - wo_xy / wo.z| < 1 / wo.z (wi.z > 0 <=> wo.z |s|^2 - 2 s.wo_xy - wo.z < 0), so the
- * horizon of wi, where the integrand has its kink, is a curve known in closed form.  In the
- * stretched slopes p = (s_x / alpha_x, s_y / alpha_y), polar (r, phi) around the lobe's centre,
- * the ray of direction phi leaves the disk at r_max(phi) = 1 / (sqrt(k^2 + q) - k) with
- * k = (S e) . wo_xy / wo.z, q = |S e|^2, S = diag(alpha_x, alpha_y); for GGX r = tan t
- * (t in [0, atan r_max], measure sin t cos t dt dphi / pi), for Beckmann r itself (measure
- * exp(-r^2) r dr dphi / pi, cut at r = 7).  Inside the disk the integrand is analytic up to the
- * boundary (G2 -> 0 linearly in wi.z there, and is analytic in wi.z), so Gauss-Legendre panels
- * converge exponentially.  Two near-singularities remain and are resolved by panels graded
- * geometrically (ratio 1/5) towards them: the layer of width ~alpha in wi.z where G1(wi) turns
- * over, at the end of each ray; and, for views beyond ~45 deg, the directions phi where k
- * changes sign (the ray's exit jumps between the near and the far side of the disk) over
- * |k| ~ sqrt(q), a width ~ cot(theta_o) in phi.  An isotropic NDF is integrated over half the
- * circle (symmetry about the view's azimuth); at normal incidence over one direction.
- *
- * The value is the rule with 12 points per panel and the error estimate is |Q12 - Q8| (the same
- * panels with 8 points), plus 64 ulp of the result for rounding: the panels make Q8 converge
- * exponentially, so Q12 is far more accurate than Q8 and |Q12 - Q8| bounds its error.
- * Verified against an independent nested adaptive Gauss-Kronrod quadrature in the spherical
- * coordinates of wi (tests/test_energy.c; the measured figures in docs/math.md).
+ * Method (docs/math.md, "BRDFs and albedo").  With dwi = 4 (wo.wm) dwm [Walter 2007, Eq. 14] and
+ * D(wm) wm.z dwm = P22(s) ds (s the slope of wm), rho = integral F G2 P22(s) (wo.z + s . wo_xy) /
+ * wo.z ds over the slopes whose reflection is above the horizon: the DISK |s - wo_xy / wo.z| <
+ * 1 / wo.z, so the kink of the integrand (the horizon of wi) is a circle known in closed form.  In
+ * the stretched slopes, polar rays around the lobe's centre leave the disk at r_max(phi) = 1 /
+ * (sqrt(k^2 + q) - k) (k = (S e) . wo_xy / wo.z, q = |S e|^2, S = diag(alpha_x, alpha_y)); for GGX
+ * r = tan t, for Beckmann r itself (cut at r = 7).  The integral along each ray and the one over phi
+ * are global-adaptive QK15 rules (bound |K15 - G7| per segment; the phi segments add the rays'
+ * bounds through the K15 weights), first graded towards the layer where G1(wi) turns over and
+ * towards the azimuths where the exit jumps; the worst segment is bisected until the total bound is
+ * <= 5e-10 (plus 64 ulp of the result).  An isotropic NDF is integrated over half the circle.
+ * Verified against the independent references below (tests/test_energy.c; figures in docs/math.md).
  *
  * Pure C11; no allocation, no state: safe from any number of threads.
  */

@@ -21,11 +21,12 @@
  *    E_avg_err (E_avg repeated along mu).  For conductors the Fresnel average
  *    F_avg = 2 integral F(mu) mu dmu: Schlick (20 F0 + 1) / 21 in closed form, the exact
  *    conductor by quadrature (mf_energy_favg_conductor).  The dielectric (mu, alpha, eta) table is
- *    not implemented.
+ *    not implemented (the pointwise reflection and transmission: mf_albedo_dielectric).
  *
  * Gates (mf_table_kind_gate): finite fields; dfg: scale, bias >= 0 and scale + bias <= 1 within
  * their bounds, and a sample of 3 x 3 texels (both ends of each axis) against the independent nested Gauss-Kronrod reference
- * (mf_albedo_microfacet_reference) within the stored bound + 1e-10; kulla_conty: the white
+ * (mf_albedo_microfacet_reference) within the stored bound + 1e-10, and the Charlie channel at the
+ * same texels against mf_albedo_charlie_reference within both bounds; kulla_conty: the white
  * furnace, E(mu_o) + (1 - E(mu_o)) (1 - E_avg') / (1 - E_avg) = 1 at every texel within the
  * propagated bound, E_avg' recomputed independently of the table (Gauss-Legendre in mu on other
  * nodes, fresh albedos).  The gates need the table's metadata "ndf" and "g2".
