@@ -84,6 +84,8 @@ static double lambda_i(const actx *c, double wx, double wy, double wz)
     if (s2 == 0.0)
         return 0.0;
     double nu = wz / sqrt(s2);
+    if (nu > 6.0) /* Lambda < exp(-36) / (4 sqrt(pi) nu^3) < 2e-19: below an ulp of 1 + Lambda_o + Lambda_i */
+        return 0.0;
     double l = exp(-nu * nu) * (0.5 * MF_INV_SQRT_PI) / nu - 0.5 * erfc(nu);
     return l > 0.0 ? l : 0.0;
 }
@@ -113,8 +115,18 @@ static void integrand(const actx *c, double x, double sx, double sy, double k, d
     double wx = f * vx - wo.x, wy = f * vy - wo.y, wz = f * vz - wo.z;
     if (!(wz > 0.0))
         return;
-    double li = lambda_i(c, wx, wy, wz);
-    double g2 = c->g2 == MF_G2_SEPARABLE ? 1.0 / ((1.0 + c->lambda_o) * (1.0 + li)) : 1.0 / (1.0 + c->lambda_o + li);
+    double g2;
+    if (c->ndf.type == MF_NDF_GGX) {
+        /* 1 + Lambda_i = (wz + sqrt(wz^2 + s2)) / (2 wz) [Heitz 2014, Eq. 72 with tan^2 = s2 / wz^2]:
+         * G2 with one square root and one division, no cancellation */
+        double ux = c->ndf.alpha_x * wx, uy = c->ndf.alpha_y * wy;
+        double rt = sqrt(wz * wz + ux * ux + uy * uy);
+        g2 = c->g2 == MF_G2_SEPARABLE ? 2.0 * wz / ((1.0 + c->lambda_o) * (wz + rt))
+                                      : 2.0 * wz / ((1.0 + 2.0 * c->lambda_o) * wz + rt);
+    } else {
+        double li = lambda_i(c, wx, wy, wz);
+        g2 = c->g2 == MF_G2_SEPARABLE ? 1.0 / ((1.0 + c->lambda_o) * (1.0 + li)) : 1.0 / (1.0 + c->lambda_o + li);
+    }
     double val = weight * meas * g2;
     if (c->schlick) {
         double m = 1.0 - ov / sqrt(v2), m5 = m * m * m * m * m;
