@@ -36,7 +36,8 @@ static const cli_command k_cmd = {
     .synopsis = "KIND",
     .min_pos = 1,
     .max_pos = 1,
-    .description = "Computes an energy table (KIND: dfg = split-sum Schlick scale and bias, kulla-conty = E and\n"
+    .description = "Computes an energy table (KIND: dfg = split-sum Schlick scale and bias and the Charlie sheen\n"
+                   "albedo (dfg.dds holds R scale, G bias, B Charlie), kulla-conty = E and\n"
                    "E_avg for multiple-scattering compensation) over (cos theta_o, sqrt(alpha)) at texel centres,\n"
                    "runs its gate and writes it.\n",
     .opts = k_opts,
@@ -108,7 +109,15 @@ int cli_energy(int argc, char **argv)
     for (int e = 0; e < 5; ++e) {
         char path[4096], msg[512];
         snprintf(path, sizeof path, "%s/%s.%s", dir, stem, exts[e]);
-        st = mf_table_write(path, &t, NULL, NULL, msg, sizeof msg);
+        mf_table_write_options wo;
+        mf_table_write_options_default(&wo);
+        if (kind == 0 && e == 3) {
+            /* dfg.dds is the engine's texture: R scale, G bias, B Charlie, A zero (the bounds are in
+             * the other files) */
+            wo.dds_fields[0] = 0, wo.dds_fields[1] = 1, wo.dds_fields[2] = 4, wo.dds_fields[3] = -1;
+            wo.dds_fields_set = 1;
+        }
+        st = mf_table_write(path, &t, &wo, NULL, msg, sizeof msg);
         if (st == MF_ERR_UNSUPPORTED && e == 4)
             continue; /* EXR needs the image bridge */
         if (st != MF_OK) {

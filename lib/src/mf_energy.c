@@ -6,7 +6,8 @@
 #include <stdio.h>
 #include <string.h>
 
-const char *const mf_dfg_table_fields[MF_DFG_NFIELDS] = {"dfg_scale", "dfg_bias", "dfg_scale_err", "dfg_bias_err"};
+const char *const mf_dfg_table_fields[MF_DFG_NFIELDS] = {"dfg_scale", "dfg_bias", "dfg_scale_err", "dfg_bias_err",
+                                                        "dfg_charlie", "dfg_charlie_err"};
 const char *const mf_kulla_conty_table_fields[MF_KULLA_CONTY_NFIELDS] = {"E", "E_err", "E_avg", "E_avg_err"};
 
 static int args_ok(mf_ndf_type ndf, mf_g2_form g2, double alpha, double mu)
@@ -154,8 +155,14 @@ mf_status mf_energy_dfg_table(mf_table *t, mf_ndf_type ndf, mf_g2_form g2, int n
                 mf_table_free(t);
                 return st;
             }
+            mf_result ch;
+            st = mf_albedo_charlie(texel_alpha(t, j), texel_mu(t, i), &ch);
+            if (st != MF_OK) {
+                mf_table_free(t);
+                return st;
+            }
             double *r = t->data + ((size_t)j * n_mu + i) * MF_DFG_NFIELDS;
-            r[0] = s.val, r[1] = b.val, r[2] = s.err, r[3] = b.err;
+            r[0] = s.val, r[1] = b.val, r[2] = s.err, r[3] = b.err, r[4] = ch.val, r[5] = ch.err;
             if (progress)
                 progress(user, ++done, total);
         }
@@ -240,7 +247,8 @@ static void dfg_range(void *vctx, mf_check *c)
         for (int i = 0; i < g->t->axes[0].size; ++i) {
             const double *r = rec(g->t, i, j);
             double bs = r[2] + g->u * fabs(r[0]), bb = r[3] + g->u * fabs(r[1]);
-            double v = fmax(fmax(0.0, -r[0] - bs), fmax(-r[1] - bb, r[0] + r[1] - 1.0 - bs - bb));
+            double bc = r[5] + g->u * fabs(r[4]);
+            double v = fmax(fmax(fmax(0.0, -r[0] - bs), fmax(-r[1] - bb, r[0] + r[1] - 1.0 - bs - bb)), -r[4] - bc);
             mf_check_recordf(c, v, "texel (%d, %d)", i, j);
         }
 }
@@ -276,6 +284,29 @@ static void dfg_reference(void *vctx, mf_check *c)
             double v1 = fabs(r[0] + r[1] - q1.val) / (bs + bb + REF_SLACK + (s1 != MF_OK ? q1.err : 0.0));
             double v0 = fabs(r[1] - q0.val) / (bb + REF_SLACK + (s0 != MF_OK ? q0.err : 0.0));
             mf_check_recordf(c, fmax(v0, v1), "texel (%d, %d): alpha %.6g, mu %.6g", i, j, alpha, mu);
+        }
+}
+
+/* |stored - independent reference| / (stored bound + reference bound) of the Charlie channel at the
+ * same DFG_REF_SAMPLES^2 texels (mf_albedo_charlie_reference: other coordinates, no shared code
+ * beyond the D V product) */
+static void dfg_charlie_reference(void *vctx, mf_check *c)
+{
+    const gate_ctx *g = vctx;
+    int nm = g->t->axes[0].size, nr = g->t->axes[1].size;
+    for (int b = 0; b < DFG_REF_SAMPLES; ++b)
+        for (int a = 0; a < DFG_REF_SAMPLES; ++a) {
+            int i = (int)((long)a * (nm - 1) / (DFG_REF_SAMPLES - 1)), j = (int)((long)b * (nr - 1) / (DFG_REF_SAMPLES - 1));
+            const double *r = rec(g->t, i, j);
+            double alpha = texel_alpha(g->t, j), mu = texel_mu(g->t, i);
+            mf_result q;
+            mf_status s = mf_albedo_charlie_reference(alpha, mu, REF_TOL, &q);
+            if (s != MF_OK && s != MF_ERR_NO_CONVERGENCE) {
+                mf_check_fail(c, "the reference quadrature failed");
+                continue;
+            }
+            double v = fabs(r[4] - q.val) / (r[5] + g->u * fabs(r[4]) + q.err);
+            mf_check_recordf(c, v, "texel (%d, %d): alpha %.6g, mu %.6g", i, j, alpha, mu);
         }
 }
 
@@ -320,12 +351,14 @@ static void kc_furnace(void *vctx, mf_check *c)
 
 const mf_check_def mf_energy_dfg_checks[] = {
     {"dfg_finite", "number of NaN or infinite fields per texel", 0.0, 0, check_finite},
-    {"dfg_range", "how far scale, bias >= 0 and scale + bias <= 1 are violated beyond the stored bounds", 0.0, 0,
+    {"dfg_range", "how far scale, bias, charlie >= 0 and scale + bias <= 1 are violated beyond the stored bounds", 0.0, 0,
      dfg_range},
     {"dfg_reference", "|stored - independent nested Gauss-Kronrod| / (stored bound + 1e-10), 9 texels", 1.0, 0,
      dfg_reference},
+    {"dfg_charlie_ref", "|stored Charlie - independent nested Gauss-Kronrod in wi| / (both bounds), 9 texels", 1.0, 0,
+     dfg_charlie_reference},
 };
-const int mf_energy_dfg_nchecks = 3;
+const int mf_energy_dfg_nchecks = MF_ENERGY_DFG_NCHECKS;
 
 const mf_check_def mf_energy_kulla_conty_checks[] = {
     {"kc_finite", "number of NaN or infinite fields per texel", 0.0, 0, check_finite},

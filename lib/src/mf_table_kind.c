@@ -325,7 +325,7 @@ static const mf_table_kind k_kinds[] = {
      MF_MOMENT_TABLE_NFIELDS, mf_moment_table_fields, MF_MOMENT_TABLE_NFIELDS, moment_layout_ok, k_moment_checks, 2,
      moment_gate},
     {"dfg", "split-sum DFG: Schlick scale and bias of the microfacet albedo over (cos theta_o, sqrt alpha)", 2,
-     k_dfg_axes, MF_DFG_NFIELDS, mf_dfg_table_fields, MF_DFG_NFIELDS, dfg_layout_ok, mf_energy_dfg_checks, 3, dfg_gate},
+     k_dfg_axes, MF_DFG_NFIELDS, mf_dfg_table_fields, MF_DFG_NFIELDS, dfg_layout_ok, mf_energy_dfg_checks, MF_ENERGY_DFG_NCHECKS, dfg_gate},
     {"kulla_conty", "Kulla-Conty energy compensation: E(mu, alpha), E_avg(alpha) with F = 1", 2, k_kc_axes,
      MF_KULLA_CONTY_NFIELDS, mf_kulla_conty_table_fields, MF_KULLA_CONTY_NFIELDS, kc_layout_ok,
      mf_energy_kulla_conty_checks, 2, kc_gate},

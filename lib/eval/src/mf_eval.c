@@ -122,6 +122,42 @@ static void fn_albedo(const eval_opts *o, const double *in, double *out)
     out[1] = r.err;
 }
 
+static void fn_dfg(const eval_opts *o, const double *in, double *out)
+{
+    /* the split-sum DFG terms (mf_energy_dfg: the albedo rule of mf_albedo.h, both Schlick moments
+     * in one pass); NaN outside alpha in [1e-4, 1], cos_theta_o in (0, 1] */
+    mf_result s, b;
+    if (mf_energy_dfg(o->ndf, o->g2, in[0], in[1], &s, &b) != MF_OK)
+        return;
+    out[0] = s.val;
+    out[1] = b.val;
+}
+
+static void fn_dfg_charlie(const eval_opts *o, const double *in, double *out)
+{
+    (void)o;
+    /* the DFG table's Charlie channel (mf_albedo_charlie); NaN outside alpha in [1e-4, 1],
+     * cos_theta_o in (0, 1] */
+    mf_result r;
+    if (!(in[0] >= MF_ENERGY_ALPHA_MIN) || mf_albedo_charlie(in[0], in[1], &r) != MF_OK)
+        return;
+    out[0] = r.val;
+    out[1] = r.err;
+}
+
+static void fn_dielectric(const eval_opts *o, const double *in, double *out)
+{
+    /* mf_albedo_dielectric; NaN outside alpha in [1e-4, 1], cos_theta_o in (0, 1], eta > 0 */
+    mf_result r, t;
+    if (!(in[0] >= MF_ENERGY_ALPHA_MIN && in[0] <= 1.0)
+        || mf_albedo_dielectric(mf_ndf_make(o->ndf, in[0], in[0]), o->g2, in[1], in[2], &r, &t) != MF_OK)
+        return;
+    out[0] = r.val;
+    out[1] = r.err;
+    out[2] = t.val;
+    out[3] = t.err;
+}
+
 /* A polygon from in[0] = n and in[1 + 3 i .. 3 + 3 i] = vertex i (NaN where unused); 0 if n is
  * not an integer in [3, MF_POLYGON_MAX_VERTICES] or a used vertex is missing or invalid. */
 static int read_polygon(const double *in, mf_polygon *p)
@@ -248,6 +284,12 @@ static const eval_function k_functions[] = {
      {NULL}, fn_brdf, 0, OPT_NDF | OPT_FRESNEL | OPT_G2},
     {"albedo", "directional albedo (no Fresnel) by quadrature, with its error estimate", {"alpha", "cos_theta_o"},
      {"albedo", "albedo_err"}, {NULL}, fn_albedo, 0, OPT_NDF | OPT_G2 | OPT_POINTS},
+    {"dfg", "split-sum DFG (Karis 2013): F0 dfg_scale + dfg_bias = the albedo with Schlick's Fresnel of o.h",
+     {"alpha", "cos_theta_o"}, {"dfg_scale", "dfg_bias"}, {NULL}, fn_dfg, 0, OPT_NDF | OPT_G2},
+    {"dielectric", "rough dielectric interface: reflected and transmitted energy (exact Fresnel, eta = beyond / view side)",
+     {"alpha", "cos_theta_o", "eta"}, {"E_R", "E_R_err", "E_T", "E_T_err"}, {NULL}, fn_dielectric, 0, OPT_NDF | OPT_G2},
+    {"dfg-charlie", "the DFG table's Charlie sheen channel: albedo of Charlie D with Neubelt V, F = 1, and its bound",
+     {"alpha", "cos_theta_o"}, {"dfg_charlie", "dfg_charlie_err"}, {NULL}, fn_dfg_charlie, 0, 0},
     {"polygon-cosine", "integral of max(0,z)/pi over a polygon (Lambert), and its solid angle (sr)", {"n"},
      {"E", "solid_angle"}, {NULL}, fn_polygon_cosine, 1, OPT_SIDED},
     {"ltc", "LTC density D(w) of the matrix M (row-major), per steradian", {LTC_M, "w_x", "w_y", "w_z"}, {"D"},
@@ -295,7 +337,7 @@ static const mf_eval_option k_options[MF_EVAL_NOPTS] = {
     {.name = "fresnel", .kind = MF_EVAL_KIND_ENUM, .choices = k_fresnel_names, .mask = OPT_FRESNEL, .def = "none",
      .help = "brdf only; schlick adds the input column f0"},
     {.name = "g2", .kind = MF_EVAL_KIND_ENUM, .choices = k_g2_names, .mask = OPT_G2, .def = "joint",
-     .help = "masking-shadowing of brdf and albedo"},
+     .help = "masking-shadowing of brdf, albedo, dfg and dielectric"},
     {.name = "points", .metavar = "N", .kind = MF_EVAL_KIND_INT, .lo = 16, .hi = 2048, .multiple = 8,
      .mask = OPT_POINTS, .optional = 1,
      .help = "albedo only: use the old N x N product rule (a multiple of 8 in [16, 2048]) instead of the default "

@@ -9,9 +9,9 @@
  *    128 x 128 -- the size and parameterisation of Filament's DFG LUT (cos theta linear,
  *    perceptual roughness sqrt(alpha) linear); fields dfg_scale, dfg_bias and their error bounds.
  *    Filament stores (bias, scale + bias) instead; UE samples (NoV, Roughness) the same way.
- *    No Charlie sheen channel: the charlie model's albedo does not converge with the cosine
- *    sampler it has today (lib/src/mf_model_albedo.c), and a channel that is not accurate is not
- *    shipped.
+ *    Third channel dfg_charlie (and its bound): the Charlie sheen albedo as Filament's DFG LUT
+ *    defines it (DFV_Charlie of its IBL library: Charlie NDF [Estevez and Kulla 2017, Eq. 2],
+ *    Neubelt-Pettineo visibility, F = 1, the same alpha = r^2), by mf_albedo_charlie.
  *  multiple-scattering compensation [Kulla and Conty 2017, "Revisiting Physically Based Shading
  *    at Imageworks", Sec. on energy compensation]: E(mu, alpha) (F = 1) and
  *    E_avg(alpha) = 2 integral_0^1 E(mu) mu dmu, with the compensation lobe
@@ -21,11 +21,12 @@
  *    E_avg_err (E_avg repeated along mu).  For conductors the Fresnel average
  *    F_avg = 2 integral F(mu) mu dmu: Schlick (20 F0 + 1) / 21 in closed form, the exact
  *    conductor by quadrature (mf_energy_favg_conductor).  The dielectric (mu, alpha, eta) table is
- *    not implemented.
+ *    not implemented (the pointwise reflection and transmission: mf_albedo_dielectric).
  *
  * Gates (mf_table_kind_gate): finite fields; dfg: scale, bias >= 0 and scale + bias <= 1 within
  * their bounds, and a sample of 3 x 3 texels (both ends of each axis) against the independent nested Gauss-Kronrod reference
- * (mf_albedo_microfacet_reference) within the stored bound + 1e-10; kulla_conty: the white
+ * (mf_albedo_microfacet_reference) within the stored bound + 1e-10, and the Charlie channel at the
+ * same texels against mf_albedo_charlie_reference within both bounds; kulla_conty: the white
  * furnace, E(mu_o) + (1 - E(mu_o)) (1 - E_avg') / (1 - E_avg) = 1 at every texel within the
  * propagated bound, E_avg' recomputed independently of the table (Gauss-Legendre in mu on other
  * nodes, fresh albedos).  The gates need the table's metadata "ndf" and "g2".
@@ -70,8 +71,9 @@ mf_status mf_energy_dfg_table(mf_table *t, mf_ndf_type ndf, mf_g2_form g2, int n
 mf_status mf_energy_kulla_conty_table(mf_table *t, mf_ndf_type ndf, mf_g2_form g2, int n_mu, int n_r,
                                       mf_energy_progress progress, void *user) MF_WARN_UNUSED;
 
-#define MF_DFG_NFIELDS 4
+#define MF_DFG_NFIELDS 6
 extern const char *const mf_dfg_table_fields[MF_DFG_NFIELDS];
+#define MF_ENERGY_DFG_NCHECKS 4
 #define MF_KULLA_CONTY_NFIELDS 4
 extern const char *const mf_kulla_conty_table_fields[MF_KULLA_CONTY_NFIELDS];
 
