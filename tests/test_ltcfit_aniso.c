@@ -2,8 +2,9 @@
  * test_ltcfit_aniso.c -- the anisotropic LTC fitter (mf_ltcfit_aniso.h) and its table kind
  * (mf_ltc_aniso_table.h): exact symmetry patterns, isotropic entries against the isotropic fitter,
  * mirrored azimuths, continuity of the interpolated lobe along every axis, bitwise determinism
- * across thread counts, the published .npy layout.  Label fit (needs Ceres).
- * Checkpoint/resume: not implemented for this fitter (the header says so), so not tested.
+ * across thread counts, the published .npy layout, checkpoint and resume (bitwise the same table
+ * after interruptions, a record cut short, other settings refused), the alpha = 1e-4 anchor rows
+ * (their collocation relation and its fallback).  Label fit (needs Ceres).
  */
 #define _POSIX_C_SOURCE 200809L
 #include "mf_test.h"
@@ -16,6 +17,7 @@
 
 #include <stdio.h>
 #include <string.h>
+#include <unistd.h>
 
 static const mf_brdf_model *ggx(void) { return mf_brdf_model_find("ggx"); }
 
@@ -220,7 +222,186 @@ static void test_sweeps(const mf_table *t)
     printf("sweeps: largest step / mean step = %.3g (bound %g)\n", worst_ratio, JUMP);
 }
 
-/* The default table: the gate's model-free checks pass, the sweeps, the .npy layout. */
+static long file_size(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return -1;
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fclose(f);
+    return n;
+}
+
+/* Checkpoint and resume (mf_ltcfit_aniso.h, "Interruption and resume"): a 4^4 fit stopped after 5
+ * pairs (2 threads), resumed and stopped again after 7 more (1 thread; this crosses into the
+ * anchor phase), its last record then cut short (as by a kill during the write), and resumed to
+ * the end (2 threads), gives the uninterrupted table bit for bit.  A checkpoint of other settings
+ * is refused with a message; resume without a checkpoint path is a domain error. */
+static void test_resume(void)
+{
+    const char *path = "test_ltcfit_aniso.checkpoint";
+    remove(path);
+    char msg[512];
+    mf_ltcfit_aniso_options o = small(1);
+    mf_table ref, t;
+    mf_ltcfit_aniso_result rr, r;
+    CHECK(mf_ltcfit_aniso_table(ggx(), &o, &ref, &rr, msg, sizeof msg) == MF_OK);
+    /* 4^4: 10 pairs in phase 1 (both alphas above 1e-4, and the isotropic 1e-4 pair), 6 anchors */
+    o = small(2);
+    o.checkpoint = path;
+    o.stop_after_pairs = 5;
+    CHECK(mf_ltcfit_aniso_table(ggx(), &o, &t, &r, msg, sizeof msg) == MF_OK);
+    CHECK(r.interrupted == 1 && r.pairs_done == 5 && r.pairs_resumed == 0);
+    mf_ltcfit_aniso_result_free(&r);
+    o = small(1);
+    o.checkpoint = path;
+    o.resume = 1;
+    o.stop_after_pairs = 7;
+    CHECK(mf_ltcfit_aniso_table(ggx(), &o, &t, &r, msg, sizeof msg) == MF_OK);
+    CHECK(r.interrupted == 1 && r.pairs_done == 12 && r.pairs_resumed == 5);
+    if (!(r.pairs_done == 12 && r.pairs_resumed == 5))
+        printf("resume: pairs done %d, resumed %d (want 12, 5)\n", r.pairs_done, r.pairs_resumed);
+    mf_ltcfit_aniso_result_free(&r);
+    /* cut the last record short: a kill during its write */
+    long size = file_size(path);
+    CHECK(size > 100 && truncate(path, size - 100) == 0);
+    o = small(2);
+    o.checkpoint = path;
+    o.resume = 1;
+    CHECK(mf_ltcfit_aniso_table(ggx(), &o, &t, &r, msg, sizeof msg) == MF_OK);
+    CHECK(r.interrupted == 0 && r.pairs_resumed == 11 && r.pairs_done == 16);
+    if (!(r.pairs_resumed == 11))
+        printf("resume after a cut record: resumed %d pairs (want 11)\n", r.pairs_resumed);
+    CHECK(r.interrupted == 0 && ref.data && t.data &&
+          memcmp(ref.data, t.data, sizeof(double) * mf_table_texels(&ref) * (size_t)ref.nfields) == 0);
+    CHECK(r.worst_residual == rr.worst_residual && r.total_iterations == rr.total_iterations &&
+          r.not_converged == rr.not_converged && r.anchor_fallbacks == rr.anchor_fallbacks);
+    mf_table_free(&t);
+    mf_ltcfit_aniso_result_free(&r);
+    /* the complete checkpoint resumes to the same table without fitting anything */
+    CHECK(mf_ltcfit_aniso_table(ggx(), &o, &t, &r, msg, sizeof msg) == MF_OK);
+    CHECK(r.pairs_resumed == 16 && r.total_iterations == rr.total_iterations && t.data &&
+          memcmp(ref.data, t.data, sizeof(double) * mf_table_texels(&ref) * (size_t)ref.nfields) == 0);
+    mf_table_free(&t);
+    mf_ltcfit_aniso_result_free(&r);
+    /* another seed: refused, one message naming the file */
+    o.seed = 2;
+    msg[0] = '\0';
+    CHECK(mf_ltcfit_aniso_table(ggx(), &o, &t, &r, msg, sizeof msg) == MF_ERR_FORMAT);
+    CHECK(strstr(msg, path) != NULL && strstr(msg, "not a checkpoint of this fit") != NULL);
+    printf("other settings: %s\n", msg);
+    mf_ltcfit_aniso_result_free(&r);
+    o.seed = 1;
+    o.checkpoint = NULL;
+    CHECK(mf_ltcfit_aniso_table(ggx(), &o, &t, &r, msg, sizeof msg) == MF_ERR_DOMAIN);
+    mf_ltcfit_aniso_result_free(&r);
+    remove(path);
+    mf_table_free(&ref);
+    mf_ltcfit_aniso_result_free(&rr);
+}
+
+/* The anchor matrix (mf_ltcfit_aniso_anchor_matrix) on given matrices: (M_0 + M_nb) / 2 is s M_mid
+ * (s the product of the unit last columns) and M_0's last column is a unit vector; both to 1e-15
+ * (a few roundings of O(1) numbers).  When the extrapolation is degenerate (det M_0 <= 0, or
+ * s <= 0) the result is M_mid itself, exactly. */
+static void test_anchor_matrix(void)
+{
+    double c = cos(0.3), sn = sin(0.3);
+    /* two nearby lobes with unit last columns */
+    const double mid[9] = {0.6, 0.05, 0.2 * sn, -0.04, 0.9, 0.0, 0.1, 0.02, 1.0};
+    double m_mid[9], m_nb[9], m0[9];
+    memcpy(m_mid, mid, sizeof m_mid);
+    double nz = sqrt(m_mid[2] * m_mid[2] + m_mid[5] * m_mid[5] + m_mid[8] * m_mid[8]);
+    m_mid[2] /= nz, m_mid[5] /= nz, m_mid[8] /= nz;
+    const double nb[9] = {0.8, 0.02, sn, 0.01, 1.1, 0.0, 0.15, 0.0, c};
+    memcpy(m_nb, nb, sizeof m_nb);
+    CHECK(mf_ltcfit_aniso_anchor_matrix(m_mid, m_nb, m0) == 1);
+    double s = m_mid[2] * m_nb[2] + m_mid[5] * m_nb[5] + m_mid[8] * m_nb[8];
+    for (int a = 0; a < 9; ++a)
+        CHECK_ABS(0.5 * (m0[a] + m_nb[a]), s * m_mid[a], 1e-15);
+    CHECK_ABS(m0[2] * m0[2] + m0[5] * m0[5] + m0[8] * m0[8], 1.0, 1e-15);
+    /* a neighbour twice as wide along x: 2 M_mid - M_nb has a negative x column, det < 0 */
+    double wide[9];
+    memcpy(wide, m_mid, sizeof wide);
+    wide[0] = 2.5 * m_mid[0], wide[3] = 2.5 * m_mid[3], wide[6] = 2.5 * m_mid[6];
+    CHECK(mf_ltcfit_aniso_anchor_matrix(m_mid, wide, m0) == 0);
+    CHECK(memcmp(m0, m_mid, sizeof m0) == 0);
+    /* opposite last columns: s < 0 */
+    double flip[9];
+    memcpy(flip, m_mid, sizeof flip);
+    flip[2] = -m_mid[2], flip[5] = -m_mid[5], flip[8] = -m_mid[8];
+    CHECK(mf_ltcfit_aniso_anchor_matrix(m_mid, flip, m0) == 0);
+    CHECK(memcmp(m0, m_mid, sizeof m0) == 0);
+}
+
+/* The anchor rows of a fitted table (an alpha index 0, alpha = 1e-4, the other above it): every
+ * stored M_0 has a unit last column (1e-12: the stored normalisation), the zero patterns hold at
+ * phi = 0 and pi/2, entries are marked as anchors exactly there (fallbacks counted as the result
+ * says), and the lobe a shader interpolates at the cell's midpoint, (M_0 + M_nb) / 2 (for a
+ * fallback: M_0 itself, which is the midpoint fit), is the lobe of a fit made at the midpoint:
+ * mean polygon difference <= 0.02 against mf_ltcfit_aniso_entry_fit there (the fit tolerance of
+ * test_isotropic_agreement: the table's fit comes from the warm chain, the direct one from the
+ * closed-form start, so they agree to the fit tolerance, not bit for bit).  Without the anchors
+ * (the fit at alpha = 1e-4 itself, which cannot follow the sliver) the midpoint lobe was off by
+ * far more: shape error 0.0167 vs 0.0074 in the benchmark (mf_ltcfit_aniso.h). */
+static void test_anchor_rows(const mf_table *t, const mf_ltcfit_aniso_result *r)
+{
+    const int *n = r->n;
+    mf_ltcfit_aniso_options o;
+    mf_ltcfit_aniso_options_default(&o);
+    double worst = 0.0, worst_norm = 0.0;
+    int checked = 0, fallbacks = 0, marks_ok = 1;
+    for (int l = 0; l < n[3]; ++l)
+        for (int k = 0; k < n[2]; ++k)
+            for (int i1 = 0; i1 < n[1]; ++i1)
+                for (int i0 = 0; i0 < n[0]; ++i0) {
+                    const mf_ltcfit_aniso_entry *e =
+                        &r->entries[i0 + n[0] * (i1 + n[1] * (k + (size_t)n[2] * l))];
+                    int is_anchor = (i0 == 0) != (i1 == 0);
+                    marks_ok &= is_anchor ? (e->anchor == 1 || e->anchor == 2) : e->anchor == 0;
+                    fallbacks += e->anchor == 2;
+                }
+    CHECK(marks_ok);
+    CHECK(fallbacks == r->anchor_fallbacks);
+    for (int side = 0; side < 2; ++side)
+        for (int i = 1; i < n[side]; ++i)
+            for (int k = 1; k < n[2]; k += 3)
+                for (int l = 0; l < n[3]; l += 3) {
+                    int a[4] = {side ? i : 0, side ? 0 : i, k, l};
+                    int b[4] = {side ? i : 1, side ? 1 : i, k, l};
+                    const double *m0 = mf_table_record(t, a), *mb = mf_table_record(t, b);
+                    const mf_ltcfit_aniso_entry *e = &r->entries[a[0] + n[0] * (a[1] + n[1] * (k + (size_t)n[2] * l))];
+                    worst_norm = fmax(worst_norm, fabs(sqrt(m0[2] * m0[2] + m0[5] * m0[5] + m0[8] * m0[8]) - 1.0));
+                    if (l == 0)
+                        CHECK(m0[1] == 0.0 && m0[3] == 0.0 && m0[5] == 0.0 && m0[7] == 0.0);
+                    if (l == n[3] - 1)
+                        CHECK(m0[1] == 0.0 && m0[2] == 0.0 && m0[3] == 0.0 && m0[6] == 0.0);
+                    double ax0, ay0, th, ph, ax1, ay1;
+                    mf_ltc_aniso_entry_values(t, a, &ax0, &ay0, &th, &ph);
+                    mf_ltc_aniso_entry_values(t, b, &ax1, &ay1, &th, &ph);
+                    double axm = 0.5 * (ax0 + ax1), aym = 0.5 * (ay0 + ay1);
+                    double mid[9];
+                    for (int q = 0; q < 9; ++q)
+                        mid[q] = e->anchor == 2 ? m0[q] : 0.5 * (m0[q] + mb[q]);
+                    mf_ltcfit_aniso_entry f;
+                    CHECK(mf_ltcfit_aniso_entry_fit(ggx(), axm, aym, th, ph, NULL, &o, &f) == MF_OK);
+                    double d = lobe_distance(mid, f.m, axm, aym, th, ph, 1.0);
+                    ++checked;
+                    worst = fmax(worst, d);
+                    if (!(d <= 0.02))
+                        printf("anchor (%d, %d, %d, %d)%s: midpoint lobe differs from a fit there by %.4g\n", a[0], a[1],
+                               k, l, e->anchor == 2 ? " (fallback)" : "", d);
+                    CHECK(d <= 0.02);
+                }
+    CHECK(worst_norm <= 1e-12);
+    printf("anchor rows: %d midpoints, worst mean |dE| %.4g (tolerance 0.02), last column |norm - 1| %.3g, "
+           "fallbacks %d\n",
+           checked, worst, worst_norm, r->anchor_fallbacks);
+}
+
+/* The default table: the gate's model-free checks pass, the sweeps, the anchor rows, the .npy
+ * layout. */
 static void test_default_table(void)
 {
     mf_ltcfit_aniso_options o;
@@ -236,19 +417,19 @@ static void test_default_table(void)
     int n = 0;
     mf_status gs = mf_ltc_aniso_gate_run(&t, NULL, NULL, ch, MF_LTC_ANISO_GATE_MAX_CHECKS, &n);
     CHECK(gs == MF_OK || gs == MF_ERR_CHECK_FAILED);
-    /* The default table does not yet pass the gate's ltca_smooth_spike (1.19 > 1 at alpha_y =
-     * 1e-4, the sliver row, where the fits do not converge): it is reported by
-     * analysis/bench_ltc_aniso with the full gate, not asserted here; the other model-free checks
-     * are. */
+    /* every model-free check passes (ltca_smooth_spike 0.29 of 1 with the random-polygon
+     * objective; 1.19 with the first fitter, when it was reported only) */
     for (int i = 0; i < n; ++i) {
-        int reported_only = !strcmp(ch[i].name, "ltca_smooth_spike");
         if (!ch[i].passed)
-            printf("gate %s%s: worst %g bound %g at %s\n", ch[i].name, reported_only ? " (reported only)" : "",
-                   ch[i].worst, ch[i].bound, ch[i].worst_at);
-        if (!reported_only)
-            CHECK(ch[i].passed);
+            printf("gate %s: worst %g bound %g at %s\n", ch[i].name, ch[i].worst, ch[i].bound, ch[i].worst_at);
+        CHECK(ch[i].passed);
     }
+    CHECK(gs == MF_OK);
+    CHECK(r.not_converged == 0);
+    printf("default table: worst residual %.4g, not converged %d, anchor fallbacks %d\n", r.worst_residual,
+           r.not_converged, r.anchor_fallbacks);
     test_sweeps(&t);
+    test_anchor_rows(&t, &r);
     /* the published layout: header, shape, C order (last axis fastest), last column unit */
     const char *path = "test_ltcfit_aniso_kt.npy";
     CHECK(mf_ltcfit_aniso_write_kt_npy(path, &t, msg, sizeof msg) == MF_OK);
@@ -283,6 +464,8 @@ int main(void)
 {
     test_patterns();
     test_threads();
+    test_resume();
+    test_anchor_matrix();
     test_isotropic_agreement();
     test_mirrors();
     test_default_table();

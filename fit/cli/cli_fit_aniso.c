@@ -11,6 +11,7 @@
 #include "mfkit/mfkit.h"
 
 #include <errno.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -55,7 +56,7 @@ static int parse_size4(const char *s, cli_val *v)
 
 static const char *const k_params[] = {"alpha-xy", "alpha-lambda", NULL};
 
-enum { A_BRDF, A_SIZE, A_PARAM, A_THREADS, A_SEED, A_OUT, A_FORCE, A_QUIET, A_NOPTS };
+enum { A_BRDF, A_SIZE, A_PARAM, A_THREADS, A_SEED, A_OUT, A_FORCE, A_QUIET, A_RESUME, A_STOP_AFTER, A_NOPTS };
 static const cli_opt k_opts[A_NOPTS] = {
     {.name = "--brdf", .metavar = "NAME", .kind = CLI_OPT_STRING, .def = "ggx",
      .help = "the BRDF model (an anisotropic one: it reads alpha_x and alpha_y)"},
@@ -73,6 +74,10 @@ static const cli_opt k_opts[A_NOPTS] = {
     {.name = "--force", .kind = CLI_OPT_FLAG,
      .help = "export even if a gate check fails (metadata \"validated\" = \"false\")"},
     {.name = "--quiet", .kind = CLI_OPT_FLAG, .help = "no summary on stderr"},
+    {.name = "--resume", .kind = CLI_OPT_FLAG,
+     .help = "continue from DIR/ltca_<brdf>.checkpoint (same settings) if it exists"},
+    {.name = "--stop-after", .metavar = "K", .kind = CLI_OPT_INT, .lo = 1, .hi = 65536,
+     .help = "(testing) stop as if interrupted after fitting K (alpha_x, alpha_y) pairs"},
 };
 static const cli_command k_cmd = {
     .name = "fit ltc-aniso",
@@ -88,8 +93,21 @@ static const cli_command k_cmd = {
               "(n0, n1, n2, n3, 3, 3) float32, divided by the norm of its last column), <p>.glsl and <p>.hlsl\n"
               "(the lookup snippet: any azimuth, all four axes interpolated, returns M^-1, M, magnitude and\n"
               "fresnel) and its three textures <p>_m0.dds, <p>_m1.dds, <p>_m2.dds (RGBA32F atlases).\n\n"
-              "exit status: 0 exported, 1 a gate check failed, 2 usage error, 3 I/O error, 4 fit failed\n",
+              "Every completed (alpha_x, alpha_y) pair is appended to DIR/ltca_<brdf>.checkpoint; after an\n"
+              "interruption (SIGINT, SIGTERM, a kill) '--resume' fits only the missing pairs, and the table is\n"
+              "the same, bit for bit.  The checkpoint is removed after a successful export.\n\n"
+              "exit status: 0 exported, 1 a gate check failed, 2 usage error, 3 I/O error, 4 fit failed,\n"
+              "130 interrupted\n",
 };
+
+/* set by the handler; an int is written atomically on every platform mfkit builds on */
+static volatile int g_cancel_aniso = 0;
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    g_cancel_aniso = 1;
+}
 
 static int make_dir(const char *dir)
 {
@@ -133,19 +151,45 @@ int cli_fit_aniso(int argc, char **argv)
         o.seed = v[A_SEED].u;
     const char *out = v[A_OUT].set ? v[A_OUT].s : "out";
     int quiet = v[A_QUIET].set, force = v[A_FORCE].set;
+    if (make_dir(out) != 0)
+        return cli_error(cmd, "%s: cannot create the output directory: %s", out, strerror(errno));
+    char ckpt[4096];
+    if (snprintf(ckpt, sizeof ckpt, "%s/ltca_%s.checkpoint", out, brdf) >= (int)sizeof ckpt)
+        return cli_error(cmd, "--out: path too long");
+    o.checkpoint = ckpt;
+    o.resume = v[A_RESUME].set;
+    if (v[A_STOP_AFTER].set)
+        o.stop_after_pairs = (int)v[A_STOP_AFTER].i;
+    g_cancel_aniso = 0;
+    o.cancel = &g_cancel_aniso;
+    struct sigaction sa, old_int, old_term;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &old_int);
+    sigaction(SIGTERM, &sa, &old_term);
     mf_table t;
     mf_ltcfit_aniso_result r;
     char msg[1024];
     mf_status st = mf_ltcfit_aniso_table(model, &o, &t, &r, msg, sizeof msg);
+    sigaction(SIGINT, &old_int, NULL);
+    sigaction(SIGTERM, &old_term, NULL);
     if (st != MF_OK) {
         cli_error(cmd, "%s", msg[0] ? msg : mf_status_str(st));
         mf_ltcfit_aniso_result_free(&r);
-        return cli_exit_code(st) == CLI_EXIT_IO ? CLI_EXIT_IO : CLI_EXIT_FIT;
+        return cli_exit_code(st) == CLI_EXIT_IO || st == MF_ERR_FORMAT ? CLI_EXIT_IO : CLI_EXIT_FIT;
+    }
+    if (r.interrupted) {
+        fprintf(stderr, "mfkit fit ltc-aniso: interrupted after %d of %d roughness pairs; no table written; '--resume' "
+                        "continues from %s\n",
+                r.pairs_done, o.n[0] * o.n[1], ckpt);
+        mf_ltcfit_aniso_result_free(&r);
+        return CLI_EXIT_INTERRUPTED;
     }
     printf("fit: %d x %d x %d x %d entries, worst residual %.4g (entry %d), not converged %d, max iterations %d, "
-           "anchor fallbacks %d\n",
+           "anchor fallbacks %d%s\n",
            o.n[0], o.n[1], o.n[2], o.n[3], r.worst_residual, r.worst_index, r.not_converged, r.max_iterations,
-           r.anchor_fallbacks);
+           r.anchor_fallbacks, r.pairs_resumed ? " (resumed)" : "");
     mf_ltc_aniso_gate_options go;
     mf_ltc_aniso_gate_options_default(&go);
     go.seed = o.seed;
@@ -221,6 +265,8 @@ int cli_fit_aniso(int argc, char **argv)
             rc = CLI_EXIT_IO;
         }
     }
+    if (rc == 0)
+        remove(ckpt);
     if (rc == 0 && !quiet)
         fprintf(stderr, "exported %s/ltca_%s.{json,npy,exr,glsl,hlsl}, %s/ltca_%s_m{0,1,2}.dds and %s/ltca_%s_kt.npy\n",
                 out, brdf, out, brdf, out, brdf);

@@ -12,18 +12,23 @@
  * S_y = diag(1, -1, 1), the LTC at the mirrored view is S M S (mf_ltc_aniso_table.h).
  *
  * The objective is the isotropic fitter's (mf_ltcfit.h): per entry, the weighted differences of
- * magnitude * E_LTC(P_k; M) and the BRDF's light integrals I_k over the same family of K test
- * lights, with the exact magnitude (the model's albedo, mf_model_albedo), the same scrambled
- * Sobol directions mapped through the model's (anisotropic) sampler, the control variate
- * (the warm start's LTC), proximal residuals towards the warm start, exact Jacobians by dual
- * numbers, Ceres Levenberg-Marquardt (mf_solver.h).  The light family is built about the lobe's
- * mean direction m in the frame rotated about z so that the view lies in its xz plane (the
- * isotropic fitter's frame, where its lights are defined), then rotated back; its lobe-sized
- * lights are shaped by the lobe's second moments in the tangent plane of m (L = (2 S)^(1/2)), so
- * they resolve both principal widths of an elongated lobe (one RMS width did not: at
- * alpha_x = 0.05, alpha_y = 1 every light was wider than the minor axis).  A barrier residual
- * keeps the LTC's minor angular width at its peak >= 5e-5 rad (the alpha = 1e-4 slivers: below
- * the lights' resolution the solver drove det M' to 0; see mf_ltcfit_aniso.c).
+ * magnitude * E_LTC(P_k; M) and the BRDF's light integrals I_k over a family of K test lights,
+ * with the exact magnitude (the model's albedo, mf_model_albedo), the same scrambled Sobol
+ * directions mapped through the model's (anisotropic) sampler, the control variate (the warm
+ * start's LTC), proximal residuals towards the warm start, exact Jacobians by dual numbers,
+ * Ceres Levenberg-Marquardt (mf_solver.h); the residual weight's floor is 1 albedo (close to
+ * absolute errors, which is what a shader's error on a light is).  The lights of the table's
+ * fits (and of mf_ltcfit_aniso_entry_fit) are 96 fixed random convex polygons drawn like the
+ * lights a renderer shades with (mf_ltc_gate_random_polygons_params from a fixed stream: a third
+ * centred on directions the model samples, a third across the horizon, a third anywhere, sizes
+ * 0.03..1.2 at distance 1).  A structured family about the lobe's mean (lobe-sized n-gons shaped
+ * by the lobe's second moments, offset n-gons, horizon and large caps) scored the published
+ * table's matrices above its own minima at 2845 of 2850 entries, yet shaded random quads worse
+ * than the published table: the objective, not the solver, limited it (measurements in
+ * mf_ltcfit_aniso.c, "RAND_LIGHTS").  mf_ltcfit_aniso_entry_fit_general keeps the structured
+ * family.  A barrier residual keeps the LTC's minor angular width at its peak >= 5e-5 rad (the
+ * alpha = 1e-4 slivers: below the lights' resolution the solver drove det M' to 0; see
+ * mf_ltcfit_aniso.c).
  *
  * The matrix.  An LTC M is defined up to a positive scale and a rotation R_z about z on the
  * right (the cosine is invariant under it) [Kt et al. 2022, Sec. 4.2]: 9 - 2 = 7 free
@@ -57,21 +62,33 @@
  * entry starting from the previous entry's lobe-frame parameters (when their cost is not above
  * the closed-form start's).  Jobs are handed to `threads` pthreads in two phases (the second
  * reads only results of the first): the result does not depend on the thread count, bit for
- * bit.  No checkpoint/resume (an 8^4 table takes seconds; see analysis/bench_ltc_aniso.c).
+ * bit.
+ *
+ * Interruption and resume.  `cancel` (a flag set from a signal handler) and `stop_after_pairs`
+ * make the fit return early with result->interrupted = 1; the table is then not filled.  With
+ * `checkpoint` set, every completed pair is appended to that file as one record (its entries'
+ * float64 bits and a checksum), flushed to the disk before the next pair is handed out;
+ * `resume` loads the file, checks that it belongs to the same fitter revision, model, sizes,
+ * parameterisation, seed and settings, drops a last record cut short by a kill, and fits only
+ * the missing pairs.  Each pair's fit reads only its own inputs and (anchors) phase-1 entries,
+ * which are restored bit for bit, so the result is bitwise that of an uninterrupted run, for any
+ * thread count (tests/test_ltcfit_aniso.c).
  *
  * Anchor rows.  Where exactly one of the two roughness indices is 0 (alpha = 1e-4 by default)
  * the lobe is a thin curved arc that one LTC cannot follow (weighted residual ~0.2 at
  * (0.857, 1e-4), 89.99 deg), and such entries serve shaders only as interpolation anchors for
  * the cell up to the next grid alpha.  They are not fitted at 1e-4: the second phase fits each
  * at the cell's midpoint (the mean of the two grid roughness pairs; the neighbour's entry is a
- * second start), and stores M_0 = 2 M_mid - M_nb (normalised), so quadrilinear interpolation
- * reproduces the midpoint fit exactly; where det M_0 <= 0 it keeps M_mid
- * (result->anchor_fallbacks).  Magnitude and Fresnel stay those at the anchor's own alphas;
+ * second start), and stores M_0 = 2 s M_mid - M_nb with s = c_mid . c_nb, the product of the two
+ * unit last columns (mf_ltcfit_aniso_anchor_matrix): M_0's last column is a unit vector too, and
+ * quadrilinear interpolation gives (M_0 + M_nb) / 2 = s M_mid at the midpoint, the midpoint fit's
+ * lobe exactly; where s <= 0 or det M_0 <= 0 it keeps M_mid (result->anchor_fallbacks).  Magnitude and Fresnel stay those at the anchor's own alphas;
  * residual, iterations and convergence are the midpoint fit's.  Measured
  * (analysis/bench_ltc_aniso.c, 60 points, alpha in [0.02, 1]): the shape error where
  * min(alpha_x, alpha_y) < 1/7 fell 0.0167 -> 0.0074 (mean absolute) against the fits made at
  * 1e-4, the whole table's 0.00475 -> 0.00289, and unconverged entries 377 -> 6 (then, with
- * the residual weight floor at 1 albedo, mf_ltcfit_aniso.c: 0.00263 and none unconverged).
+ * the residual weight floor at 1 albedo, mf_ltcfit_aniso.c: 0.00263 and none unconverged; with
+ * the random lights: 0.00233).
  *
  * Stored per entry (mf_ltc_aniso_table.h): the view-frame forward M divided by the norm of its
  * last column (the published layout), its inverse (the matrix a shader applies to the polygon),
@@ -100,9 +117,13 @@ typedef struct mf_ltcfit_aniso_options {
     uint64_t seed;              /* scramble of the Sobol points (default 1) */
     int samples;                /* directions per entry, a power of two in [64, 1 << 20] (default 4096) */
     int max_iterations;         /* per solve (default 100) */
-    const volatile int *cancel; /* may be NULL; non-zero: stop after the jobs in progress */
+    const volatile int *cancel; /* may be NULL; non-zero: stop; the pairs in progress are dropped */
     void (*progress)(void *user, int done, int total); /* may be NULL; called under a lock */
     void *progress_user;
+    const char *checkpoint;     /* NULL: none; else every completed (alpha_x, alpha_y) pair is appended here */
+    int resume;                 /* load `checkpoint` if it exists and fit only the missing pairs */
+    int stop_after_pairs;       /* > 0: fit at most this many pairs in this run, then return
+                                 * interrupted (a test hook for resume); 0: no limit */
 } mf_ltcfit_aniso_options;
 
 void mf_ltcfit_aniso_options_default(mf_ltcfit_aniso_options *o);
@@ -115,6 +136,8 @@ typedef struct mf_ltcfit_aniso_entry {
     int iterations;      /* solver steps */
     int converged;       /* the solver met a tolerance */
     double magnitude, magnitude_err, fresnel;
+    int anchor;          /* 0: fitted at its own alphas; 1: an anchor entry, M_0 = 2 s M_mid - M_nb;
+                          * 2: an anchor entry that kept M_mid (a fallback; see "Anchor rows") */
 } mf_ltcfit_aniso_entry;
 
 typedef struct mf_ltcfit_aniso_result {
@@ -127,12 +150,15 @@ typedef struct mf_ltcfit_aniso_result {
     long total_iterations;
     int not_converged;
     int anchor_fallbacks; /* anchor entries that kept the midpoint fit (see mf_ltcfit_aniso_table) */
+    int pairs_done;       /* completed (alpha_x, alpha_y) pairs, including those loaded by resume */
+    int pairs_resumed;    /* loaded from the checkpoint */
 } mf_ltcfit_aniso_result;
 
 /* Fits every entry of a new table *table (mf_ltc_aniso_table_create with the options' sizes and
  * parameterisation), fills its fields and metadata.  MF_ERR_DOMAIN (bad options; the model must
  * have a sampler-compatible eval_cos), MF_ERR_ALLOC, MF_ERR_INTERNAL.  On cancel: MF_OK with
- * result->interrupted and the table freed. */
+ * result->interrupted and the table freed.  MF_ERR_FORMAT / MF_ERR_IO: the checkpoint (msg says
+ * which). */
 mf_status mf_ltcfit_aniso_table(const mf_brdf_model *model, const mf_ltcfit_aniso_options *o, mf_table *table,
                                 mf_ltcfit_aniso_result *result, char *msg, size_t msg_size) MF_WARN_UNUSED;
 void mf_ltcfit_aniso_result_free(mf_ltcfit_aniso_result *r);
@@ -154,6 +180,12 @@ mf_status mf_ltcfit_aniso_entry_fit(const mf_brdf_model *model, double alpha_x, 
 mf_status mf_ltcfit_aniso_entry_fit_general(const mf_brdf_model *model, mf_brdf_params p, double theta, double phi,
                                             double magnitude, double magnitude_err, const double *lobe_start,
                                             const mf_ltcfit_aniso_options *o, mf_ltcfit_aniso_entry *out) MF_WARN_UNUSED;
+
+/* The anchor matrix of an alpha = 1e-4 entry (see "Anchor rows" above) from the fit at its cell's
+ * midpoint m_mid and its neighbour's entry m_nb (both row-major with unit last columns):
+ * m0 = 2 s m_mid - m_nb, s = (last column of m_mid) . (last column of m_nb), and 1; or, when
+ * s <= 0 or det(m0) <= 0 (the extrapolated lobe is degenerate), m0 = m_mid and 0 (a fallback). */
+int mf_ltcfit_aniso_anchor_matrix(const double m_mid[9], const double m_nb[9], double m0[9]);
 
 /* Writes the published layout: a little-endian float32 .npy of shape (n0, n1, n2, n3, 3, 3),
  * C order (the LAST table axis fastest, unlike mf_table's storage), the forward M of each entry
