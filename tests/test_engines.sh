@@ -3,6 +3,8 @@
 # legacy DDS) read back by independent readers, values compared with mfkit's JSON table:
 #   node + three.js + ktx-parse (tests/node, installed by `npm ci` from its lockfile into BUILD):
 #     the three.js module through three's own DataTexture/UniformsLib, the KTX2 files;
+#   node + naga-wasm (naga, wgpu's WGSL front end and validator): every generated .wgsl parses and
+#     validates (tests/node/validate_wgsl.mjs, with an ill-typed control that must be refused);
 #   OpenImageIO (oiiotool): the RGBA EXRs keep R, G, B, A and hold ltc_1 / ltc_2;
 #   numpy: the legacy DDS headers and data at byte 128;
 #   cc: the EEVEE header compiles (-Wall -Wextra -pedantic -Werror) and holds the values;
@@ -18,10 +20,10 @@ done
 
 # the node packages, pinned by the lockfile, installed once per build tree
 nm="$build/tests_node"
-if ! cmp -s "$src/tests/node/package-lock.json" "$nm/package-lock.json" || [ ! -d "$nm/node_modules/three" ]; then
+if ! cmp -s "$src/tests/node/package-lock.json" "$nm/package-lock.json" || [ ! -d "$nm/node_modules/three" ] || [ ! -d "$nm/node_modules/naga-wasm" ]; then
   mkdir -p "$nm" && cp "$src/tests/node/package.json" "$src/tests/node/package-lock.json" "$nm/" &&
     (cd "$nm" && npm ci --no-audit --no-fund --loglevel=error >/dev/null) ||
-    { echo "FAIL: npm ci in $nm (three, ktx-parse from the npm registry)" >&2; exit 1; }
+    { echo "FAIL: npm ci in $nm (three, ktx-parse, naga-wasm from the npm registry)" >&2; exit 1; }
 fi
 
 out="$tmp/ltc"
@@ -38,6 +40,12 @@ cp "$src/tests/node/check_engines.mjs" "$nm/"
 node "$nm/check_engines.mjs" "$out" ltc_ggx >"$tmp/node.txt" 2>&1; rc=$?
 ok "[ $rc -eq 0 ]" "node readers: $(grep -v '^ok' "$tmp/node.txt" | head -20)"
 tail -1 "$tmp/node.txt"
+
+# naga: the WGSL area-light code validates (a real WGSL compiler front end, not a text check)
+cp "$src/tests/node/validate_wgsl.mjs" "$nm/"
+node "$nm/validate_wgsl.mjs" "$p"_area.wgsl >"$tmp/wgsl.txt" 2>&1; rc=$?
+ok "[ $rc -eq 0 ]" "WGSL validation: $(head -c 2000 "$tmp/wgsl.txt")"
+cat "$tmp/wgsl.txt" | head -3
 
 # OpenImageIO: channel order and values of the RGBA EXRs (--dumpdata prints %.9f: tolerance 5e-10)
 for k in 1 2; do
