@@ -13,6 +13,9 @@
  *    and the same float table go through the C library in double (mf_table_lookup,
  *    mf_ltc_integrate_polygon, mf_ltc_integrate_line, mf_ellipse_form_factor + the sphere field).
  *    Fails (never skips) when no OSMesa context can be made.
+ * 3. With --wgsl NODE_DIR (tests/test_engines.sh, which installs naga): the WGSL with a WGSL main
+ *    doing the same, translated to GLSL 3.30 by naga (NODE_DIR/wgsl_to_glsl.mjs), runs the same
+ *    cases against the same reference and tolerance.
  */
 #define _POSIX_C_SOURCE 200809L
 #define GL_GLEXT_PROTOTYPES 1
@@ -84,6 +87,30 @@ static const char *k_glsl_main =
     "    float fr = ltc_fresnel(t2, f0).x;\n"
     "    frag = fr * vec4(ltc_quad(minv, q0, q1, q2, q3, two), ltc_quad_clipless(ltc_2, minv, q0, q1, q2, q3, two),\n"
     "                     ltc_line(minv, l1, l2), ltc_disk(ltc_2, minv, dc, d1, d2, two));\n"
+    "}\n";
+
+/* the WGSL main of the same run (--wgsl): translated to GLSL by naga, each texture with its sampler
+ * becomes the sampler2D _group_0_binding_<b>_fs */
+static const char *k_wgsl_main =
+    "@group(0) @binding(0) var ltc_1: texture_2d<f32>;\n@group(0) @binding(1) var ltc_1_s: sampler;\n"
+    "@group(0) @binding(2) var ltc_2: texture_2d<f32>;\n@group(0) @binding(3) var ltc_2_s: sampler;\n"
+    "@group(0) @binding(4) var cases: texture_2d<f32>;\n"
+    "fn case_texel(i: i32, id: i32) -> vec4<f32> { return textureLoad(cases, vec2<i32>(i, id), 0); }\n"
+    "@fragment fn main(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {\n"
+    "    let id = i32(pos.x) + 32 * i32(pos.y);\n"
+    "    let a = case_texel(0, id);\n    let b = case_texel(1, id);\n"
+    "    let n = a.xyz;\n    let v = b.xyz;\n    let alpha = a.w;\n    let f0 = vec3<f32>(b.w, b.w, b.w);\n"
+    "    let q0 = case_texel(2, id).xyz;\n    let q1 = case_texel(3, id).xyz;\n"
+    "    let q2 = case_texel(4, id).xyz;\n    let q3 = case_texel(5, id).xyz;\n"
+    "    let l1 = case_texel(6, id).xyz;\n    let l2 = case_texel(7, id).xyz;\n"
+    "    let dc = case_texel(8, id).xyz;\n    let d1 = case_texel(9, id).xyz;\n    let d2 = case_texel(10, id).xyz;\n"
+    "    let two = case_texel(11, id).x > 0.5;\n"
+    "    let t1 = ltc_lookup(ltc_1, ltc_1_s, alpha, dot(n, v));\n"
+    "    let t2 = ltc_lookup(ltc_2, ltc_2_s, alpha, dot(n, v));\n"
+    "    let minv = ltc_minv(t1, n, v);\n"
+    "    let fr = ltc_fresnel(t2, f0).x;\n"
+    "    return fr * vec4<f32>(ltc_quad(minv, q0, q1, q2, q3, two), ltc_quad_clipless(ltc_2, ltc_2_s, minv, q0, q1, q2, q3, two),\n"
+    "                          ltc_line(minv, l1, l2), ltc_disk(ltc_2, ltc_2_s, minv, dc, d1, d2, two));\n"
     "}\n";
 
 static const char *k_hlsl_main =
@@ -332,8 +359,45 @@ static void reference(const mf_table *t, const gcase *c, double out[4], double *
         out[k] *= fr;
 }
 
-int main(void)
+/* --wgsl NODE_DIR: the generated WGSL with k_wgsl_main, translated to GLSL 3.30 by naga
+ * (NODE_DIR/wgsl_to_glsl.mjs, node_modules beside it: tests/test_engines.sh installs them), or NULL. */
+static char *wgsl_as_glsl(const mf_table *t, const char *node_dir)
 {
+    char dir[] = "/tmp/mfkit_gpu_wgslXXXXXX", in[600], out[600], cmd[2048], msg[512];
+    if (!mkdtemp(dir)) {
+        MF_FAIL_AT("cannot create a temporary directory");
+        return NULL;
+    }
+    mf_buf b = {0};
+    CHECK(mf_ltc_shader_build(&b, t, MF_SHADER_WGSL, "ltc", msg, sizeof msg) == MF_OK);
+    mf_buf_puts(&b, k_wgsl_main);
+    mf_buf_put(&b, "", 1);
+    snprintf(in, sizeof in, "%s/run.wgsl", dir);
+    snprintf(out, sizeof out, "%s/run.frag", dir);
+    char *glsl = NULL;
+    if (!b.failed && gpu_write_file(in, b.data, NULL, NULL)) {
+        snprintf(cmd, sizeof cmd, "node %s/wgsl_to_glsl.mjs %s %s main", node_dir, in, out);
+        if (gpu_run(cmd))
+            glsl = gpu_read_all(out);
+    }
+    mf_buf_free(&b);
+    if (!glsl)
+        MF_FAIL_AT("the WGSL could not be translated by naga (%s/wgsl_to_glsl.mjs)", node_dir);
+    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+    if (system(cmd) != 0)
+        fprintf(stderr, "could not remove %s\n", dir);
+    return glsl;
+}
+
+int main(int argc, char **argv)
+{
+    const char *node_dir = NULL;
+    if (argc == 3 && !strcmp(argv[1], "--wgsl"))
+        node_dir = argv[2];
+    else if (argc != 1) {
+        fprintf(stderr, "usage: test_gpu_ltc [--wgsl NODE_DIR]\n");
+        return 2;
+    }
     mf_pcg32 rng;
     mf_pcg32_seed(&rng, mf_test_seed(2016), 0);
     mf_table t;
@@ -396,18 +460,6 @@ int main(void)
     gpu_float_texture(1, NR, NU, t2, GL_LINEAR);
     gpu_float_texture(2, CASE_W, NCASE, ct, GL_NEAREST);
 
-    GLuint prog = gpu_program(frag_src);
-    CHECK(prog != 0);
-    static float pix[NCASE * 4];
-    if (prog) {
-        glUseProgram(prog);
-        glUniform1i(glGetUniformLocation(prog, "ltc_1"), 0);
-        glUniform1i(glGetUniformLocation(prog, "ltc_2"), 1);
-        glUniform1i(glGetUniformLocation(prog, "cases"), 2);
-        glUniform1i(glGetUniformLocation(prog, "grid_w"), GRID_W);
-        CHECK(gpu_draw(3, GRID_W, NCASE / GRID_W, pix));
-    }
-
     /* compare.  Tolerance |gpu - C| <= 2e-6 + 2e-4 |C| (docs/tables.md, "Shader code"): the GPU
      * evaluates in float what C evaluates in double on the same float inputs and float table.
      * Absolute part: Lambert's sum adds up to 8 + 2 edge terms of size up to pi, each after ~10
@@ -418,32 +470,61 @@ int main(void)
      * llvmpipe filters float textures with float weights (a C model with 8-bit weights is off by
      * 2.5e-3 relative, i.e. that hardware behaviour would fail this test, as it should: the
      * tolerance is not loose enough to hide it). */
-    static const char *const what[4] = {"quad", "quad clipless", "line", "disk"};
-    double worst[4] = {0}, worst_rel[4] = {0}, gap = 0.0;
-    int nonzero[4] = {0};
-    for (int i = 0; i < NCASE; ++i) {
-        double ref[4], g;
-        reference(&t, &cases[i], ref, &g);
-        gap = fmax(gap, g);
-        for (int k = 0; k < 4; ++k) {
-            double gpu = pix[4 * i + k], e = fabs(gpu - ref[k]);
-            worst[k] = fmax(worst[k], e);
-            if (fabs(ref[k]) > 1e-3) {
-                ++nonzero[k];
-                worst_rel[k] = fmax(worst_rel[k], e / fabs(ref[k]));
-            }
-            double tol = 2e-4 * fabs(ref[k]) + 2e-6;
-            if (!(e <= tol))
-                MF_FAIL_AT("case %d (%s): gpu %.9g vs C %.9g, |diff| %.3g > %.3g", i, what[k], gpu, ref[k], e, tol);
+    /* the GLSL, and with --wgsl the WGSL (through naga's GLSL writer) */
+    char *wgsl_frag = node_dir ? wgsl_as_glsl(&t, node_dir) : NULL;
+    static const char *const names[2][3] = {{"ltc_1", "ltc_2", "cases"},
+                                            {"_group_0_binding_0_fs", "_group_0_binding_2_fs", "_group_0_binding_4_fs"}};
+    for (int variant = 0; variant < (node_dir ? 2 : 1); ++variant) {
+        const char *src = variant ? wgsl_frag : frag_src;
+        if (!src)
+            continue;
+        printf("%s on %s:\n", variant ? "the generated WGSL (translated to GLSL by naga)" : "the generated GLSL",
+               (const char *)glGetString(GL_RENDERER));
+        GLuint prog = gpu_program(src);
+        CHECK(prog != 0);
+        static float pix[NCASE * 4];
+        for (int i = 0; i < NCASE * 4; ++i) /* no value of an earlier run can pass */
+            pix[i] = NAN;
+        if (!prog)
+            continue;
+        glUseProgram(prog);
+        for (int k = 0; k < 3; ++k) {
+            GLint loc = glGetUniformLocation(prog, names[variant][k]);
+            CHECK(loc >= 0);
+            glUniform1i(loc, k);
         }
+        if (!variant)
+            glUniform1i(glGetUniformLocation(prog, "grid_w"), GRID_W);
+        CHECK(gpu_draw(3, GRID_W, NCASE / GRID_W, pix));
+        glUseProgram(0);
+        glDeleteProgram(prog);
+        static const char *const what[4] = {"quad", "quad clipless", "line", "disk"};
+        double worst[4] = {0}, worst_rel[4] = {0}, gap = 0.0;
+        int nonzero[4] = {0};
+        for (int i = 0; i < NCASE; ++i) {
+            double ref[4], g;
+            reference(&t, &cases[i], ref, &g);
+            gap = fmax(gap, g);
+            for (int k = 0; k < 4; ++k) {
+                double gpu = pix[4 * i + k], e = fabs(gpu - ref[k]);
+                worst[k] = fmax(worst[k], e);
+                if (fabs(ref[k]) > 1e-3) {
+                    ++nonzero[k];
+                    worst_rel[k] = fmax(worst_rel[k], e / fabs(ref[k]));
+                }
+                double tol = 2e-4 * fabs(ref[k]) + 2e-6;
+                if (!(e <= tol))
+                    MF_FAIL_AT("case %d (%s): gpu %.9g vs C %.9g, |diff| %.3g > %.3g", i, what[k], gpu, ref[k], e, tol);
+            }
+        }
+        for (int k = 0; k < 4; ++k)
+            printf("%-14s worst |gpu - C| %.3g, worst relative %.3g over %d cases with C > 1e-3 (of %d)\n", what[k],
+                   worst[k], worst_rel[k], nonzero[k], NCASE);
+        printf("table sphere term vs analytic (not a GPU error): worst %.3g\n", gap);
+        for (int k = 0; k < 4; ++k)
+            CHECK(nonzero[k] >= NCASE / 4);
     }
-    for (int k = 0; k < 4; ++k)
-        printf("%-14s worst |gpu - C| %.3g, worst relative %.3g over %d cases with C > 1e-3 (of %d)\n", what[k],
-               worst[k], worst_rel[k], nonzero[k], NCASE);
-    printf("table sphere term vs analytic (not a GPU error): worst %.3g\n", gap);
-    for (int k = 0; k < 4; ++k)
-        CHECK(nonzero[k] >= NCASE / 4);
-    glDeleteProgram(prog);
+    free(wgsl_frag);
     OSMesaDestroyContext(ctx);
     free(frag_src);
     mf_table_free(&t);
