@@ -14,6 +14,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 /* Under LeakSanitizer (tests/test_sanitize.sh): Mesa 22.3's OSMesa keeps a few hundred bytes of
  * its framebuffer state per process (allocated in OSMesaMakeCurrent, never freed on destroy);
@@ -169,6 +170,33 @@ static inline int gpu_draw(int unit, int w, int h, float *pix)
     glDeleteFramebuffers(1, &fbo);
     glDeleteTextures(1, &target);
     return ok;
+}
+
+/* wgsl (a NUL-terminated module with a fragment entry point `main`) translated to GLSL 3.30 by naga:
+ * node NODE_DIR/wgsl_to_glsl.mjs (tests/node; tests/test_engines.sh installs naga-wasm beside it).
+ * Each texture with its sampler becomes the sampler2D _group_0_binding_<texture binding>_fs.  NULL
+ * (with a failure recorded) on any error. */
+static inline char *gpu_wgsl_to_glsl(const char *wgsl, const char *node_dir)
+{
+    char dir[] = "/tmp/mfkit_gpu_wgslXXXXXX", in[600], out[600], cmd[2048];
+    if (!mkdtemp(dir)) {
+        MF_FAIL_AT("cannot create a temporary directory");
+        return NULL;
+    }
+    snprintf(in, sizeof in, "%s/run.wgsl", dir);
+    snprintf(out, sizeof out, "%s/run.frag", dir);
+    char *glsl = NULL;
+    if (gpu_write_file(in, wgsl, NULL, NULL)) {
+        snprintf(cmd, sizeof cmd, "node %s/wgsl_to_glsl.mjs %s %s main", node_dir, in, out);
+        if (gpu_run(cmd))
+            glsl = gpu_read_all(out);
+    }
+    if (!glsl)
+        MF_FAIL_AT("the WGSL could not be translated by naga (%s/wgsl_to_glsl.mjs)", node_dir);
+    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+    if (system(cmd) != 0)
+        fprintf(stderr, "could not remove %s\n", dir);
+    return glsl;
 }
 
 #endif /* MF_GPU_OSMESA_H */

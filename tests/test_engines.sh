@@ -5,7 +5,8 @@
 #     the three.js module through three's own DataTexture/UniformsLib, the KTX2 files;
 #   node + naga-wasm (naga, wgpu's WGSL front end and validator): every generated .wgsl parses and
 #     validates (tests/node/validate_wgsl.mjs, with an ill-typed control that must be refused), and
-#     the isotropic WGSL, translated to GLSL by naga, runs on llvmpipe (test_gpu_ltc --wgsl);
+#     the isotropic and anisotropic WGSL, translated to GLSL by naga, run on llvmpipe
+#     (test_gpu_ltc --wgsl, test_gpu_ltc_aniso --wgsl);
 #   OpenImageIO (oiiotool): the RGBA EXRs keep R, G, B, A and hold ltc_1 / ltc_2;
 #   numpy: the legacy DDS headers and data at byte 128;
 #   cc: the EEVEE header compiles (-Wall -Wextra -pedantic -Werror) and holds the values;
@@ -124,14 +125,17 @@ cat "$tmp/wgsl.txt" | head -3
 # and run: test_gpu_ltc --wgsl renders the WGSL area-light code, translated to GLSL 3.30 by naga, on
 # llvmpipe against the C library with the GLSL's tolerance (MFKIT_TEST_GPU_LTC: set by CMake when
 # OSMesa is found)
-if [ -z "${MFKIT_TEST_GPU_LTC-}" ]; then
-  ok "false" "MFKIT_TEST_GPU_LTC is not set: the software-GPU test was not built (install libosmesa6-dev, README)"
-else
-  cp "$src/tests/node/wgsl_to_glsl.mjs" "$nm/"
-  "$MFKIT_TEST_GPU_LTC" --wgsl "$nm" >"$tmp/gpu_wgsl.txt" 2>&1; rc=$?
-  ok "[ $rc -eq 0 ]" "WGSL run on llvmpipe (test_gpu_ltc --wgsl): $(grep -i 'fail' "$tmp/gpu_wgsl.txt" | head -5)"
-  grep -A4 "generated WGSL" "$tmp/gpu_wgsl.txt"
-fi
+cp "$src/tests/node/wgsl_to_glsl.mjs" "$nm/"
+for v in MFKIT_TEST_GPU_LTC MFKIT_TEST_GPU_LTC_ANISO; do
+  exe="${!v-}"
+  if [ -z "$exe" ]; then
+    ok "false" "$v is not set: the software-GPU tests were not built (install libosmesa6-dev, README)"
+    continue
+  fi
+  "$exe" --wgsl "$nm" >"$tmp/gpu_wgsl.txt" 2>&1; rc=$?
+  ok "[ $rc -eq 0 ]" "WGSL run on llvmpipe ($(basename "$exe") --wgsl): $(grep -i 'fail' "$tmp/gpu_wgsl.txt" | head -5)"
+  grep -A4 "generated WGSL" "$tmp/gpu_wgsl.txt" | grep -v "^--"
+done
 
 # OpenImageIO: channel order and values of the RGBA EXRs (--dumpdata prints %.9f: tolerance 5e-10)
 for k in 1 2; do

@@ -359,33 +359,16 @@ static void reference(const mf_table *t, const gcase *c, double out[4], double *
         out[k] *= fr;
 }
 
-/* --wgsl NODE_DIR: the generated WGSL with k_wgsl_main, translated to GLSL 3.30 by naga
- * (NODE_DIR/wgsl_to_glsl.mjs, node_modules beside it: tests/test_engines.sh installs them), or NULL. */
+/* --wgsl NODE_DIR: the generated WGSL with k_wgsl_main, translated to GLSL 3.30 by naga, or NULL. */
 static char *wgsl_as_glsl(const mf_table *t, const char *node_dir)
 {
-    char dir[] = "/tmp/mfkit_gpu_wgslXXXXXX", in[600], out[600], cmd[2048], msg[512];
-    if (!mkdtemp(dir)) {
-        MF_FAIL_AT("cannot create a temporary directory");
-        return NULL;
-    }
+    char msg[512];
     mf_buf b = {0};
     CHECK(mf_ltc_shader_build(&b, t, MF_SHADER_WGSL, "ltc", msg, sizeof msg) == MF_OK);
     mf_buf_puts(&b, k_wgsl_main);
     mf_buf_put(&b, "", 1);
-    snprintf(in, sizeof in, "%s/run.wgsl", dir);
-    snprintf(out, sizeof out, "%s/run.frag", dir);
-    char *glsl = NULL;
-    if (!b.failed && gpu_write_file(in, b.data, NULL, NULL)) {
-        snprintf(cmd, sizeof cmd, "node %s/wgsl_to_glsl.mjs %s %s main", node_dir, in, out);
-        if (gpu_run(cmd))
-            glsl = gpu_read_all(out);
-    }
+    char *glsl = b.failed ? NULL : gpu_wgsl_to_glsl(b.data, node_dir);
     mf_buf_free(&b);
-    if (!glsl)
-        MF_FAIL_AT("the WGSL could not be translated by naga (%s/wgsl_to_glsl.mjs)", node_dir);
-    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
-    if (system(cmd) != 0)
-        fprintf(stderr, "could not remove %s\n", dir);
     return glsl;
 }
 

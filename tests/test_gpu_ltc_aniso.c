@@ -17,6 +17,8 @@
  *    mf_ltc_integrate_line, mf_ltc_integrate_disk.
  * 3. The test can fail: the same run with one mirror sign flipped in the generated GLSL (the S_y of
  *    the fourth quadrant) must exceed the tolerance in most cases of that quadrant.
+ * 4. With --wgsl NODE_DIR (tests/test_engines.sh, which installs naga): the WGSL with a WGSL main doing
+ *    the same, translated to GLSL 3.30 by naga, on the same cases, reference and tolerance.
  * Fails (never skips) when no OSMesa context can be made.
  */
 #define _POSIX_C_SOURCE 200809L
@@ -113,6 +115,33 @@ static const char *k_glsl_main =
     "    float fr = ltca_fresnel(t2, f0).x;\n"
     "    frag = fr * vec4(ltca_quad(minv, q0, q1, q2, q3, two), ltca_quad_clipless(minv, q0, q1, q2, q3, two),\n"
     "                     ltca_line(minv, l1, l2), ltca_disk(minv, dc, d1, d2, two));\n"
+    "}\n";
+
+/* the WGSL main of the same run (--wgsl), translated to GLSL by naga (gpu_wgsl_to_glsl) */
+static const char *k_wgsl_main =
+    "@group(0) @binding(0) var tex0: texture_2d<f32>;\n@group(0) @binding(1) var tex0_s: sampler;\n"
+    "@group(0) @binding(2) var tex1: texture_2d<f32>;\n@group(0) @binding(3) var tex1_s: sampler;\n"
+    "@group(0) @binding(4) var tex2: texture_2d<f32>;\n@group(0) @binding(5) var tex2_s: sampler;\n"
+    "@group(0) @binding(6) var cases: texture_2d<f32>;\n"
+    "fn case_texel(i: i32, id: i32) -> vec4<f32> { return textureLoad(cases, vec2<i32>(i, id), 0); }\n"
+    "@fragment fn main(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {\n"
+    "    let id = i32(pos.x) + 48 * i32(pos.y);\n"
+    "    let a = case_texel(0, id);\n    let b = case_texel(1, id);\n    let c = case_texel(2, id);\n"
+    "    let d = case_texel(3, id);\n"
+    "    let n = a.xyz;\n    let tg = b.xyz;\n    let bt = c.xyz;\n    let v = d.xyz;\n"
+    "    let f0 = vec3<f32>(c.w, c.w, c.w);\n    let two = d.w > 0.5;\n"
+    "    let q0 = case_texel(4, id).xyz;\n    let q1 = case_texel(5, id).xyz;\n"
+    "    let q2 = case_texel(6, id).xyz;\n    let q3 = case_texel(7, id).xyz;\n"
+    "    let l1 = case_texel(8, id).xyz;\n    let l2 = case_texel(9, id).xyz;\n"
+    "    let dc = case_texel(10, id).xyz;\n    let d1 = case_texel(11, id).xyz;\n    let d2 = case_texel(12, id).xyz;\n"
+    "    let fv = ltca_fold(ltca_view(tg, bt, n, v));\n"
+    "    let t0 = ltca_lookup(tex0, tex0_s, a.w, b.w, fv);\n"
+    "    let t1 = ltca_lookup(tex1, tex1_s, a.w, b.w, fv);\n"
+    "    let t2 = ltca_lookup(tex2, tex2_s, a.w, b.w, fv);\n"
+    "    let minv = ltca_minv(t0, t1, t2, fv, tg, bt, n);\n"
+    "    let fr = ltca_fresnel(t2, f0).x;\n"
+    "    return fr * vec4<f32>(ltca_quad(minv, q0, q1, q2, q3, two), ltca_quad_clipless(minv, q0, q1, q2, q3, two),\n"
+    "                          ltca_line(minv, l1, l2), ltca_disk(minv, dc, d1, d2, two));\n"
     "}\n";
 
 static const char *k_hlsl_main =
@@ -275,7 +304,8 @@ static void reference(const mf_table *t, const gcase *c, double out[4])
 /* ---- one GPU run ------------------------------------------------------------------------------ */
 enum { NPAIR = 4, NTH = 4, NPH = 12, NK = 6, NCASE = NPAIR * NTH * NPH * NK, GRID_W = 48 };
 
-static int render(const mf_table *t, const char *frag_src, const gcase *cases, float *pix)
+/* names: the sampler uniforms of tex0, tex1, tex2, cases (NULL: the GLSL's, with grid_w) */
+static int render(const mf_table *t, const char *frag_src, const gcase *cases, float *pix, const char *const *names)
 {
     mf_table_atlas a;
     CHECK(mf_table_atlas_from_meta(t, &a) == MF_OK);
@@ -315,10 +345,16 @@ static int render(const mf_table *t, const char *frag_src, const gcase *cases, f
     int ok = prog != 0;
     if (ok) {
         glUseProgram(prog);
-        static const char *const names[4] = {"tex0", "tex1", "tex2", "cases"};
-        for (int k = 0; k < 4; ++k)
-            glUniform1i(glGetUniformLocation(prog, names[k]), k);
-        glUniform1i(glGetUniformLocation(prog, "grid_w"), GRID_W);
+        static const char *const glsl_names[4] = {"tex0", "tex1", "tex2", "cases"};
+        for (int k = 0; k < 4; ++k) {
+            GLint loc = glGetUniformLocation(prog, (names ? names : glsl_names)[k]);
+            CHECK(loc >= 0);
+            glUniform1i(loc, k);
+        }
+        if (!names)
+            glUniform1i(glGetUniformLocation(prog, "grid_w"), GRID_W);
+        for (int i = 0; i < NCASE * 4; ++i) /* no value of an earlier run can pass */
+            pix[i] = NAN;
         ok = gpu_draw(4, GRID_W, NCASE / GRID_W, pix);
         glUseProgram(0);
         glDeleteProgram(prog);
@@ -398,8 +434,15 @@ static char *mutant(const char *src)
     return m;
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
+    const char *node_dir = NULL;
+    if (argc == 3 && !strcmp(argv[1], "--wgsl"))
+        node_dir = argv[2];
+    else if (argc != 1) {
+        fprintf(stderr, "usage: test_gpu_ltc_aniso [--wgsl NODE_DIR]\n");
+        return 2;
+    }
     mf_pcg32 rng;
     mf_pcg32_seed(&rng, mf_test_seed(2022), 0);
     OSMesaContext ctx = NULL;
@@ -463,7 +506,7 @@ int main(void)
                         ++id;
                     }
         double ratio, mratio;
-        if (render(&t, frag_src, cases, pix)) {
+        if (render(&t, frag_src, cases, pix, NULL)) {
             printf("generated GLSL on llvmpipe vs the C library, %d cases:\n", NCASE);
             int bad = compare(&t, cases, pix, 1, &ratio, NULL);
             CHECK(bad == 0);
@@ -471,7 +514,7 @@ int main(void)
         /* the test can fail: the fourth quadrant without its S_y mirror */
         char *mut = mutant(frag_src);
         CHECK(mut != NULL);
-        if (mut && render(&t, mut, cases, pix)) {
+        if (mut && render(&t, mut, cases, pix, NULL)) {
             int bad_q4 = 0, q4 = 0;
             int bad = compare(&t, cases, pix, 0, &mratio, &bad_q4);
             for (int i = 0; i < NCASE; ++i)
@@ -484,6 +527,23 @@ int main(void)
                 MF_FAIL_AT("a mirror sign flip went unnoticed: only %d of %d cases fail", bad_q4, q4);
         }
         free(mut);
+        if (node_dir) { /* the WGSL, translated to GLSL by naga, on the same cases */
+            static const char *const wnames[4] = {"_group_0_binding_0_fs", "_group_0_binding_2_fs",
+                                                   "_group_0_binding_4_fs", "_group_0_binding_6_fs"};
+            mf_buf b = {0};
+            char msg[512];
+            CHECK(mf_ltc_shader_build(&b, &t, MF_SHADER_WGSL, "ltca", msg, sizeof msg) == MF_OK);
+            mf_buf_puts(&b, k_wgsl_main);
+            mf_buf_put(&b, "", 1);
+            char *wfrag = b.failed ? NULL : gpu_wgsl_to_glsl(b.data, node_dir);
+            mf_buf_free(&b);
+            if (wfrag && render(&t, wfrag, cases, pix, wnames)) {
+                printf("generated WGSL (translated to GLSL by naga) on llvmpipe vs the C library, %d cases:\n", NCASE);
+                CHECK(compare(&t, cases, pix, 1, &ratio, NULL) == 0);
+            }
+            CHECK(wfrag != NULL);
+            free(wfrag);
+        }
         free(frag_src);
         mf_table_free(&t);
     }
