@@ -3,6 +3,10 @@
 # legacy DDS) read back by independent readers, values compared with mfkit's JSON table:
 #   node + three.js + ktx-parse (tests/node, installed by `npm ci` from its lockfile into BUILD):
 #     the three.js module through three's own DataTexture/UniformsLib, the KTX2 files;
+#   node + naga-wasm (naga, wgpu's WGSL front end and validator): every generated .wgsl parses and
+#     validates (tests/node/validate_wgsl.mjs, with an ill-typed control that must be refused), and
+#     the isotropic and anisotropic WGSL, translated to GLSL by naga, run on llvmpipe
+#     (test_gpu_ltc --wgsl, test_gpu_ltc_aniso --wgsl);
 #   OpenImageIO (oiiotool): the RGBA EXRs keep R, G, B, A and hold ltc_1 / ltc_2;
 #   numpy: the legacy DDS headers and data at byte 128;
 #   cc: the EEVEE header compiles (-Wall -Wextra -pedantic -Werror) and holds the values;
@@ -18,10 +22,10 @@ done
 
 # the node packages, pinned by the lockfile, installed once per build tree
 nm="$build/tests_node"
-if ! cmp -s "$src/tests/node/package-lock.json" "$nm/package-lock.json" || [ ! -d "$nm/node_modules/three" ]; then
+if ! cmp -s "$src/tests/node/package-lock.json" "$nm/package-lock.json" || [ ! -d "$nm/node_modules/three" ] || [ ! -d "$nm/node_modules/naga-wasm" ]; then
   mkdir -p "$nm" && cp "$src/tests/node/package.json" "$src/tests/node/package-lock.json" "$nm/" &&
     (cd "$nm" && npm ci --no-audit --no-fund --loglevel=error >/dev/null) ||
-    { echo "FAIL: npm ci in $nm (three, ktx-parse from the npm registry)" >&2; exit 1; }
+    { echo "FAIL: npm ci in $nm (three, ktx-parse, naga-wasm from the npm registry)" >&2; exit 1; }
 fi
 
 out="$tmp/ltc"
@@ -38,6 +42,100 @@ cp "$src/tests/node/check_engines.mjs" "$nm/"
 node "$nm/check_engines.mjs" "$out" ltc_ggx >"$tmp/node.txt" 2>&1; rc=$?
 ok "[ $rc -eq 0 ]" "node readers: $(grep -v '^ok' "$tmp/node.txt" | head -20)"
 tail -1 "$tmp/node.txt"
+
+# Unity HDRP: <p>_hdrp.cs (the C# array of HDRP's LtcData.GGX.cs) read back and evaluated through
+# HDRP's own indexing (LTCAreaLight.hlsl / Lit.hlsl: uv = 0.5/64 + 63/64 (perceptualRoughness,
+# acos(N.V) / (pi/2)), bilinear; LoadLUT: entries 0, 2, 4, 6 -> R, G, B, A; the matrix loaded
+# transposed with _m22 = 1), against mfkit's own table through its indexing (u = sqrt(1 - N.V)): the
+# two-sided LTC integrals of random quads at random (r, N.V) off both grids.  Both tables fit the
+# same GGX, each interpolated on its own grid, so they differ by interpolation error only; the same
+# comparison with HDRP's matrix read untransposed or its rows read in the other order (the layout
+# mistakes it guards against) differs by far more.
+ok "[ -s '$p'_hdrp.cs ]" "mfkit fit ltc wrote ltc_ggx_hdrp.cs"
+ok "/usr/bin/python3 - '$p' <<'PY'
+import json, math, re, sys
+import numpy as np
+p = sys.argv[1]
+src = open(p + '_hdrp.cs').read()
+rows = np.array([[float(x) for x in m.split(',')] for m in re.findall(r'^\s*\{([-+0-9eE., ]+)\},?\s*$', src, re.M)])
+d = np.array(json.load(open(p + '.json'))['data'], dtype=np.float64)
+n = 64
+good = rows.shape == (n * n, 9) and np.all(rows[:, [1, 3, 5, 7]] == 0) and np.all(rows[:, 8] == 1)
+print('HDRP rows', rows.shape, 'zeros at 1, 3, 5, 7 and 1 at 8:', good)
+def bilerp(tex, x, y):  # tex[(ix + n iy), :], texel centres at integer x, y (clamp-to-edge)
+    x = min(max(x, 0.0), n - 1.0); y = min(max(y, 0.0), n - 1.0)
+    x0 = min(int(math.floor(x)), n - 2); y0 = min(int(math.floor(y)), n - 2); fx = x - x0; fy = y - y0
+    t = lambda i, j: tex[i + n * j]
+    return (1 - fy) * ((1 - fx) * t(x0, y0) + fx * t(x0 + 1, y0)) + fy * ((1 - fx) * t(x0, y0 + 1) + fx * t(x0 + 1, y0 + 1))
+def hdrp_minv(r, nv, transpose=True, swap=False):
+    # HDRP: uv = LTC_LUT_OFFSET + LTC_LUT_SCALE * (r, theta / (pi/2)); texel coordinate = uv * 64 - 0.5
+    uv = (0.5 / n + (n - 1.0) / n * r, 0.5 / n + (n - 1.0) / n * (math.acos(nv) / (0.5 * math.pi)))
+    x, y = uv[0] * n - 0.5, uv[1] * n - 0.5
+    R, G, B, A = bilerp(rows[:, [0, 2, 4, 6]], y if swap else x, x if swap else y)
+    T = np.array([[R, 0, G], [0, B, 0], [A, 0, 1.0]])  # ltcTransform._m00_m02_m11_m20, _m22 = 1
+    return T.T if transpose else T
+def mfkit_minv(r, nv):
+    m00, m20, m02, m22 = bilerp(d[:, :4], r * (n - 1), math.sqrt(max(1.0 - nv, 0.0)) * (n - 1))
+    return np.array([[m00, 0, m02], [0, 1.0, 0], [m20, 0, m22]])
+def ltc_quad(minv, P):  # two-sided LTC integral: transform, clip at z >= 0, Lambert's formula
+    Q = [minv @ q for q in P]; out = []
+    for i in range(len(Q)):
+        a, b = Q[i], Q[(i + 1) % len(Q)]
+        if a[2] >= 0: out.append(a)
+        if (a[2] >= 0) != (b[2] >= 0): out.append(a + (a[2] / (a[2] - b[2])) * (b - a))
+    if len(out) < 3: return 0.0
+    s = 0.0
+    for i in range(len(out)):
+        a = out[i] / np.linalg.norm(out[i]); b = out[(i + 1) % len(out)] / np.linalg.norm(out[(i + 1) % len(out)])
+        c = np.cross(a, b); sc = np.linalg.norm(c)
+        if sc > 0: s += math.atan2(sc, float(a @ b)) * c[2] / sc
+    return abs(s / (2 * math.pi))
+rng = np.random.default_rng(15)
+diff = []; ctl = []; ctl2 = []; ref = []
+for k in range(3000):
+    r = rng.uniform(0.15, 1.0); nv = rng.uniform(0.05, 1.0)
+    th = rng.uniform(0.0, 1.4); ph = rng.uniform(0, 2 * math.pi); dist = rng.uniform(1.0, 4.0)
+    c = dist * np.array([math.sin(th) * math.cos(ph), math.sin(th) * math.sin(ph), math.cos(th)])
+    e1 = np.cross(c, [0.3, 0.5, 0.8]); e1 *= 0.4 / np.linalg.norm(e1); e2 = np.cross(c, e1); e2 *= 0.3 / np.linalg.norm(e2)
+    P = [c + e1 + e2, c + e1 - e2, c - e1 - e2, c - e1 + e2]
+    im = ltc_quad(mfkit_minv(r, nv), P); ih = ltc_quad(hdrp_minv(r, nv), P); it = ltc_quad(hdrp_minv(r, nv, False), P)
+    iw = ltc_quad(hdrp_minv(r, nv, True, True), P)
+    ref.append(im); diff.append(abs(ih - im)); ctl.append(abs(it - im)); ctl2.append(abs(iw - im))
+ref = np.array(ref); diff = np.array(diff); ctl = np.array(ctl); ctl2 = np.array(ctl2)
+mean_ref = ref.mean(); md = diff.mean() / mean_ref; mc = min(ctl.mean(), ctl2.mean()) / mean_ref
+print('HDRP indexing vs mfkit indexing, 3000 quads: mean |difference| / mean integral %.3g (95th pct %.3g); '
+      'HDRP matrix untransposed: %.3g, rows read theta-fastest: %.3g' % (md, np.percentile(diff, 95) / mean_ref,
+      ctl.mean() / mean_ref, ctl2.mean() / mean_ref))
+# tolerance: two bilinear interpolations of fits of the same BRDF on different 64 x 64 grids; 0.01
+# of the mean integral (measured 1e-3), and each layout mistake must be 10 times worse
+sys.exit(0 if good and md <= 0.01 and mc >= 10 * md else 1)
+PY" "HDRP layout read back through HDRP's indexing"
+
+# naga: the WGSL area-light code validates (a real WGSL compiler front end, not a text check)
+# and the anisotropic table's (a 4^4 fit, about 2 s, exported past its gate: only the code matters here)
+"$mfkit" fit ltc-aniso --size 4 --force --out "$tmp/a4" --quiet >"$tmp/a4.txt" 2>&1 ||
+  { cat "$tmp/a4.txt"; echo "FAIL: mfkit fit ltc-aniso --size 4 --force" >&2; exit 1; }
+for l in glsl hlsl wgsl; do
+  ok "[ -s '$tmp/a4/ltca_ggx_area.$l' ]" "mfkit fit ltc-aniso wrote ltca_ggx_area.$l"
+done
+cp "$src/tests/node/validate_wgsl.mjs" "$nm/"
+node "$nm/validate_wgsl.mjs" "$p"_area.wgsl "$tmp/a4/ltca_ggx_area.wgsl" >"$tmp/wgsl.txt" 2>&1; rc=$?
+ok "[ $rc -eq 0 ]" "WGSL validation: $(head -c 2000 "$tmp/wgsl.txt")"
+cat "$tmp/wgsl.txt" | head -3
+# and run: test_gpu_ltc --wgsl renders the WGSL area-light code, translated to GLSL 3.30 by naga, on
+# llvmpipe against the C library with the GLSL's tolerance (MFKIT_TEST_GPU_LTC: set by CMake when
+# OSMesa is found)
+cp "$src/tests/node/wgsl_to_glsl.mjs" "$nm/"
+for v in MFKIT_TEST_GPU_LTC MFKIT_TEST_GPU_LTC_ANISO; do
+  exe="${!v-}"
+  if [ -z "$exe" ]; then
+    ok "false" "$v is not set: the software-GPU tests were not built (install libosmesa6-dev, README)"
+    continue
+  fi
+  "$exe" --wgsl "$nm" >"$tmp/gpu_wgsl.txt" 2>&1; rc=$?
+  ok "[ $rc -eq 0 ]" "WGSL run on llvmpipe ($(basename "$exe") --wgsl): $(grep -i 'fail' "$tmp/gpu_wgsl.txt" | head -5)"
+  grep -A4 "generated WGSL" "$tmp/gpu_wgsl.txt" | grep -v "^--"
+done
 
 # OpenImageIO: channel order and values of the RGBA EXRs (--dumpdata prints %.9f: tolerance 5e-10)
 for k in 1 2; do

@@ -3,9 +3,9 @@
  *
  * 1. Generates the GLSL, HLSL and WGSL of a small LTC table and compiles GLSL and HLSL with
  *    glslangValidator, each inside a main that calls every function (GLSL #version 330 fragment
- *    shader; HLSL with its HLSL front end to SPIR-V).  Debian has no WGSL compiler, so the WGSL is
- *    checked structurally (declarations, signatures, no GLSL/HLSL spellings, balanced braces, the
- *    same function list as the GLSL).
+ *    shader; HLSL with its HLSL front end to SPIR-V).  The WGSL is checked structurally here
+ *    (declarations, signatures, no GLSL/HLSL spellings, balanced braces, the same function list as
+ *    the GLSL) and validated by naga in tests/test_engines.sh.
  * 2. Runs the GLSL on Mesa's software rasteriser (OSMesa, llvmpipe): an 8 x 8 table built from known
  *    matrices (mf_ltc_table_pack) as float textures (GL_LINEAR, clamp-to-edge), a grid of
  *    (view, roughness, light) cases, one per pixel of a GL_RGBA32F framebuffer, each pixel holding
@@ -13,14 +13,15 @@
  *    and the same float table go through the C library in double (mf_table_lookup,
  *    mf_ltc_integrate_polygon, mf_ltc_integrate_line, mf_ellipse_form_factor + the sphere field).
  *    Fails (never skips) when no OSMesa context can be made.
+ * 3. With --wgsl NODE_DIR (tests/test_engines.sh, which installs naga): the WGSL with a WGSL main
+ *    doing the same, translated to GLSL 3.30 by naga (NODE_DIR/wgsl_to_glsl.mjs), runs the same
+ *    cases against the same reference and tolerance.
  */
 #define _POSIX_C_SOURCE 200809L
 #define GL_GLEXT_PROTOTYPES 1
-#include <GL/osmesa.h>
-#include <GL/gl.h>
-#include <GL/glext.h>
-
 #include "mf_test.h"
+
+#include "gpu_osmesa.h"
 #include "mfkit/io/mf_ltc_shader.h"
 #include "mfkit/mf_ltc_lights.h"
 #include "mfkit/mf_ltc_table.h"
@@ -58,14 +59,6 @@ static void build_table(mf_table *t)
 }
 
 /* ---- compiling with glslangValidator and the WGSL structure -------------------------------- */
-static int run(const char *cmd)
-{
-    int rc = system(cmd);
-    if (rc != 0)
-        fprintf(stderr, "command failed (%d): %s\n", rc, cmd);
-    return rc == 0;
-}
-
 static const char *k_glsl_uniforms =
     "uniform sampler2D ltc_1;\nuniform sampler2D ltc_2;\nuniform sampler2D cases;\nuniform int grid_w;\n"
     "out vec4 frag;\n";
@@ -96,6 +89,30 @@ static const char *k_glsl_main =
     "                     ltc_line(minv, l1, l2), ltc_disk(ltc_2, minv, dc, d1, d2, two));\n"
     "}\n";
 
+/* the WGSL main of the same run (--wgsl): translated to GLSL by naga, each texture with its sampler
+ * becomes the sampler2D _group_0_binding_<b>_fs */
+static const char *k_wgsl_main =
+    "@group(0) @binding(0) var ltc_1: texture_2d<f32>;\n@group(0) @binding(1) var ltc_1_s: sampler;\n"
+    "@group(0) @binding(2) var ltc_2: texture_2d<f32>;\n@group(0) @binding(3) var ltc_2_s: sampler;\n"
+    "@group(0) @binding(4) var cases: texture_2d<f32>;\n"
+    "fn case_texel(i: i32, id: i32) -> vec4<f32> { return textureLoad(cases, vec2<i32>(i, id), 0); }\n"
+    "@fragment fn main(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {\n"
+    "    let id = i32(pos.x) + 32 * i32(pos.y);\n"
+    "    let a = case_texel(0, id);\n    let b = case_texel(1, id);\n"
+    "    let n = a.xyz;\n    let v = b.xyz;\n    let alpha = a.w;\n    let f0 = vec3<f32>(b.w, b.w, b.w);\n"
+    "    let q0 = case_texel(2, id).xyz;\n    let q1 = case_texel(3, id).xyz;\n"
+    "    let q2 = case_texel(4, id).xyz;\n    let q3 = case_texel(5, id).xyz;\n"
+    "    let l1 = case_texel(6, id).xyz;\n    let l2 = case_texel(7, id).xyz;\n"
+    "    let dc = case_texel(8, id).xyz;\n    let d1 = case_texel(9, id).xyz;\n    let d2 = case_texel(10, id).xyz;\n"
+    "    let two = case_texel(11, id).x > 0.5;\n"
+    "    let t1 = ltc_lookup(ltc_1, ltc_1_s, alpha, dot(n, v));\n"
+    "    let t2 = ltc_lookup(ltc_2, ltc_2_s, alpha, dot(n, v));\n"
+    "    let minv = ltc_minv(t1, n, v);\n"
+    "    let fr = ltc_fresnel(t2, f0).x;\n"
+    "    return fr * vec4<f32>(ltc_quad(minv, q0, q1, q2, q3, two), ltc_quad_clipless(ltc_2, ltc_2_s, minv, q0, q1, q2, q3, two),\n"
+    "                          ltc_line(minv, l1, l2), ltc_disk(ltc_2, ltc_2_s, minv, dc, d1, d2, two));\n"
+    "}\n";
+
 static const char *k_hlsl_main =
     "Texture2D<float4> ltc_1;\nSamplerState ltc_1_s;\nTexture2D<float4> ltc_2;\nSamplerState ltc_2_s;\n"
     "cbuffer C { float3 n; float3 v; float alpha; float3 f0; float3 q0; float3 q1; float3 q2; float3 q3; int two; };\n"
@@ -108,25 +125,6 @@ static const char *k_hlsl_main =
     "                       ltc_quad_clipless(ltc_2, ltc_2_s, minv, q0, q1, q2, q3, two != 0),\n"
     "                       ltc_line(minv, q0, q1), ltc_disk(ltc_2, ltc_2_s, minv, q0, q1, q2, two != 0));\n"
     "}\n";
-
-static char *read_all(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return NULL;
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *s = malloc((size_t)n + 1);
-    if (s && fread(s, 1, (size_t)n, f) != (size_t)n) {
-        free(s);
-        s = NULL;
-    }
-    if (s)
-        s[n] = 0;
-    fclose(f);
-    return s;
-}
 
 static int count(const char *s, const char *needle)
 {
@@ -197,7 +195,7 @@ static char *compile_checks(const char *dir, const mf_table *t)
         if (st != MF_OK)
             MF_FAIL_AT("%s", msg);
     }
-    char *glsl = read_all(path[0]), *hlsl = read_all(path[1]), *wgsl = read_all(path[2]);
+    char *glsl = gpu_read_all(path[0]), *hlsl = gpu_read_all(path[1]), *wgsl = gpu_read_all(path[2]);
     CHECK(glsl && hlsl && wgsl);
     if (!glsl || !hlsl || !wgsl)
         return NULL;
@@ -213,9 +211,9 @@ static char *compile_checks(const char *dir, const mf_table *t)
     if (system("command -v glslangValidator >/dev/null 2>&1") != 0)
         MF_FAIL_AT("glslangValidator is needed (Debian: glslang-tools)");
     snprintf(cmd, sizeof cmd, "glslangValidator %s", frag);
-    CHECK(run(cmd));
+    CHECK(gpu_run(cmd));
     snprintf(cmd, sizeof cmd, "glslangValidator -V -D -e main -S frag -o %s/main.spv %s", dir, hl);
-    CHECK(run(cmd));
+    CHECK(gpu_run(cmd));
     check_wgsl(wgsl, glsl);
     /* refusals: not an LTC table, bad prefix */
     mf_buf b = {0};
@@ -361,46 +359,28 @@ static void reference(const mf_table *t, const gcase *c, double out[4], double *
         out[k] *= fr;
 }
 
-/* Under LeakSanitizer (tests/test_sanitize.sh): Mesa 22.3's OSMesa keeps a few hundred bytes of
- * its framebuffer state per process (allocated in OSMesaMakeCurrent, never freed on destroy);
- * leaks whose stack is inside libOSMesa are not ours.  (The sanitizer runtime's documented hook;
- * unused without it.) */
-const char *__lsan_default_suppressions(void);
-const char *__lsan_default_suppressions(void) { return "leak:libOSMesa.so"; }
-
-/* ---- OpenGL through OSMesa ------------------------------------------------------------------- */
-static GLuint compile(GLenum type, const char *src)
+/* --wgsl NODE_DIR: the generated WGSL with k_wgsl_main, translated to GLSL 3.30 by naga, or NULL. */
+static char *wgsl_as_glsl(const mf_table *t, const char *node_dir)
 {
-    GLuint s = glCreateShader(type);
-    glShaderSource(s, 1, &src, NULL);
-    glCompileShader(s);
-    GLint ok = 0;
-    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        char log[4096];
-        glGetShaderInfoLog(s, sizeof log, NULL, log);
-        MF_FAIL_AT("the GL driver refused the shader: %s", log);
+    char msg[512];
+    mf_buf b = {0};
+    CHECK(mf_ltc_shader_build(&b, t, MF_SHADER_WGSL, "ltc", msg, sizeof msg) == MF_OK);
+    mf_buf_puts(&b, k_wgsl_main);
+    mf_buf_put(&b, "", 1);
+    char *glsl = b.failed ? NULL : gpu_wgsl_to_glsl(b.data, node_dir);
+    mf_buf_free(&b);
+    return glsl;
+}
+
+int main(int argc, char **argv)
+{
+    const char *node_dir = NULL;
+    if (argc == 3 && !strcmp(argv[1], "--wgsl"))
+        node_dir = argv[2];
+    else if (argc != 1) {
+        fprintf(stderr, "usage: test_gpu_ltc [--wgsl NODE_DIR]\n");
+        return 2;
     }
-    return s;
-}
-
-static GLuint float_texture(int unit, int w, int h, const float *rgba, GLenum filter)
-{
-    GLuint tex;
-    glGenTextures(1, &tex);
-    glActiveTexture(GL_TEXTURE0 + (GLenum)unit);
-    glBindTexture(GL_TEXTURE_2D, tex);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, rgba);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, (GLint)filter);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, (GLint)filter);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
-    return tex;
-}
-
-int main(void)
-{
     mf_pcg32 rng;
     mf_pcg32_seed(&rng, mf_test_seed(2016), 0);
     mf_table t;
@@ -431,20 +411,9 @@ int main(void)
                 make_case(&cases[id++], &rng, fmin(cos_v, 1.0), r * r, k);
             }
 
-    /* OSMesa: GL 3.3 core */
-    const int attribs[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 0, OSMESA_PROFILE, OSMESA_CORE_PROFILE,
-                           OSMESA_CONTEXT_MAJOR_VERSION, 3, OSMESA_CONTEXT_MINOR_VERSION, 3, 0};
-    OSMesaContext ctx = OSMesaCreateContextAttribs(attribs, NULL);
-    if (!ctx) {
-        MF_FAIL_AT("OSMesa: cannot create an OpenGL 3.3 core context (Mesa's libosmesa6 with llvmpipe is needed)");
+    OSMesaContext ctx = gpu_context();
+    if (!ctx)
         MF_TEST_MAIN_END();
-    }
-    static unsigned char dummy[4 * 4 * 4];
-    if (!OSMesaMakeCurrent(ctx, dummy, GL_UNSIGNED_BYTE, 4, 4)) {
-        MF_FAIL_AT("OSMesa: cannot make the context current");
-        MF_TEST_MAIN_END();
-    }
-    printf("GL: %s, %s\n", (const char *)glGetString(GL_VERSION), (const char *)glGetString(GL_RENDERER));
 
     /* textures: ltc_1, ltc_2 (NR x NU, row iu = 0 first), the cases (CASE_W x NCASE) */
     static float t1[NR * NU * 4], t2[NR * NU * 4], ct[NCASE * CASE_W * 4];
@@ -470,45 +439,9 @@ int main(void)
         memcpy(row + 40, c->d2, 3 * sizeof(float));
         row[44] = c->two;
     }
-    float_texture(0, NR, NU, t1, GL_LINEAR);
-    float_texture(1, NR, NU, t2, GL_LINEAR);
-    float_texture(2, CASE_W, NCASE, ct, GL_NEAREST);
-
-    const char *vs = "#version 330 core\nvoid main() {\n"
-                     "    vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));\n"
-                     "    gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0);\n}\n";
-    GLuint prog = glCreateProgram();
-    glAttachShader(prog, compile(GL_VERTEX_SHADER, vs));
-    glAttachShader(prog, compile(GL_FRAGMENT_SHADER, frag_src));
-    glLinkProgram(prog);
-    GLint linked = 0;
-    glGetProgramiv(prog, GL_LINK_STATUS, &linked);
-    CHECK(linked);
-    glUseProgram(prog);
-    glUniform1i(glGetUniformLocation(prog, "ltc_1"), 0);
-    glUniform1i(glGetUniformLocation(prog, "ltc_2"), 1);
-    glUniform1i(glGetUniformLocation(prog, "cases"), 2);
-    glUniform1i(glGetUniformLocation(prog, "grid_w"), GRID_W);
-
-    GLuint fbo, target, vao;
-    const int gh = NCASE / GRID_W;
-    glGenTextures(1, &target);
-    glActiveTexture(GL_TEXTURE3);
-    glBindTexture(GL_TEXTURE_2D, target);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, GRID_W, gh, 0, GL_RGBA, GL_FLOAT, NULL);
-    glGenFramebuffers(1, &fbo);
-    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, target, 0);
-    CHECK(glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE);
-    glGenVertexArrays(1, &vao);
-    glBindVertexArray(vao);
-    glViewport(0, 0, GRID_W, gh);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-    static float pix[NCASE * 4];
-    glReadPixels(0, 0, GRID_W, gh, GL_RGBA, GL_FLOAT, pix);
-    GLenum err = glGetError();
-    if (err != GL_NO_ERROR)
-        MF_FAIL_AT("GL error 0x%x", err);
+    gpu_float_texture(0, NR, NU, t1, GL_LINEAR);
+    gpu_float_texture(1, NR, NU, t2, GL_LINEAR);
+    gpu_float_texture(2, CASE_W, NCASE, ct, GL_NEAREST);
 
     /* compare.  Tolerance |gpu - C| <= 2e-6 + 2e-4 |C| (docs/tables.md, "Shader code"): the GPU
      * evaluates in float what C evaluates in double on the same float inputs and float table.
@@ -520,35 +453,61 @@ int main(void)
      * llvmpipe filters float textures with float weights (a C model with 8-bit weights is off by
      * 2.5e-3 relative, i.e. that hardware behaviour would fail this test, as it should: the
      * tolerance is not loose enough to hide it). */
-    static const char *const what[4] = {"quad", "quad clipless", "line", "disk"};
-    double worst[4] = {0}, worst_rel[4] = {0}, gap = 0.0;
-    int nonzero[4] = {0};
-    for (int i = 0; i < NCASE; ++i) {
-        double ref[4], g;
-        reference(&t, &cases[i], ref, &g);
-        gap = fmax(gap, g);
-        for (int k = 0; k < 4; ++k) {
-            double gpu = pix[4 * i + k], e = fabs(gpu - ref[k]);
-            worst[k] = fmax(worst[k], e);
-            if (fabs(ref[k]) > 1e-3) {
-                ++nonzero[k];
-                worst_rel[k] = fmax(worst_rel[k], e / fabs(ref[k]));
-            }
-            double tol = 2e-4 * fabs(ref[k]) + 2e-6;
-            if (!(e <= tol))
-                MF_FAIL_AT("case %d (%s): gpu %.9g vs C %.9g, |diff| %.3g > %.3g", i, what[k], gpu, ref[k], e, tol);
+    /* the GLSL, and with --wgsl the WGSL (through naga's GLSL writer) */
+    char *wgsl_frag = node_dir ? wgsl_as_glsl(&t, node_dir) : NULL;
+    static const char *const names[2][3] = {{"ltc_1", "ltc_2", "cases"},
+                                            {"_group_0_binding_0_fs", "_group_0_binding_2_fs", "_group_0_binding_4_fs"}};
+    for (int variant = 0; variant < (node_dir ? 2 : 1); ++variant) {
+        const char *src = variant ? wgsl_frag : frag_src;
+        if (!src)
+            continue;
+        printf("%s on %s:\n", variant ? "the generated WGSL (translated to GLSL by naga)" : "the generated GLSL",
+               (const char *)glGetString(GL_RENDERER));
+        GLuint prog = gpu_program(src);
+        CHECK(prog != 0);
+        static float pix[NCASE * 4];
+        for (int i = 0; i < NCASE * 4; ++i) /* no value of an earlier run can pass */
+            pix[i] = NAN;
+        if (!prog)
+            continue;
+        glUseProgram(prog);
+        for (int k = 0; k < 3; ++k) {
+            GLint loc = glGetUniformLocation(prog, names[variant][k]);
+            CHECK(loc >= 0);
+            glUniform1i(loc, k);
         }
+        if (!variant)
+            glUniform1i(glGetUniformLocation(prog, "grid_w"), GRID_W);
+        CHECK(gpu_draw(3, GRID_W, NCASE / GRID_W, pix));
+        glUseProgram(0);
+        glDeleteProgram(prog);
+        static const char *const what[4] = {"quad", "quad clipless", "line", "disk"};
+        double worst[4] = {0}, worst_rel[4] = {0}, gap = 0.0;
+        int nonzero[4] = {0};
+        for (int i = 0; i < NCASE; ++i) {
+            double ref[4], g;
+            reference(&t, &cases[i], ref, &g);
+            gap = fmax(gap, g);
+            for (int k = 0; k < 4; ++k) {
+                double gpu = pix[4 * i + k], e = fabs(gpu - ref[k]);
+                worst[k] = fmax(worst[k], e);
+                if (fabs(ref[k]) > 1e-3) {
+                    ++nonzero[k];
+                    worst_rel[k] = fmax(worst_rel[k], e / fabs(ref[k]));
+                }
+                double tol = 2e-4 * fabs(ref[k]) + 2e-6;
+                if (!(e <= tol))
+                    MF_FAIL_AT("case %d (%s): gpu %.9g vs C %.9g, |diff| %.3g > %.3g", i, what[k], gpu, ref[k], e, tol);
+            }
+        }
+        for (int k = 0; k < 4; ++k)
+            printf("%-14s worst |gpu - C| %.3g, worst relative %.3g over %d cases with C > 1e-3 (of %d)\n", what[k],
+                   worst[k], worst_rel[k], nonzero[k], NCASE);
+        printf("table sphere term vs analytic (not a GPU error): worst %.3g\n", gap);
+        for (int k = 0; k < 4; ++k)
+            CHECK(nonzero[k] >= NCASE / 4);
     }
-    for (int k = 0; k < 4; ++k)
-        printf("%-14s worst |gpu - C| %.3g, worst relative %.3g over %d cases with C > 1e-3 (of %d)\n", what[k],
-               worst[k], worst_rel[k], nonzero[k], NCASE);
-    printf("table sphere term vs analytic (not a GPU error): worst %.3g\n", gap);
-    for (int k = 0; k < 4; ++k)
-        CHECK(nonzero[k] >= NCASE / 4);
-    glDeleteVertexArrays(1, &vao);
-    glDeleteFramebuffers(1, &fbo);
-    glDeleteTextures(1, &target);
-    glDeleteProgram(prog);
+    free(wgsl_frag);
     OSMesaDestroyContext(ctx);
     free(frag_src);
     mf_table_free(&t);

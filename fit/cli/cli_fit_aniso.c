@@ -265,11 +265,27 @@ int cli_fit_aniso(int argc, char **argv)
             rc = CLI_EXIT_IO;
         }
     }
+    /* the area-light code (mf_ltc_shader.h): ltca_<brdf>_area.glsl, .hlsl, .wgsl */
+    for (int l = MF_SHADER_GLSL; l <= MF_SHADER_WGSL && rc == 0; ++l) {
+        char prefix[80];
+        snprintf(prefix, sizeof prefix, "ltca_%s", brdf);
+        for (char *c = prefix; *c; ++c)
+            if (!((*c >= 'a' && *c <= 'z') || (*c >= 'A' && *c <= 'Z') || (*c >= '0' && *c <= '9')))
+                *c = '_';
+        snprintf(path, sizeof path, "%s/ltca_%s_area.%s", out, brdf, mf_shader_lang_name((mf_shader_lang)l));
+        mf_status ws = mf_ltc_shader_write(path, &t, (mf_shader_lang)l, prefix, msg, sizeof msg);
+        if (ws != MF_OK) {
+            cli_error(cmd, "%s (%s)", msg[0] ? msg : path, mf_status_str(ws));
+            rc = CLI_EXIT_IO;
+        }
+    }
     if (rc == 0)
         remove(ckpt);
     if (rc == 0 && !quiet)
-        fprintf(stderr, "exported %s/ltca_%s.{json,npy,exr,glsl,hlsl}, %s/ltca_%s_m{0,1,2}.dds and %s/ltca_%s_kt.npy\n",
-                out, brdf, out, brdf, out, brdf);
+        fprintf(stderr,
+                "exported %s/ltca_%s.{json,npy,exr,glsl,hlsl}, %s/ltca_%s_m{0,1,2}.dds, %s/ltca_%s_kt.npy and "
+                "%s/ltca_%s_area.{glsl,hlsl,wgsl}\n",
+                out, brdf, out, brdf, out, brdf, out, brdf);
     mf_table_free(&t);
     mf_ltcfit_aniso_result_free(&r);
     return rc;

@@ -3,6 +3,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "mfkit/fit/mf_ltc_bake.h"
+#include "mfkit/fit/mf_ltcfit_hdrp.h"
 #include "mfkit/io/mf_image.h"
 #include "mfkit/io/mf_io.h"
 #include "mfkit/io/mf_json.h"
@@ -138,6 +139,29 @@ static mf_status export_all(const mf_ltc_bake_options *o, const mf_table *t, mf_
         }
         if (st != MF_OK) {
             set_msg(r, "%s (%s)", msg[0] ? msg : path, mf_status_str(st));
+            return st;
+        }
+        ++r->nfiles;
+    }
+    if (dropin) { /* <stem>_hdrp.cs: Unity HDRP's LTC data, fitted on its grid (mf_ltcfit_hdrp.h) */
+        const int n = MF_LTC_HDRP_SIZE;
+        double *rows = malloc((size_t)n * n * 9 * sizeof *rows);
+        mf_ltcfit_hdrp_report hr;
+        char note[160];
+        if (!rows)
+            return MF_ERR_ALLOC;
+        if ((st = mf_ltcfit_hdrp(o->model, t, &o->fit, n, rows, &hr)) != MF_OK) {
+            free(rows);
+            set_msg(r, "HDRP fit (%s)", mf_status_str(st));
+            return st;
+        }
+        snprintf(note, sizeof note, "%d x %d texels fitted, %d kept at mfkit's interpolated start; worst residual %.3g",
+                 n, n, hr.fallbacks, hr.worst_residual);
+        if ((st = add_file(r, o->out_dir, "_hdrp.cs", &path)) == MF_OK)
+            st = mf_ltc_write_hdrp(path, rows, n, NULL, note, msg, sizeof msg);
+        free(rows);
+        if (st != MF_OK) {
+            set_msg(r, "%s", msg);
             return st;
         }
         ++r->nfiles;

@@ -151,11 +151,12 @@ mf_status mf_ltc_aniso_shader_build(mf_buf *out, const mf_table *t, mf_shader_la
     mf_buf_puts(out, "    r.magnitude = t2.y;\n    r.fresnel = t2.z;\n    return r;\n}\n\n");
     mf_buf_printf(out,
                   "// The LTC for the unit view direction wo in the tangent frame (x along alpha_x, z the normal):\n"
-                  "// theta = acos(wo.z), phi = atan(wo.y, wo.x).\n"
+                  "// theta = atan(|wo.xy|, wo.z) (= acos(wo.z), accurate near the normal; GPUs approximate acos\n"
+                  "// coarsely), phi = atan(wo.y, wo.x).\n"
                   "%s_ltc %s_ltc_view(%s, float alpha_x, float alpha_y, %s wo)\n{\n"
-                  "    return %s_ltc_angles(tex0, tex1, tex2%s, alpha_x, alpha_y, acos(clamp(wo.z, -1.0, 1.0)), %s(wo.y, wo.x));\n"
+                  "    return %s_ltc_angles(tex0, tex1, tex2%s, alpha_x, alpha_y, %s(sqrt(wo.x * wo.x + wo.y * wo.y), wo.z), %s(wo.y, wo.x));\n"
                   "}\n\n",
-                  p, p, texp, v3, p, sm, hlsl ? "atan2" : "atan");
+                  p, p, texp, v3, p, sm, hlsl ? "atan2" : "atan", hlsl ? "atan2" : "atan");
     mf_buf_printf(out, "#endif // %s_LTC_ANISO\n", up);
     if (out->failed) {
         mf_io_msg(msg, msg_size, "shader", "out of memory");

@@ -16,6 +16,7 @@
  */
 #include "io_internal.h"
 #include "mfkit/io/mf_ltc_shader.h"
+#include "mfkit/mf_ltc_aniso_table.h"
 #include "mfkit/mf_ltc_table.h"
 
 #include <ctype.h>
@@ -24,7 +25,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-static const char *const k_body =
+/* The isotropic table's lookup: texture coordinates, the texels, M^-1 in world space, Fresnel. */
+static const char *const k_iso_lookup =
     "// ---- texture coordinates at the texel centres (docs/tables.md): p in [lo, hi] of n texels\n"
     "fn float @_coord(float p, float lo, float hi, float n) {\n"
     "    return (clamp(p, min(lo, hi), max(lo, hi)) - lo) / (hi - lo) * (n - 1.0) / n + 0.5 / n;\n"
@@ -65,7 +67,161 @@ static const char *const k_body =
     "// the Fresnel split of the ltc_2 texel: F0 magnitude + (1 - F0) fresnel (Schlick)\n"
     "fn vec3 @_fresnel(vec4 t2, vec3 f0) {\n"
     "    return f0 * t2.x + (vec3(1.0, 1.0, 1.0) - f0) * t2.y;\n"
+    "}\n";
+
+/* The isotropic sphere integral: the table's sphere channel. */
+static const char *const k_iso_sphere =
+    "// the horizon-clipped sphere integral of a form factor f (pointing into the light) from the\n"
+    "// table's sphere channel: |f| ltc_2.a at (f.z / |f|, |f|) (mf_ltc_sphere_integral, tabulated)\n"
+    "fn float @_sphere(tex ltc_2, vec3 f) {\n"
+    "    let float f_len = length(f);\n"
+    "    if (f_len <= 0.0) {\n"
+    "        return 0.0;\n"
+    "    }\n"
+    "    return f_len * SAMPLE(ltc_2, @_sphere_uv(f.z / f_len, f_len)).w;\n"
+    "}\n";
+
+/* The anisotropic table's lookup [Kt, Heitz, Dupuy, Narayanan 2022, Sec. 5]: the view in the tangent
+ * frame, the azimuth folded into [0, pi/2] with the mirrors of mf_ltc_aniso_lookup, the three atlas
+ * textures interpolated over all four axes (mf_table_lookup), M mirrored back, inverted (adjugate)
+ * and taken to world space; Fresnel. */
+static const char *const k_aniso_lookup =
+    "// ---- texture coordinates at the texel centres (docs/tables.md): p in [lo, hi] of n texels\n"
+    "fn float @_coord(float p, float lo, float hi, float n) {\n"
+    "    return (clamp(p, min(lo, hi), max(lo, hi)) - lo) / (hi - lo) * (n - 1.0) / n + 0.5 / n;\n"
     "}\n"
+    "// the continuous texel index of p in [0, n - 1] (the lerp across tiles)\n"
+    "fn float @_pos(float p, float lo, float hi, float n) {\n"
+    "    return clamp((p - lo) / (hi - lo) * (n - 1.0), 0.0, n - 1.0);\n"
+    "}\n"
+    "// tile number `tile` (theta index + n_theta phi index) of an atlas, bilinear at the in-tile\n"
+    "// coordinate uv (within [0.5/n, 1 - 0.5/n], so the filter never reaches a neighbouring tile)\n"
+    "fn vec4 @_tile(tex atlas, vec2 uv, float tile) {\n"
+    "    let float row = floor((tile + 0.5) / @_TILES_X);\n"
+    "    let float col = tile - row * @_TILES_X;\n"
+    "    return SAMPLE(atlas, vec2((col + uv.x) * @_TILE_W / @_ATLAS_W, (row + uv.y) * @_TILE_H / @_ATLAS_H));\n"
+    "}\n"
+    "// the view direction in the tangent frame (tg along alpha_x, bt along alpha_y, n the normal; unit)\n"
+    "fn vec3 @_view(vec3 tg, vec3 bt, vec3 n, vec3 v) {\n"
+    "    return vec3(dot(v, tg), dot(v, bt), dot(v, n));\n"
+    "}\n"
+    "// the table coordinates of the view wo (tangent frame): vec4(theta, phi', s_x, s_y) with the azimuth\n"
+    "// phi = atan2(wo.y, wo.x) folded into phi' in [0, pi/2] and the mirror S = diag(s_x, s_y, 1):\n"
+    "// (pi/2, pi]: pi - phi, S_x; (pi, 3pi/2]: phi - pi, S_x S_y; (3pi/2, 2pi): 2pi - phi, S_y\n"
+    "// (theta by atan2, not acos: accurate near the normal, and GPUs approximate acos coarsely --\n"
+    "// llvmpipe's is off by 1.6e-4 rad, its atan2 by 3e-6)\n"
+    "fn vec4 @_fold(vec3 wo) {\n"
+    "    let float theta = atan2(sqrt(wo.x * wo.x + wo.y * wo.y), wo.z);\n"
+    "    var float ph = 0.0;\n"
+    "    if (wo.x != 0.0 || wo.y != 0.0) {\n"
+    "        ph = atan2(wo.y, wo.x);\n"
+    "    }\n"
+    "    if (ph < 0.0) {\n"
+    "        ph = ph + 2.0 * @_PI;\n"
+    "    }\n"
+    "    var float sx = 1.0;\n"
+    "    var float sy = 1.0;\n"
+    "    if (ph > 1.5 * @_PI) {\n"
+    "        ph = 2.0 * @_PI - ph;\n"
+    "        sy = -1.0;\n"
+    "    } else if (ph > @_PI) {\n"
+    "        ph = ph - @_PI;\n"
+    "        sx = -1.0;\n"
+    "        sy = -1.0;\n"
+    "    } else if (ph > 0.5 * @_PI) {\n"
+    "        ph = @_PI - ph;\n"
+    "        sx = -1.0;\n"
+    "    }\n"
+    "    return vec4(theta, ph, sx, sy);\n"
+    "}\n"
+    "// the texel of one atlas (tex0 = (m00, m01, m02, m10), tex1 = (m11, m12, m20, m21), tex2 = (m22,\n"
+    "// magnitude, fresnel, residual)) at (alpha_x, alpha_y) and the folded view fv: bilinear over the\n"
+    "// two roughness axes by the sampler, linear across theta and phi between tiles (mf_table_lookup)\n"
+    "fn vec4 @_lookup(tex atlas, float alpha_x, float alpha_y, vec4 fv) {\n"
+    "    var float p1 = alpha_y;\n"
+    "    if (@_LAMBDA > 0.5) {\n"
+    "        p1 = 0.0;\n"
+    "        if (alpha_x > 0.0) {\n"
+    "            p1 = alpha_y / alpha_x;\n"
+    "        }\n"
+    "    }\n"
+    "    let vec2 uv = vec2(@_coord(alpha_x, @_A0_LO, @_A0_HI, @_A0_N), @_coord(p1, @_A1_LO, @_A1_HI, @_A1_N));\n"
+    "    let float f2 = @_pos(fv.x, @_A2_LO, @_A2_HI, @_A2_N);\n"
+    "    let float f3 = @_pos(fv.y, @_A3_LO, @_A3_HI, @_A3_N);\n"
+    "    let float i2 = min(floor(f2), @_A2_N - 2.0);\n"
+    "    let float i3 = min(floor(f3), @_A3_N - 2.0);\n"
+    "    let float w2 = f2 - i2;\n"
+    "    let float w3 = f3 - i3;\n"
+    "    let float k = i2 + @_A2_N * i3;\n"
+    "    return @_tile(TEXARG(atlas), uv, k) * ((1.0 - w2) * (1.0 - w3)) + @_tile(TEXARG(atlas), uv, k + 1.0) * (w2 * (1.0 - w3))\n"
+    "        + @_tile(TEXARG(atlas), uv, k + @_A2_N) * ((1.0 - w2) * w3) + @_tile(TEXARG(atlas), uv, k + @_A2_N + 1.0) * (w2 * w3);\n"
+    "}\n"
+    "// M^-1 in world space from the three texels at fv and the tangent frame: M(phi) = S M(phi') S\n"
+    "// (entry (i, j) times s_i s_j), M^-1 = adj(M) / det M, times the rotation R = rows(tg, bt, n)\n"
+    "fn mat3 @_minv(vec4 t0, vec4 t1, vec4 t2, vec4 fv, vec3 tg, vec3 bt, vec3 n) {\n"
+    "    let vec3 s = vec3(fv.z, fv.w, 1.0);\n"
+    "    let vec3 r0 = vec3(t0.x, t0.y, t0.z) * s * fv.z;\n"
+    "    let vec3 r1 = vec3(t0.w, t1.x, t1.y) * s * fv.w;\n"
+    "    let vec3 r2 = vec3(t1.z, t1.w, t2.x) * s;\n"
+    "    // the columns of adj(M): r1 x r2, r2 x r0, r0 x r1; det M = r0 . (r1 x r2)\n"
+    "    let vec3 c0 = cross(r1, r2);\n"
+    "    let vec3 c1 = cross(r2, r0);\n"
+    "    let vec3 c2 = cross(r0, r1);\n"
+    "    let float inv_det = 1.0 / dot(r0, c0);\n"
+    "    // row i of M^-1 R: (c0_i tg + c1_i bt + c2_i n) / det M\n"
+    "    return @_rows((tg * c0.x + bt * c1.x + n * c2.x) * inv_det, (tg * c0.y + bt * c1.y + n * c2.y) * inv_det,\n"
+    "        (tg * c0.z + bt * c1.z + n * c2.z) * inv_det);\n"
+    "}\n"
+    "// the Fresnel split of the tex2 texel: F0 magnitude + (1 - F0) fresnel (Schlick)\n"
+    "fn vec3 @_fresnel(vec4 t2, vec3 f0) {\n"
+    "    return f0 * t2.y + (vec3(1.0, 1.0, 1.0) - f0) * t2.z;\n"
+    "}\n";
+
+/* The anisotropic sphere integral, in closed form (the table has no sphere channel). */
+static const char *const k_aniso_sphere =
+    "// atan(z) - z for 0 <= z < 1: the series -z^3/3 + z^5/5 - ... below 0.1 (5 terms: the first omitted\n"
+    "// one is below 1e-10 of the sum), the difference above (it keeps all but log10(3 / z^2) <= 2.5 digits)\n"
+    "fn float @_atan_minus_x(float z) {\n"
+    "    if (z >= 0.1) {\n"
+    "        return atan(z) - z;\n"
+    "    }\n"
+    "    let float z2 = z * z;\n"
+    "    return z * z2 * (-1.0 / 3.0 + z2 * (1.0 / 5.0 + z2 * (-1.0 / 7.0 + z2 * (1.0 / 9.0 - z2 / 11.0))));\n"
+    "}\n"
+    "// the horizon-clipped integral of max(0, z) / pi over the spherical cap whose form factor is f\n"
+    "// (sin^2 sigma = |f|, centre at cos theta = f.z / |f|) [Snyder 1996, as in Heitz and Hill 2017], in\n"
+    "// the rearranged form of mf_ltc_sphere_integral (docs/math.md)\n"
+    "fn float @_sphere(vec3 f) {\n"
+    "    let float f_len = length(f);\n"
+    "    if (f_len <= 0.0) {\n"
+    "        return 0.0;\n"
+    "    }\n"
+    "    let float s2 = min(f_len, 1.0);\n"
+    "    let float c = clamp(f.z / f_len, -1.0, 1.0);\n"
+    "    if (c * c >= s2) {\n"
+    "        return max(c, 0.0) * s2;\n"
+    "    }\n"
+    "    if (s2 >= 1.0) {\n"
+    "        return 0.5 * (1.0 + c);\n"
+    "    }\n"
+    "    let float sn = sqrt(1.0 - c * c);\n"
+    "    let float x = sqrt(1.0 - s2) / sqrt(s2);\n"
+    "    let float y = clamp(-x * c / sn, -1.0, 1.0);\n"
+    "    let float sy = sqrt(max(1.0 - y * y, 0.0));\n"
+    "    let float q = sn * sy;\n"
+    "    let float z = q / x;\n"
+    "    var float t = atan(z) - x * q * s2;\n"
+    "    if (z < 1.0) {\n"
+    "        t = @_atan_minus_x(z) + z * s2;\n"
+    "    }\n"
+    "    // acos(y) as atan2(sqrt(1 - y^2), y): GPUs approximate acos coarsely (see @_fold)\n"
+    "    return (c * atan2(sy, y) * s2 + t) / @_PI;\n"
+    "}\n";
+
+/* The integrals shared by both tables (C twins in mf_ltc.h, mf_ltc_lights.h).  SPHERE_TEX and
+ * SPHERE_ARG stand for the sphere integral's texture parameter and argument ("tex ltc_2, " and
+ * "TEXARG(ltc_2), " for the isotropic table, nothing for the anisotropic one). */
+static const char *const k_integrals_1 =
     "// one edge of Lambert's formula: theta / sin(theta) (a x b) for unit a, b (theta = angle(a, b);\n"
     "// atan2 keeps small angles accurate; the series 1 + theta^2/6 below sin theta = 1e-4)\n"
     "fn vec3 @_edge(vec3 a, vec3 b) {\n"
@@ -123,19 +279,12 @@ static const char *const k_body =
     "        return abs(e);\n"
     "    }\n"
     "    return max(e, 0.0);\n"
-    "}\n"
-    "// the horizon-clipped sphere integral of a form factor f (pointing into the light) from the\n"
-    "// table's sphere channel: |f| ltc_2.a at (f.z / |f|, |f|) (mf_ltc_sphere_integral, tabulated)\n"
-    "fn float @_sphere(tex ltc_2, vec3 f) {\n"
-    "    let float f_len = length(f);\n"
-    "    if (f_len <= 0.0) {\n"
-    "        return 0.0;\n"
-    "    }\n"
-    "    return f_len * SAMPLE(ltc_2, @_sphere_uv(f.z / f_len, f_len)).w;\n"
-    "}\n"
+    "}\n";
+
+static const char *const k_integrals_2 =
     "// the clipless variant of @_polygon for a planar polygon: the form factor of the unclipped\n"
-    "// transformed polygon and the sphere channel (mf_ltc_integrate_polygon_sphere)\n"
-    "fn float @_polygon_clipless(tex ltc_2, mat3 minv, vec3[8] pts, int n, bool two_sided) {\n"
+    "// transformed polygon and @_sphere (mf_ltc_integrate_polygon_sphere)\n"
+    "fn float @_polygon_clipless(SPHERE_TEX mat3 minv, vec3[8] pts, int n, bool two_sided) {\n"
     "    var vec3[8] q = pts;\n"
     "    let float facing = dot(cross(q[1] - q[0], q[2] - q[0]), q[0]);\n"
     "    if (!two_sided && facing <= 0.0) {\n"
@@ -152,7 +301,7 @@ static const char *const k_body =
     "    if ((determinant(minv) < 0.0) != (facing < 0.0)) {\n"
     "        f = -f;\n"
     "    }\n"
-    "    return @_sphere(TEXARG(ltc_2), f);\n"
+    "    return @_sphere(SPHERE_ARG f);\n"
     "}\n"
     "// quads: corners p0..p3 (clockwise seen from the shading point for one-sided lights)\n"
     "fn float @_quad(mat3 minv, vec3 p0, vec3 p1, vec3 p2, vec3 p3, bool two_sided) {\n"
@@ -166,7 +315,7 @@ static const char *const k_body =
     "    }\n"
     "    return @_polygon(minv, pts, 4, two_sided);\n"
     "}\n"
-    "fn float @_quad_clipless(tex ltc_2, mat3 minv, vec3 p0, vec3 p1, vec3 p2, vec3 p3, bool two_sided) {\n"
+    "fn float @_quad_clipless(SPHERE_TEX mat3 minv, vec3 p0, vec3 p1, vec3 p2, vec3 p3, bool two_sided) {\n"
     "    var vec3[8] pts;\n"
     "    pts[0] = p0;\n"
     "    pts[1] = p1;\n"
@@ -175,7 +324,7 @@ static const char *const k_body =
     "    for (var int i = 4; i < 8; i++) {\n"
     "        pts[i] = p0;\n"
     "    }\n"
-    "    return @_polygon_clipless(TEXARG(ltc_2), minv, pts, 4, two_sided);\n"
+    "    return @_polygon_clipless(SPHERE_ARG minv, pts, 4, two_sided);\n"
     "}\n"
     "// the cosine integral over the segment p1 p2 clipped to z >= 0, per unit width (mf_line_integrate_cosine)\n"
     "fn float @_line_cosine(vec3 p1_in, vec3 p2_in) {\n"
@@ -222,8 +371,8 @@ static const char *const k_body =
     "}\n"
     "// integral of the LTC over the ellipse c + cos(phi) v1 + sin(phi) v2 (a disk: perpendicular v1, v2\n"
     "// of equal length), front-facing when (v1 x v2).c > 0 (mf_ltc_integrate_disk): the form factor of\n"
-    "// the transformed ellipse from the negative eigenvalue of its cone, the sphere channel for the horizon\n"
-    "fn float @_disk(tex ltc_2, mat3 minv, vec3 c_in, vec3 v1_in, vec3 v2_in, bool two_sided) {\n"
+    "// the transformed ellipse from the negative eigenvalue of its cone, @_sphere for the horizon\n"
+    "fn float @_disk(SPHERE_TEX mat3 minv, vec3 c_in, vec3 v1_in, vec3 v2_in, bool two_sided) {\n"
     "    if (!two_sided && dot(cross(v1_in, v2_in), c_in) <= 0.0) {\n"
     "        return 0.0;\n"
     "    }\n"
@@ -290,7 +439,7 @@ static const char *const k_body =
     "    }\n"
     "    let float f_len = min(1.0, abs(lam) / sqrt(dp));\n"
     "    let vec3 axis = normalize(e1 * (al * x0 / (al - lam)) + e2 * (be * y0 / (be - lam)) + nrm);\n"
-    "    return @_sphere(TEXARG(ltc_2), axis * f_len);\n"
+    "    return @_sphere(SPHERE_ARG axis * f_len);\n"
     "}\n";
 
 /* ---- the translator ----------------------------------------------------------------------- */
@@ -415,7 +564,12 @@ static void translate_span(const gen *g, const char *s, size_t n, mf_buf *b)
         if (s[0] == '/' && s[1] == '/') { /* comments verbatim to the end of the line */
             const char *e = strchr(s, '\n');
             size_t len = e && e < end ? (size_t)(e - s) : (size_t)(end - s);
-            mf_buf_put(b, s, len);
+            for (size_t i = 0; i < len; ++i) { /* @_name: the prefix, as in code */
+                if (s[i] == '@')
+                    mf_buf_puts(b, g->prefix);
+                else
+                    mf_buf_put(b, s + i, 1);
+            }
             s += len;
             continue;
         }
@@ -564,6 +718,39 @@ static void set_msg(char *msg, size_t size, const char *fmt, const char *arg)
         snprintf(msg, size, fmt, arg);
 }
 
+/* text with SPHERE_TEX / SPHERE_ARG replaced (k_integrals_2 for one table kind), translated */
+static void translate_sphere_variant(const gen *g, const char *text, int iso)
+{
+    mf_buf t = {0};
+    for (const char *s = text; *s;) {
+        if (!strncmp(s, "SPHERE_TEX ", 11)) {
+            if (iso)
+                mf_buf_puts(&t, "tex ltc_2, ");
+            s += 11;
+        } else if (!strncmp(s, "SPHERE_ARG ", 11)) {
+            if (iso)
+                mf_buf_puts(&t, "TEXARG(ltc_2), ");
+            s += 11;
+        } else
+            mf_buf_put(&t, s++, 1);
+    }
+    mf_buf_put(&t, "", 1); /* the translator scans NUL-terminated text */
+    if (t.failed)
+        g->b->failed = 1;
+    else
+        translate_span(g, t.data, t.len - 1, g->b);
+    mf_buf_free(&t);
+}
+
+static int is_iso_table(const mf_table *t)
+{
+    int ok = t->naxes == 2 && t->nfields == MF_LTC_NFIELDS && t->axes[0].mapping == MF_AXIS_SQUARE &&
+             t->axes[1].mapping == MF_AXIS_ONE_MINUS_SQUARE && t->axes[0].size >= 2 && t->axes[1].size >= 2;
+    for (int f = 0; ok && f < MF_LTC_NFIELDS; ++f)
+        ok = !strcmp(t->fields[f], mf_ltc_table_fields[f]);
+    return ok;
+}
+
 mf_status mf_ltc_shader_build(mf_buf *out, const mf_table *t, mf_shader_lang lang, const char *prefix, char *msg,
                               size_t msg_size)
 {
@@ -577,32 +764,54 @@ mf_status mf_ltc_shader_build(mf_buf *out, const mf_table *t, mf_shader_lang lan
         set_msg(msg, msg_size, "shader: prefix '%s' is not an identifier", prefix ? prefix : "");
         return MF_ERR_DOMAIN;
     }
-    int ok = t->naxes == 2 && t->nfields == MF_LTC_NFIELDS && t->axes[0].mapping == MF_AXIS_SQUARE &&
-             t->axes[1].mapping == MF_AXIS_ONE_MINUS_SQUARE && t->axes[0].size >= 2 && t->axes[1].size >= 2;
-    for (int f = 0; ok && f < MF_LTC_NFIELDS; ++f)
-        ok = !strcmp(t->fields[f], mf_ltc_table_fields[f]);
-    if (!ok) {
-        set_msg(msg, msg_size, "%s",
-                "shader: the area-light code needs an isotropic LTC table (axes r, u; fields minv_00 .. sphere)");
-        return MF_ERR_UNSUPPORTED;
+    const int iso = is_iso_table(t);
+    mf_table_atlas atlas;
+    memset(&atlas, 0, sizeof atlas);
+    if (!iso) {
+        int aniso = mf_ltc_aniso_layout_ok(t, NULL, 0) && t->nfields >= MF_LTCA_NFIELDS &&
+                    (mf_table_atlas_from_meta(t, &atlas) == MF_OK || mf_table_atlas_layout(t, 0, &atlas) == MF_OK);
+        if (!aniso) {
+            set_msg(msg, msg_size, "%s",
+                    "shader: the area-light code needs an isotropic LTC table (axes r, u; fields minv_00 .. sphere) "
+                    "or an anisotropic one (axes ax/a, ay/lambda, theta, phi; fields m00 .. fresnel)");
+            return MF_ERR_UNSUPPORTED;
+        }
     }
     gen g = {out, lang, prefix};
     static const char *const lang_title[] = {"GLSL (3.30 / ES 3.0 and later)", "HLSL (Shader Model 4 and later)",
                                              "WGSL"};
-    mf_buf_printf(out,
-                  "// %s_area.%s -- LTC area lights, %s (generated by mfkit from one source for GLSL, HLSL and\n"
-                  "// WGSL; do not edit).  Textures: ltc_1 = (minv_00, minv_20, minv_02, minv_22), ltc_2 =\n"
-                  "// (magnitude, fresnel, 0, sphere), float, bilinear, clamp-to-edge, no mipmaps (docs/tables.md).\n"
-                  "//\n"
-                  "// Use (positions relative to the shading point, world space; n, v unit):\n"
-                  "//   t1 = %s_lookup(ltc_1, alpha, dot(n, v)); t2 = %s_lookup(ltc_2, alpha, dot(n, v));\n"
-                  "//   minv = %s_minv(t1, n, v);\n"
-                  "//   spec = radiance * %s_quad(minv, p0, p1, p2, p3, false) * %s_fresnel(t2, f0);\n"
-                  "//   diffuse: the same with minv = identity (%s_rows of the unit vectors), no Fresnel.\n"
-                  "// Lines: %s_line(...) * 2 R for a cylinder of radius R.  Disks and %s_quad_clipless use\n"
-                  "// the sphere channel of ltc_2 (exact while the light is above the horizon).\n\n",
-                  prefix, mf_shader_lang_name(lang), lang_title[lang], prefix, prefix, prefix, prefix, prefix, prefix,
-                  prefix, prefix);
+    if (iso)
+        mf_buf_printf(out,
+                      "// %s_area.%s -- LTC area lights, %s (generated by mfkit from one source for GLSL, HLSL and\n"
+                      "// WGSL; do not edit).  Textures: ltc_1 = (minv_00, minv_20, minv_02, minv_22), ltc_2 =\n"
+                      "// (magnitude, fresnel, 0, sphere), float, bilinear, clamp-to-edge, no mipmaps (docs/tables.md).\n"
+                      "//\n"
+                      "// Use (positions relative to the shading point, world space; n, v unit):\n"
+                      "//   t1 = %s_lookup(ltc_1, alpha, dot(n, v)); t2 = %s_lookup(ltc_2, alpha, dot(n, v));\n"
+                      "//   minv = %s_minv(t1, n, v);\n"
+                      "//   spec = radiance * %s_quad(minv, p0, p1, p2, p3, false) * %s_fresnel(t2, f0);\n"
+                      "//   diffuse: the same with minv = identity (%s_rows of the unit vectors), no Fresnel.\n"
+                      "// Lines: %s_line(...) * 2 R for a cylinder of radius R.  Disks and %s_quad_clipless use\n"
+                      "// the sphere channel of ltc_2 (exact while the light is above the horizon).\n\n",
+                      prefix, mf_shader_lang_name(lang), lang_title[lang], prefix, prefix, prefix, prefix, prefix,
+                      prefix, prefix, prefix);
+    else
+        mf_buf_printf(out,
+                      "// %s_area.%s -- anisotropic LTC area lights, %s (generated by mfkit from one source for\n"
+                      "// GLSL, HLSL and WGSL; do not edit).  Textures: the three %d x %d atlases %s_m0.dds = (m00, m01,\n"
+                      "// m02, m10), %s_m1.dds = (m11, m12, m20, m21), %s_m2.dds = (m22, magnitude, fresnel, residual),\n"
+                      "// float, bilinear, clamp-to-edge, no mipmaps (docs/tables.md).\n"
+                      "//\n"
+                      "// Use (positions relative to the shading point, world space; tg, bt, n the unit tangent frame\n"
+                      "// with tg along alpha_x; v the unit view direction):\n"
+                      "//   fv = %s_fold(%s_view(tg, bt, n, v));\n"
+                      "//   t0 = %s_lookup(tex0, alpha_x, alpha_y, fv); t1, t2 likewise from tex1, tex2;\n"
+                      "//   minv = %s_minv(t0, t1, t2, fv, tg, bt, n);\n"
+                      "//   spec = radiance * %s_quad(minv, p0, p1, p2, p3, false) * %s_fresnel(t2, f0);\n"
+                      "// Lines: %s_line(...) * 2 R for a cylinder of radius R.  Disks and %s_quad_clipless use the\n"
+                      "// closed-form sphere integral %s_sphere (exact while the light is above the horizon).\n\n",
+                      prefix, mf_shader_lang_name(lang), lang_title[lang], atlas.width, atlas.height, prefix, prefix,
+                      prefix, prefix, prefix, prefix, prefix, prefix, prefix, prefix, prefix, prefix);
     if (lang != MF_SHADER_WGSL) {
         char up[80];
         size_t n = strlen(prefix);
@@ -610,18 +819,42 @@ mf_status mf_ltc_shader_build(mf_buf *out, const mf_table *t, mf_shader_lang lan
             up[i] = (char)toupper((unsigned char)prefix[i]);
         mf_buf_printf(out, "#ifndef %s_AREA\n#define %s_AREA\n\n", up, up);
     }
-    const mf_table_axis *ar = &t->axes[0], *au = &t->axes[1];
-    mf_buf_printf(out, "// the table's axes: r (%d texels over [%.9g, %.9g]), u (%d texels over [%.9g, %.9g])\n",
-                  ar->size, ar->lo, ar->hi, au->size, au->lo, au->hi);
-    put_const(&g, "PI", MF_PI);
-    put_const(&g, "R_LO", ar->lo);
-    put_const(&g, "R_HI", ar->hi);
-    put_const(&g, "R_N", ar->size);
-    put_const(&g, "U_LO", au->lo);
-    put_const(&g, "U_HI", au->hi);
-    put_const(&g, "U_N", au->size);
-    put_const(&g, "ALPHA_MIN", isfinite(ar->physical_min) ? ar->physical_min : 0.0);
-    put_const(&g, "COS_MIN", isfinite(au->physical_min) ? au->physical_min : -1.0);
+    if (iso) {
+        const mf_table_axis *ar = &t->axes[0], *au = &t->axes[1];
+        mf_buf_printf(out, "// the table's axes: r (%d texels over [%.9g, %.9g]), u (%d texels over [%.9g, %.9g])\n",
+                      ar->size, ar->lo, ar->hi, au->size, au->lo, au->hi);
+        put_const(&g, "PI", MF_PI);
+        put_const(&g, "R_LO", ar->lo);
+        put_const(&g, "R_HI", ar->hi);
+        put_const(&g, "R_N", ar->size);
+        put_const(&g, "U_LO", au->lo);
+        put_const(&g, "U_HI", au->hi);
+        put_const(&g, "U_N", au->size);
+        put_const(&g, "ALPHA_MIN", isfinite(ar->physical_min) ? ar->physical_min : 0.0);
+        put_const(&g, "COS_MIN", isfinite(au->physical_min) ? au->physical_min : -1.0);
+    } else {
+        mf_buf_puts(out, "// the table's axes (texels over [lo, hi]) and its atlas (tile = i_theta + n_theta i_phi at\n"
+                         "// column tile % TILES_X, row tile / TILES_X)\n");
+        for (int k = 0; k < 4; ++k)
+            mf_buf_printf(out, "//   axis %d: %s, %d texels over [%.9g, %.9g]\n", k, t->axes[k].name, t->axes[k].size,
+                          t->axes[k].lo, t->axes[k].hi);
+        put_const(&g, "PI", MF_PI);
+        for (int k = 0; k < 4; ++k) {
+            char nm[16];
+            snprintf(nm, sizeof nm, "A%d_LO", k);
+            put_const(&g, nm, t->axes[k].lo);
+            snprintf(nm, sizeof nm, "A%d_HI", k);
+            put_const(&g, nm, t->axes[k].hi);
+            snprintf(nm, sizeof nm, "A%d_N", k);
+            put_const(&g, nm, t->axes[k].size);
+        }
+        put_const(&g, "LAMBDA", mf_ltc_aniso_table_param(t) == MF_LTC_ANISO_PARAM_ALPHA_LAMBDA ? 1.0 : 0.0);
+        put_const(&g, "TILES_X", atlas.tiles_x);
+        put_const(&g, "TILE_W", atlas.tile_w);
+        put_const(&g, "TILE_H", atlas.tile_h);
+        put_const(&g, "ATLAS_W", atlas.width);
+        put_const(&g, "ATLAS_H", atlas.height);
+    }
     mf_buf_puts(out, "\n// ---- the per-language prelude: matrices from rows, matrix times vector\n");
     switch (lang) {
     case MF_SHADER_GLSL:
@@ -641,7 +874,11 @@ mf_status mf_ltc_shader_build(mf_buf *out, const mf_table *t, mf_shader_lang lan
         mf_buf_printf(out, "fn %s_mul(m: mat3x3<f32>, v: vec3<f32>) -> vec3<f32> { return m * v; }\n\n", prefix);
         break;
     }
-    translate_span(&g, k_body, strlen(k_body), out);
+    const char *lookup = iso ? k_iso_lookup : k_aniso_lookup, *sphere = iso ? k_iso_sphere : k_aniso_sphere;
+    translate_span(&g, lookup, strlen(lookup), out);
+    translate_span(&g, k_integrals_1, strlen(k_integrals_1), out);
+    translate_span(&g, sphere, strlen(sphere), out);
+    translate_sphere_variant(&g, k_integrals_2, iso);
     if (lang != MF_SHADER_WGSL)
         mf_buf_puts(out, "\n#endif\n");
     if (out->failed) {

@@ -36,6 +36,13 @@ int mf_ltc_table_is_dropin(const mf_table *t);
 
 /* The three.js module (t: mf_ltc_table_is_dropin).  MF_ERR_UNSUPPORTED for another layout. */
 mf_status mf_ltc_write_threejs(const char *path, const mf_table *t, char *msg, size_t msg_size) MF_WARN_UNUSED;
+/* Unity HDRP's LTC data source file (LtcData.GGX.cs: partial class LTCAreaLight, static double
+ * s_LtcGGXMatrixData[n * n, 9]) from rows in HDRP's layout (mf_ltcfit_hdrp.h: row i_r + n i_theta,
+ * {m00, 0, m20, 0, m11, 0, m02, 0, 1} of M^-1 / (M^-1)_22), n = 64 for HDRP.  name: the array's
+ * name (NULL: "s_LtcGGXMatrixData"; letters, digits, '_'); note: one more comment line (NULL:
+ * none).  MF_ERR_DOMAIN for n < 2, a bad name or a non-finite value. */
+mf_status mf_ltc_write_hdrp(const char *path, const double *rows, int n, const char *name, const char *note,
+                            char *msg, size_t msg_size) MF_WARN_UNUSED;
 /* The EEVEE header; brdf names the arrays (ltc_mat_<brdf>, [A-Za-z0-9_]+; NULL: the table's
  * "brdf" metadata, else "ggx").  MF_ERR_UNSUPPORTED for another layout, MF_ERR_DOMAIN for a bad name. */
 mf_status mf_ltc_write_eevee(const char *path, const mf_table *t, const char *brdf, char *msg,

@@ -16,6 +16,14 @@
  *   _disk(ltc_2, minv, c, v1, v2, two_sided)    mf_ltc_integrate_disk with the sphere channel;
  *   _fresnel(ltc_2 texel, f0)                   F0 magnitude + (1 - F0) fresnel.
  * Positions are relative to the shading point, in the world frame of N and V.
+ *
+ * For an anisotropic LTC table (mf_ltc_aniso_table.h) the same integrals come with its lookup
+ * instead: _view(tg, bt, n, v) (the view in the tangent frame, tg along alpha_x), _fold(wo)
+ * (theta, the azimuth folded into [0, pi/2], the mirror signs), _lookup(atlas, alpha_x, alpha_y,
+ * fold) (one of the three atlases, interpolated over all four axes), _minv(t0, t1, t2, fold, tg,
+ * bt, n) (M mirrored back, inverted, in world space; mf_ltc_aniso_lookup), _fresnel(t2 texel, f0);
+ * the clipless and disk integrals use the closed-form sphere integral _sphere(f)
+ * (mf_ltc_sphere_integral) and take no texture.
  */
 #ifndef MF_LTC_SHADER_H
 #define MF_LTC_SHADER_H
@@ -35,8 +43,8 @@ int mf_shader_lang_parse(const char *name, mf_shader_lang *out);
 
 /* The shader code for the LTC table t (its axes give the texture-coordinate constants) appended to
  * out.  prefix: an identifier ([A-Za-z_][A-Za-z0-9_]*, at most 64 characters).  MF_ERR_UNSUPPORTED
- * (with a one-line message) if t is not an isotropic LTC table; MF_ERR_DOMAIN for a bad prefix or
- * language. */
+ * (with a one-line message) if t is neither an isotropic nor an anisotropic LTC table; MF_ERR_DOMAIN
+ * for a bad prefix or language. */
 mf_status mf_ltc_shader_build(mf_buf *out, const mf_table *t, mf_shader_lang lang, const char *prefix, char *msg,
                               size_t msg_size) MF_WARN_UNUSED;
 
