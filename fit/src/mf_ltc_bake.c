@@ -11,6 +11,8 @@
 #include "mfkit/io/mf_table_io.h"
 
 #include <errno.h>
+#include <math.h>
+#include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -39,6 +41,178 @@ static void set_msg(mf_ltc_bake_report *r, const char *fmt, ...)
     va_start(ap, fmt);
     vsnprintf(r->message, sizeof r->message, fmt, ap);
     va_end(ap);
+}
+
+static double cpu_seconds(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* ---- the texel check (mf_ltc_bake_texel_check; docs/validation.md, "The texel check") ---------
+ * Why a fresh fit and not the BRDF: a good table's own error against the BRDF exceeds 10 % at
+ * many texels (its shape family cannot follow the BRDF), so no bound on that error both passes a
+ * good table and catches a texel changed by 10 %; the issue's "10 % from the fitted texel" needs
+ * the fitted texel, which only the fitter can recompute.  Why three starts: a refit from the
+ * stored texel converges to the same texel within 1 % at 98.5 % of the default table's texels
+ * (measured, 4096 samples), but where the objective is flat (grazing views of low roughness)
+ * the table's fitter keeps its texel near the previous texel of the column (its proximal terms)
+ * and the unconstrained refit drifts up to 16 %; started from that previous texel, as the
+ * table's fitter started, it lands within 6 % of the stored texel. */
+
+#define TEXEL_CHECK_STEPS 3 /* solver steps of the first refit: the fit converges in 4 on average */
+#define MF_LTC_BAKE_GATE_MC_SAMPLES 16384 /* Monte Carlo samples of the gate's polygon checks (see mf_ltc_bake) */
+
+typedef struct texel_job {
+    const mf_table *t;
+    const mf_brdf_model *model;
+    mf_ltcfit_options quick, full;
+    uint64_t seed;
+    int nr, nu, threads, npoly;
+    double *val;   /* per texel: the smallest d, +inf if unusable */
+    signed char *stage; /* per texel: the refit that gave val (1..3), 0 if unusable */
+    mf_status status;
+} texel_job;
+
+/* d of the stored texel against a refit from the view-frame matrix `start` with options o. */
+static double texel_refit_d(const texel_job *j, int ir, int iu, const mf_ltc *ltc, double mag, const mf_mat3 *start,
+                            const mf_ltcfit_options *o, const mf_polygon *polys, mf_status *st)
+{
+    double m9[9];
+    for (int i = 0; i < 9; ++i)
+        m9[i] = start->m[i / 3][i % 3];
+    mf_ltcfit_entry e;
+    *st = mf_ltcfit_entry_fit(j->model, mf_ltc_table_alpha(j->t, ir), mf_ltc_table_cos_theta(j->t, iu), m9, o, &e);
+    if (*st != MF_OK)
+        return INFINITY;
+    mf_mat3 m;
+    for (int i = 0; i < 9; ++i)
+        m.m[i / 3][i % 3] = e.m[i];
+    mf_ltc ref;
+    if (mf_ltc_init(&ref, m) != MF_OK)
+        return INFINITY;
+    double d = mf_ltc_gate_texel_difference(ltc, mag, &ref, e.magnitude, polys, j->npoly, NULL);
+    return isnan(d) ? INFINITY : d;
+}
+
+static void texel_one(texel_job *j, int ir, int iu, mf_polygon *polys)
+{
+    size_t k = (size_t)ir + (size_t)j->nr * (size_t)iu;
+    mf_ltc ltc, prev;
+    double mag, pmag;
+    j->val[k] = INFINITY;
+    j->stage[k] = 0;
+    if (mf_ltc_gate_texel(j->t, ir, iu, &ltc, &mag) != MF_OK)
+        return;
+    mf_ltc_gate_texel_polygons(j->t, j->model, j->seed, ir, iu, j->npoly, polys);
+    mf_status st;
+    double d = texel_refit_d(j, ir, iu, &ltc, mag, &ltc.m, &j->quick, polys, &st);
+    int stage = 1;
+    if (st == MF_ERR_ALLOC)
+        j->status = MF_ERR_ALLOC;
+    if (d > MF_LTC_GATE_TEXEL_REL) {
+        double d2 = texel_refit_d(j, ir, iu, &ltc, mag, &ltc.m, &j->full, polys, &st);
+        if (d2 < d)
+            d = d2, stage = 2;
+    }
+    if (d > MF_LTC_GATE_TEXEL_REL && iu > 0 && mf_ltc_gate_texel(j->t, ir, iu - 1, &prev, &pmag) == MF_OK) {
+        double d3 = texel_refit_d(j, ir, iu, &ltc, mag, &prev.m, &j->full, polys, &st);
+        if (d3 < d)
+            d = d3, stage = 3;
+    }
+    j->val[k] = d;
+    j->stage[k] = isfinite(d) ? (signed char)stage : 0;
+}
+
+typedef struct texel_worker_arg {
+    texel_job *j;
+    int id;
+} texel_worker_arg;
+
+static void *texel_worker(void *arg)
+{
+    texel_worker_arg *a = arg;
+    texel_job *j = a->j;
+    mf_polygon polys[MF_LTC_GATE_TEXEL_POLYGONS];
+    /* texel k goes to worker k mod threads: each texel is computed alone, so the values do not
+     * depend on the thread count */
+    for (long k = a->id; k < (long)j->nr * j->nu; k += j->threads)
+        texel_one(j, (int)(k % j->nr), (int)(k / j->nr), polys);
+    return NULL;
+}
+
+mf_status mf_ltc_bake_texel_check(const mf_table *t, const mf_brdf_model *model, const mf_ltcfit_options *fit,
+                                  uint64_t gate_seed, int threads, mf_check *c)
+{
+    if (!c || !model || !fit || threads < 1 || !mf_ltc_gate_layout_ok(t, NULL, 0))
+        return MF_ERR_DOMAIN;
+    mf_check_begin(c, "ltc_texel_refit",
+                   "max over texels of the shading difference d from a fresh fit of the texel (gate polygons)",
+                   MF_LTC_GATE_TEXEL_REL);
+    texel_job j;
+    memset(&j, 0, sizeof j);
+    j.t = t;
+    j.model = model;
+    j.seed = gate_seed;
+    j.nr = (int)t->axes[0].size;
+    j.nu = (int)t->axes[1].size;
+    j.npoly = MF_LTC_GATE_TEXEL_POLYGONS;
+    j.threads = threads > 256 ? 256 : threads;
+    j.full = *fit;
+    j.full.threads = 1;
+    j.full.checkpoint = NULL;
+    j.full.resume = 0;
+    j.full.cancel = NULL;
+    j.full.progress = NULL;
+    j.quick = j.full;
+    j.quick.samples = fit->samples / 4 >= 64 ? fit->samples / 4 : 64;
+    j.quick.max_iterations = TEXEL_CHECK_STEPS < fit->max_iterations ? TEXEL_CHECK_STEPS : fit->max_iterations;
+    j.status = MF_OK;
+    size_t n = (size_t)j.nr * (size_t)j.nu;
+    j.val = malloc(sizeof *j.val * n);
+    j.stage = malloc(n);
+    pthread_t tid[256];
+    texel_worker_arg args[256];
+    if (!j.val || !j.stage) {
+        free(j.val);
+        free(j.stage);
+        mf_check_fail(c, "out of memory");
+        return MF_ERR_ALLOC;
+    }
+    int started[256] = {0};
+    for (int i = 0; i < j.threads; ++i) {
+        args[i].j = &j;
+        args[i].id = i;
+        if (i > 0)
+            started[i] = pthread_create(&tid[i], NULL, texel_worker, &args[i]) == 0;
+    }
+    texel_worker(&args[0]);
+    for (int i = 1; i < j.threads; ++i) {
+        if (started[i])
+            pthread_join(tid[i], NULL);
+        else
+            texel_worker(&args[i]); /* no thread: this worker's texels run here */
+    }
+    long staged[4] = {0, 0, 0, 0};
+    for (size_t k = 0; k < n; ++k) {
+        int ir = (int)(k % (size_t)j.nr), iu = (int)(k / (size_t)j.nr);
+        ++staged[j.stage[k] >= 0 && j.stage[k] <= 3 ? j.stage[k] : 0];
+        mf_check_recordf(c, j.val[k], "%s (ir %d, iu %d: alpha %.4g, theta %.2f deg)",
+                         j.stage[k] ? "shading vs refit" : "texel cannot be unpacked or refitted", ir, iu,
+                         mf_ltc_table_alpha(t, ir), acos(mf_ltc_table_cos_theta(t, iu)) * 180.0 / MF_PI);
+    }
+    snprintf(c->what, sizeof c->what,
+             "max over texels of min over refits of d (gate polygons, > 0.02 albedo); refits 1/2/3: %ld/%ld/%ld",
+             staged[1], staged[2], staged[3]);
+    mf_check_finish(c);
+    free(j.val);
+    free(j.stage);
+    if (j.status != MF_OK) {
+        mf_check_fail(c, "out of memory");
+        return j.status;
+    }
+    return MF_OK;
 }
 
 /* ---- the gate report (JSON) ------------------------------------------------------------------
@@ -210,9 +384,10 @@ mf_status mf_ltc_bake(const mf_ltc_bake_options *o, mf_ltc_bake_report *r)
         remove(r->checkpoint); /* a fresh fit never mixes with an old checkpoint */
 
     mf_table t;
-    double t0 = now_seconds();
+    double t0 = now_seconds(), f0 = cpu_seconds();
     st = mf_ltcfit_table(o->model, &fo, &t, &r->fit, msg, sizeof msg);
     r->fit_seconds = now_seconds() - t0;
+    r->fit_cpu_seconds = cpu_seconds() - f0;
     if (st != MF_OK) {
         set_msg(r, "%s%s%s", mf_status_str(st), msg[0] ? ": " : "", msg);
         return st;
@@ -229,10 +404,29 @@ mf_status mf_ltc_bake(const mf_ltc_bake_options *o, mf_ltc_bake_report *r)
     mf_ltc_gate_options_default(&go);
     go.seed = fo.seed;
     go.threads = fo.threads;
+    /* The texel check below compares every texel with a fresh fit; the polygon checks against the
+     * BRDF stay as the model's cross-check on 16 x 16 texels, with 16384 samples instead of
+     * 65536 (their bound subtracts 5.5 standard errors, so fewer samples make them more lenient,
+     * never a false alarm): 0.7 s of CPU instead of 2.8 s on the default table. */
+    go.mc_samples = MF_LTC_BAKE_GATE_MC_SAMPLES;
     t0 = now_seconds();
+    double c0 = cpu_seconds();
     mf_status gs = mf_ltc_gate_run(&t, o->model, &go, r->checks, (int)(sizeof r->checks / sizeof r->checks[0]),
                                    &r->nchecks);
+    if (gs == MF_OK || gs == MF_ERR_CHECK_FAILED) {
+        /* the texel check: every texel against a fresh fit of it (mf_ltc_bake_texel_check) */
+        mf_check *tc = &r->checks[r->nchecks];
+        mf_status ts = mf_ltc_bake_texel_check(&t, o->model, &fo, go.seed, fo.threads, tc);
+        if (ts != MF_OK)
+            gs = ts;
+        else {
+            ++r->nchecks;
+            if (!tc->passed)
+                gs = MF_ERR_CHECK_FAILED;
+        }
+    }
     r->gate_seconds = now_seconds() - t0;
+    r->gate_cpu_seconds = cpu_seconds() - c0;
     if (gs != MF_OK && gs != MF_ERR_CHECK_FAILED) {
         mf_table_free(&t);
         set_msg(r, "gate: %s", mf_status_str(gs));
@@ -247,12 +441,14 @@ mf_status mf_ltc_bake(const mf_ltc_bake_options *o, mf_ltc_bake_report *r)
 
     r->stage = MF_LTC_BAKE_STAGE_EXPORT;
     t0 = now_seconds();
+    double e0 = cpu_seconds();
     st = mf_table_set_meta(&t, "validated", r->gate_passed ? "true" : "false");
     if (st != MF_OK)
         set_msg(r, "metadata: %s", mf_status_str(st));
     else
         st = export_all(o, &t, r);
     r->export_seconds = now_seconds() - t0;
+    r->export_cpu_seconds = cpu_seconds() - e0;
     mf_table_free(&t);
     if (st != MF_OK)
         return st;

@@ -68,9 +68,25 @@ typedef struct {
     char files[MF_LTC_BAKE_MAX_FILES][MF_LTC_BAKE_PATH_LEN];
     double fit_seconds, gate_seconds, export_seconds; /* wall clock, not written to any file */
     char message[1024];                   /* the reason of a failure (empty on success) */
+    double fit_cpu_seconds, gate_cpu_seconds, export_cpu_seconds; /* process CPU time (all threads) */
 } mf_ltc_bake_report;
 
 void mf_ltc_bake_options_default(mf_ltc_bake_options *o);
+
+/* The texel check "ltc_texel_refit" (docs/validation.md, "The texel check"), which the pipeline
+ * runs after mf_ltc_gate_run: every texel of the isotropic LTC table t is compared with a fresh
+ * fit of that texel by the fitter `fit` describes (its seed, samples, iterations), on the texel's
+ * gate polygons (mf_ltc_gate_texel_polygons with gate_seed), by d of mf_ltc_gate.h; the texel
+ * fails when d > MF_LTC_GATE_TEXEL_REL for every fresh fit tried:
+ *   1. warm-started from the stored texel, fit->samples / 4 directions, 3 solver steps;
+ *   2. (only if 1 failed) the same with fit->samples directions and fit->max_iterations steps;
+ *   3. (only if 2 failed, iu > 0) started from the stored texel before it along the view axis,
+ *      as the table's fitter starts it (where the fit is not unique, this is the fit's own branch).
+ * Writes one check into *c (value per texel: the smallest d; +inf for a texel that cannot be
+ * unpacked or refitted).  `threads` (>= 1) workers share the texels; the result does not depend on
+ * it.  MF_ERR_DOMAIN (bad table layout or arguments), MF_ERR_ALLOC. */
+mf_status mf_ltc_bake_texel_check(const mf_table *t, const mf_brdf_model *model, const mf_ltcfit_options *fit,
+                                  uint64_t gate_seed, int threads, mf_check *c) MF_WARN_UNUSED;
 
 /* Runs the pipeline.  Returns MF_OK when the files were written (with force also after a gate
  * failure: report->gate_passed says which), MF_ERR_CHECK_FAILED when the gate failed and nothing
