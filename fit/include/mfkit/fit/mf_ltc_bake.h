@@ -79,8 +79,9 @@ void mf_ltc_bake_options_default(mf_ltc_bake_options *o);
  * gate polygons (mf_ltc_gate_texel_polygons with gate_seed), by d of mf_ltc_gate.h; the texel
  * fails when d > MF_LTC_GATE_TEXEL_REL for every fresh fit tried:
  *   1. warm-started from the stored texel, fit->samples / 4 directions, 3 solver steps;
- *   2. (only if 1 failed) the same with fit->samples directions and fit->max_iterations steps;
- *   3. (only if 2 failed, iu > 0) started from the stored texel before it along the view axis,
+ *   2. (only if d > MF_LTC_GATE_TEXEL_REL / 2 so far) the same with fit->samples directions and
+ *      fit->max_iterations steps;
+ *   3. (only if d > MF_LTC_GATE_TEXEL_REL / 2 so far, iu > 0) started from the stored texel before it along the view axis,
  *      as the table's fitter starts it (where the fit is not unique, this is the fit's own branch).
  * Writes one check into *c (value per texel: the smallest d; +inf for a texel that cannot be
  * unpacked or refitted).  `threads` (>= 1) workers share the texels; the result does not depend on
