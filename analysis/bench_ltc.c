@@ -21,6 +21,9 @@
  *     per entry (each one objective + Jacobian evaluation), worst residual, unconverged entries;
  *   - with --bake DIR: `mfkit fit ltc` as a whole (mf_ltc_bake into DIR: fit, gate, export), wall
  *     and CPU time of each stage and the gate's checks;
+ *   - with --power N: the texel check's power on the first TABLE (a table fitted by mfkit with
+ *     --seed S: the check refits its texels): N single-texel corruptions, the fraction flagged per
+ *     band of the true difference (power_study below);
  *   - with --reference-fit: the reference fitter re-implemented below (Nelder-Mead, one thread;
  *     GGX), its wall and CPU time, and with --bake the speed-up of mf_ltc_bake over it (wall and
  *     CPU; the CPU ratio is the one that a loaded machine does not distort); its table joins the
@@ -337,16 +340,80 @@ static mf_status reference_fit(int n, mf_table *t)
     return MF_OK;
 }
 
+/* The texel check's power on the table t (fitted with the default options and `seed`): n
+ * single-texel corruptions (PCG32(seed, 0x706f776572)): a random texel, a random minv field
+ * v -> v + delta max(|v|, 0.1), delta = +-{0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1} (log-uniform-ish,
+ * so that many land near the threshold); D = d of the corrupted texel against the stored one on
+ * its gate polygons (the truth), and the check's reading at that texel
+ * (mf_ltc_bake_texel_value).  Prints the fraction flagged (reading > 0.1) per band of D. */
+static void power_study(const mf_table *t0, const mf_brdf_model *model, uint64_t seed, int n)
+{
+    mf_ltcfit_options fo;
+    mf_ltcfit_options_default(&fo);
+    fo.seed = seed;
+    const double deltas[7] = {0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0};
+    const double edges[7] = {0.0, 0.05, 0.095, 0.105, 0.2, 0.5, INFINITY};
+    long cnt[6] = {0}, flag[6] = {0};
+    double worst_gap = 0.0;
+    mf_pcg32 rng;
+    mf_pcg32_seed(&rng, seed, 0x706f776572ULL);
+    mf_table t;
+    if (mf_table_copy(&t, t0) != MF_OK)
+        return;
+    const int nr = (int)t.axes[0].size, nu = (int)t.axes[1].size;
+    double w0 = now_wall(), c0 = now_cpu();
+    for (int k = 0; k < n; ++k) {
+        int ir = (int)(mf_pcg32_next_u32(&rng) % (uint32_t)nr), iu = (int)(mf_pcg32_next_u32(&rng) % (uint32_t)nu);
+        int fi = mf_table_field(&t, mf_ltc_table_fields[mf_pcg32_next_u32(&rng) % 4u]);
+        double delta = (mf_pcg32_next_u32(&rng) & 1u ? 1.0 : -1.0) * deltas[mf_pcg32_next_u32(&rng) % 7u];
+        int idx[2] = {ir, iu};
+        double *r = mf_table_record(&t, idx), v0 = r[fi];
+        mf_ltc a, b;
+        double ma, mb;
+        if (mf_ltc_gate_texel(t0, ir, iu, &b, &mb) != MF_OK)
+            continue;
+        r[fi] = v0 + delta * fmax(fabs(v0), 0.1);
+        double D = INFINITY;
+        if (mf_ltc_gate_texel(&t, ir, iu, &a, &ma) == MF_OK) {
+            mf_polygon polys[MF_LTC_GATE_TEXEL_POLYGONS];
+            mf_ltc_gate_texel_polygons(&t, model, seed, ir, iu, MF_LTC_GATE_TEXEL_POLYGONS, polys);
+            D = mf_ltc_gate_texel_difference(&a, ma, &b, mb, polys, MF_LTC_GATE_TEXEL_POLYGONS, NULL);
+        }
+        int refit;
+        double v = mf_ltc_bake_texel_value(&t, model, &fo, seed, ir, iu, &refit);
+        r[fi] = v0;
+        int band = 0;
+        while (band < 5 && !(D < edges[band + 1]))
+            ++band;
+        ++cnt[band];
+        flag[band] += !(v <= MF_LTC_GATE_TEXEL_REL);
+        if ((D > 0.105 && v <= MF_LTC_GATE_TEXEL_REL) || (D < 0.095 && !(v <= MF_LTC_GATE_TEXEL_REL)))
+            printf("  %s: texel (%d, %d) %s %+g: D %.4g, reading %.4g (refit %d)\n",
+                   D > 0.105 ? "missed" : "false alarm", ir, iu, t.fields[fi], delta, D, v, refit);
+        if (isfinite(D) && isfinite(v) && fabs(v - D) > worst_gap)
+            worst_gap = fabs(v - D);
+    }
+    printf("\ntexel check power, %d single-texel matrix corruptions of table '%s' (seed %llu): %.2f s wall, %.2f s CPU\n",
+           n, mf_table_get_meta(&t, "brdf") ? mf_table_get_meta(&t, "brdf") : "?", (unsigned long long)seed,
+           now_wall() - w0, now_cpu() - c0);
+    printf("  %-22s %8s %8s %8s\n", "true difference D", "cases", "flagged", "rate");
+    for (int b = 0; b < 6; ++b)
+        printf("  [%6.3f, %6.3f)       %8ld %8ld %8.3f\n", edges[b], edges[b + 1], cnt[b], flag[b],
+               cnt[b] ? (double)flag[b] / cnt[b] : NAN);
+    printf("  worst |reading - D| (finite cases): %.4f\n", worst_gap);
+    mf_table_free(&t);
+}
+
 static void usage(FILE *f)
 {
-    fprintf(f, "usage: bench_ltc [--fit] [--bake DIR] [--reference-fit] [--brdf NAME] [--threads N] [--size N]\n"
-               "                 [--seed S] [--views V] [--polygons P] [--samples N] [--csv PATH] [TABLE ...]\n");
+    fprintf(f, "usage: bench_ltc [--fit] [--bake DIR] [--reference-fit] [--power N] [--brdf NAME] [--threads N]\n"
+               "                 [--size N] [--seed S] [--views V] [--polygons P] [--samples N] [--csv PATH] [TABLE ...]\n");
 }
 
 int main(int argc, char **argv)
 {
     mf_image_set_backend(mf_image_oiio_backend()); /* EXR files */
-    int do_fit = 0, do_ref = 0, threads = 2, size = 64, nviews = 512, npoly = 16, nsamples = 32768;
+    int do_fit = 0, do_ref = 0, power_n = 0, threads = 2, size = 64, nviews = 512, npoly = 16, nsamples = 32768;
     uint64_t seed = 1;
     const char *brdf = "ggx", *csv_path = NULL, *bake_dir = NULL;
     const char *paths[MAX_TABLES];
@@ -358,6 +425,8 @@ int main(int argc, char **argv)
             do_fit = 1;
         else if (!strcmp(a, "--reference-fit"))
             do_ref = 1;
+        else if (!strcmp(a, "--power") && v)
+            power_n = atoi(v), ++i;
         else if (!strcmp(a, "--bake") && v)
             bake_dir = v, ++i;
         else if (!strcmp(a, "--brdf") && v)
@@ -488,6 +557,9 @@ int main(int argc, char **argv)
         mf_ltcfit_result_free(&fr);
         names[ntab++] = "mfkit fit (this run)";
     }
+
+    if (power_n > 0 && ntab > 0)
+        power_study(&tables[0], model, seed, power_n);
 
     /* The views, their quadrature albedo, polygons and Monte Carlo estimates: shared by every table. */
     view *views = calloc((size_t)nviews, sizeof *views);

@@ -66,6 +66,14 @@ static double cpu_seconds(void)
  * below the bound (Beckmann 32 x 32 read 0.098 at alpha 0.23, 34.5 deg when only texels above
  * the bound got them), and a corrupted one reads about the same in every refit. */
 #define TEXEL_ESCALATE (0.5 * MF_LTC_GATE_TEXEL_REL)
+/* A first refit whose residual is above 2 x its neighbours' largest (+ 0.01) is an outlier and gets
+ * the further refits; among the refits of a texel, only those within 2 x the best residual
+ * (+ 0.01) count.  Why: a refit started from a grossly wrong texel can stay stuck near it (a
+ * minv_22 set to 0 turned a GGX texel (alpha 0.82, 18 deg) into a needle lobe, and 3 steps from it gave
+ * d = 0.0001 against the corrupted texel while the fitted one differed by 1.13); a stuck refit
+ * fits the lights much worse than its neighbours do. */
+#define TEXEL_RESIDUAL_OUTLIER 2.0
+#define TEXEL_RESIDUAL_FLOOR 0.01
 #define MF_LTC_BAKE_GATE_MC_SAMPLES 16384 /* Monte Carlo samples of the gate's polygon checks (see mf_ltc_bake) */
 
 typedef struct texel_job {
@@ -74,21 +82,28 @@ typedef struct texel_job {
     mf_ltcfit_options quick, full;
     uint64_t seed;
     int nr, nu, threads, npoly;
-    double *val;   /* per texel: the smallest d, +inf if unusable */
+    int pass;       /* 1: the first refit of every texel; 2: the further refits where needed */
+    double *d1, *r1; /* per texel: d and residual of the first refit (NaN: not computed) */
+    double *val;    /* per texel: the check's value, +inf if unusable */
     signed char *stage; /* per texel: the refit that gave val (1..3), 0 if unusable */
     mf_status status;
 } texel_job;
 
-/* d of the stored texel against a refit from the view-frame matrix `start` with options o. */
-static double texel_refit_d(const texel_job *j, int ir, int iu, const mf_ltc *ltc, double mag, const mf_mat3 *start,
-                            const mf_ltcfit_options *o, const mf_polygon *polys, mf_status *st)
+/* d of the stored texel (ltc, mag) against a refit from the view-frame matrix `start` with
+ * options o, and the refit's residual (the fitter's RMS of weighted light residuals); +inf
+ * for both if the refit failed. */
+static double texel_refit_d(texel_job *j, int ir, int iu, const mf_ltc *ltc, double mag, const mf_mat3 *start,
+                            const mf_ltcfit_options *o, const mf_polygon *polys, double *residual)
 {
     double m9[9];
     for (int i = 0; i < 9; ++i)
         m9[i] = start->m[i / 3][i % 3];
     mf_ltcfit_entry e;
-    *st = mf_ltcfit_entry_fit(j->model, mf_ltc_table_alpha(j->t, ir), mf_ltc_table_cos_theta(j->t, iu), m9, o, &e);
-    if (*st != MF_OK)
+    *residual = INFINITY;
+    mf_status st = mf_ltcfit_entry_fit(j->model, mf_ltc_table_alpha(j->t, ir), mf_ltc_table_cos_theta(j->t, iu), m9, o, &e);
+    if (st == MF_ERR_ALLOC)
+        j->status = MF_ERR_ALLOC;
+    if (st != MF_OK)
         return INFINITY;
     mf_mat3 m;
     for (int i = 0; i < 9; ++i)
@@ -97,36 +112,148 @@ static double texel_refit_d(const texel_job *j, int ir, int iu, const mf_ltc *lt
     if (mf_ltc_init(&ref, m) != MF_OK)
         return INFINITY;
     double d = mf_ltc_gate_texel_difference(ltc, mag, &ref, e.magnitude, polys, j->npoly, NULL);
-    return isnan(d) ? INFINITY : d;
+    if (isnan(d) || !isfinite(e.residual))
+        return INFINITY;
+    *residual = e.residual;
+    return d;
 }
 
-static void texel_one(texel_job *j, int ir, int iu, mf_polygon *polys)
+/* Pass 1 at texel k: the first refit (from the stored texel, few directions, few steps). */
+static void texel_pass1(texel_job *j, size_t k, mf_polygon *polys)
 {
-    size_t k = (size_t)ir + (size_t)j->nr * (size_t)iu;
+    int ir = (int)(k % (size_t)j->nr), iu = (int)(k / (size_t)j->nr);
+    mf_ltc ltc;
+    double mag;
+    j->d1[k] = j->r1[k] = INFINITY;
+    if (mf_ltc_gate_texel(j->t, ir, iu, &ltc, &mag) != MF_OK)
+        return;
+    mf_ltc_gate_texel_polygons(j->t, j->model, j->seed, ir, iu, j->npoly, polys);
+    j->d1[k] = texel_refit_d(j, ir, iu, &ltc, mag, &ltc.m, &j->quick, polys, &j->r1[k]);
+}
+
+/* Pass 2 at texel k (pass 1 done at k and its neighbours): the value and the refit that gave it. */
+static void texel_pass2(texel_job *j, size_t k, mf_polygon *polys)
+{
+    int ir = (int)(k % (size_t)j->nr), iu = (int)(k / (size_t)j->nr);
     mf_ltc ltc, prev;
     double mag, pmag;
     j->val[k] = INFINITY;
     j->stage[k] = 0;
     if (mf_ltc_gate_texel(j->t, ir, iu, &ltc, &mag) != MF_OK)
         return;
+    /* the first refit's residual against its neighbours' (an outlier: the refit may be stuck
+     * near a wrong texel, see TEXEL_RESIDUAL_OUTLIER) */
+    double rn = 0.0;
+    const int nb[4][2] = {{-1, 0}, {1, 0}, {0, -1}, {0, 1}};
+    for (int n = 0; n < 4; ++n) {
+        int r2 = ir + nb[n][0], u2 = iu + nb[n][1];
+        if (r2 < 0 || u2 < 0 || r2 >= j->nr || u2 >= j->nu)
+            continue;
+        double v = j->r1[(size_t)r2 + (size_t)j->nr * (size_t)u2];
+        if (isfinite(v) && v > rn)
+            rn = v;
+    }
+    double d1 = j->d1[k], r1 = j->r1[k];
+    int outlier = !(r1 <= TEXEL_RESIDUAL_OUTLIER * rn + TEXEL_RESIDUAL_FLOOR);
+    if (!(d1 > TEXEL_ESCALATE) && !outlier) {
+        j->val[k] = d1;
+        j->stage[k] = 1;
+        return;
+    }
+    /* the further refits: from the stored texel with the fit's settings, and from the previous
+     * texel of the column as the table's fitter starts; the value is the smallest d among the
+     * refits whose residual is within TEXEL_RESIDUAL_OUTLIER of the best one (a refit stuck
+     * near a corrupted start fits worse than one that found the fitted texel) */
     mf_ltc_gate_texel_polygons(j->t, j->model, j->seed, ir, iu, j->npoly, polys);
-    mf_status st;
-    double d = texel_refit_d(j, ir, iu, &ltc, mag, &ltc.m, &j->quick, polys, &st);
-    int stage = 1;
-    if (st == MF_ERR_ALLOC)
-        j->status = MF_ERR_ALLOC;
-    if (d > TEXEL_ESCALATE) {
-        double d2 = texel_refit_d(j, ir, iu, &ltc, mag, &ltc.m, &j->full, polys, &st);
-        if (d2 < d)
-            d = d2, stage = 2;
+    double d[3] = {d1, INFINITY, INFINITY}, r[3] = {r1, INFINITY, INFINITY};
+    d[1] = texel_refit_d(j, ir, iu, &ltc, mag, &ltc.m, &j->full, polys, &r[1]);
+    if (iu > 0 && mf_ltc_gate_texel(j->t, ir, iu - 1, &prev, &pmag) == MF_OK)
+        d[2] = texel_refit_d(j, ir, iu, &ltc, mag, &prev.m, &j->full, polys, &r[2]);
+    double rbest = fmin(r[0], fmin(r[1], r[2]));
+    double v = INFINITY;
+    int best = 0;
+    for (int i = 0; i < 3; ++i)
+        if (r[i] <= TEXEL_RESIDUAL_OUTLIER * rbest + TEXEL_RESIDUAL_FLOOR && d[i] < v) {
+            v = d[i];
+            best = i + 1;
+        }
+    j->val[k] = v;
+    j->stage[k] = (signed char)(isfinite(v) ? best : 0);
+}
+
+static void texel_job_init(texel_job *j, const mf_table *t, const mf_brdf_model *model, const mf_ltcfit_options *fit,
+                           uint64_t gate_seed, int threads)
+{
+    memset(j, 0, sizeof *j);
+    j->t = t;
+    j->model = model;
+    j->seed = gate_seed;
+    j->nr = (int)t->axes[0].size;
+    j->nu = (int)t->axes[1].size;
+    j->npoly = MF_LTC_GATE_TEXEL_POLYGONS;
+    j->threads = threads > 256 ? 256 : threads;
+    j->full = *fit;
+    j->full.threads = 1;
+    j->full.checkpoint = NULL;
+    j->full.resume = 0;
+    j->full.cancel = NULL;
+    j->full.progress = NULL;
+    j->quick = j->full;
+    j->quick.samples = fit->samples / 4 >= 64 ? fit->samples / 4 : 64;
+    j->quick.max_iterations = TEXEL_CHECK_STEPS < fit->max_iterations ? TEXEL_CHECK_STEPS : fit->max_iterations;
+    j->status = MF_OK;
+}
+
+static int texel_job_alloc(texel_job *j)
+{
+    size_t n = (size_t)j->nr * (size_t)j->nu;
+    j->d1 = malloc(sizeof *j->d1 * n);
+    j->r1 = malloc(sizeof *j->r1 * n);
+    j->val = malloc(sizeof *j->val * n);
+    j->stage = malloc(n);
+    if (!j->d1 || !j->r1 || !j->val || !j->stage)
+        return 0;
+    for (size_t k = 0; k < n; ++k)
+        j->d1[k] = j->r1[k] = NAN;
+    return 1;
+}
+
+static void texel_job_free(texel_job *j)
+{
+    free(j->d1);
+    free(j->r1);
+    free(j->val);
+    free(j->stage);
+}
+
+double mf_ltc_bake_texel_value(const mf_table *t, const mf_brdf_model *model, const mf_ltcfit_options *fit,
+                               uint64_t gate_seed, int ir, int iu, int *refit)
+{
+    if (refit)
+        *refit = 0;
+    if (!model || !fit || !mf_ltc_gate_layout_ok(t, NULL, 0) || ir < 0 || iu < 0 || ir >= (int)t->axes[0].size ||
+        iu >= (int)t->axes[1].size)
+        return NAN;
+    texel_job j;
+    texel_job_init(&j, t, model, fit, gate_seed, 1);
+    if (!texel_job_alloc(&j)) {
+        texel_job_free(&j);
+        return NAN;
     }
-    if (d > TEXEL_ESCALATE && iu > 0 && mf_ltc_gate_texel(j->t, ir, iu - 1, &prev, &pmag) == MF_OK) {
-        double d3 = texel_refit_d(j, ir, iu, &ltc, mag, &prev.m, &j->full, polys, &st);
-        if (d3 < d)
-            d = d3, stage = 3;
+    mf_polygon polys[MF_LTC_GATE_TEXEL_POLYGONS];
+    const int nb[5][2] = {{0, 0}, {-1, 0}, {1, 0}, {0, -1}, {0, 1}};
+    for (int n = 0; n < 5; ++n) {
+        int r2 = ir + nb[n][0], u2 = iu + nb[n][1];
+        if (r2 >= 0 && u2 >= 0 && r2 < j.nr && u2 < j.nu)
+            texel_pass1(&j, (size_t)r2 + (size_t)j.nr * (size_t)u2, polys);
     }
-    j->val[k] = d;
-    j->stage[k] = isfinite(d) ? (signed char)stage : 0;
+    size_t k = (size_t)ir + (size_t)j.nr * (size_t)iu;
+    texel_pass2(&j, k, polys);
+    double v = j.val[k];
+    if (refit)
+        *refit = j.stage[k];
+    texel_job_free(&j);
+    return v;
 }
 
 typedef struct texel_worker_arg {
@@ -139,11 +266,36 @@ static void *texel_worker(void *arg)
     texel_worker_arg *a = arg;
     texel_job *j = a->j;
     mf_polygon polys[MF_LTC_GATE_TEXEL_POLYGONS];
-    /* texel k goes to worker k mod threads: each texel is computed alone, so the values do not
-     * depend on the thread count */
-    for (long k = a->id; k < (long)j->nr * j->nu; k += j->threads)
-        texel_one(j, (int)(k % j->nr), (int)(k / j->nr), polys);
+    /* texel k goes to worker k mod threads: each texel is computed alone (pass 2 reads pass 1's
+     * finished results), so the values do not depend on the thread count */
+    for (size_t k = (size_t)a->id; k < (size_t)j->nr * (size_t)j->nu; k += (size_t)j->threads) {
+        if (j->pass == 1)
+            texel_pass1(j, k, polys);
+        else
+            texel_pass2(j, k, polys);
+    }
     return NULL;
+}
+
+static void texel_run_pass(texel_job *j, int pass)
+{
+    pthread_t tid[256];
+    texel_worker_arg args[256];
+    int started[256] = {0};
+    j->pass = pass;
+    for (int i = 0; i < j->threads; ++i) {
+        args[i].j = j;
+        args[i].id = i;
+        if (i > 0)
+            started[i] = pthread_create(&tid[i], NULL, texel_worker, &args[i]) == 0;
+    }
+    texel_worker(&args[0]);
+    for (int i = 1; i < j->threads; ++i) {
+        if (started[i])
+            pthread_join(tid[i], NULL);
+        else
+            texel_worker(&args[i]); /* no thread: this worker's texels run here */
+    }
 }
 
 mf_status mf_ltc_bake_texel_check(const mf_table *t, const mf_brdf_model *model, const mf_ltcfit_options *fit,
@@ -155,49 +307,15 @@ mf_status mf_ltc_bake_texel_check(const mf_table *t, const mf_brdf_model *model,
                    "max over texels of the shading difference d from a fresh fit of the texel (gate polygons)",
                    MF_LTC_GATE_TEXEL_REL);
     texel_job j;
-    memset(&j, 0, sizeof j);
-    j.t = t;
-    j.model = model;
-    j.seed = gate_seed;
-    j.nr = (int)t->axes[0].size;
-    j.nu = (int)t->axes[1].size;
-    j.npoly = MF_LTC_GATE_TEXEL_POLYGONS;
-    j.threads = threads > 256 ? 256 : threads;
-    j.full = *fit;
-    j.full.threads = 1;
-    j.full.checkpoint = NULL;
-    j.full.resume = 0;
-    j.full.cancel = NULL;
-    j.full.progress = NULL;
-    j.quick = j.full;
-    j.quick.samples = fit->samples / 4 >= 64 ? fit->samples / 4 : 64;
-    j.quick.max_iterations = TEXEL_CHECK_STEPS < fit->max_iterations ? TEXEL_CHECK_STEPS : fit->max_iterations;
-    j.status = MF_OK;
-    size_t n = (size_t)j.nr * (size_t)j.nu;
-    j.val = malloc(sizeof *j.val * n);
-    j.stage = malloc(n);
-    pthread_t tid[256];
-    texel_worker_arg args[256];
-    if (!j.val || !j.stage) {
-        free(j.val);
-        free(j.stage);
+    texel_job_init(&j, t, model, fit, gate_seed, threads);
+    if (!texel_job_alloc(&j)) {
+        texel_job_free(&j);
         mf_check_fail(c, "out of memory");
         return MF_ERR_ALLOC;
     }
-    int started[256] = {0};
-    for (int i = 0; i < j.threads; ++i) {
-        args[i].j = &j;
-        args[i].id = i;
-        if (i > 0)
-            started[i] = pthread_create(&tid[i], NULL, texel_worker, &args[i]) == 0;
-    }
-    texel_worker(&args[0]);
-    for (int i = 1; i < j.threads; ++i) {
-        if (started[i])
-            pthread_join(tid[i], NULL);
-        else
-            texel_worker(&args[i]); /* no thread: this worker's texels run here */
-    }
+    texel_run_pass(&j, 1);
+    texel_run_pass(&j, 2);
+    size_t n = (size_t)j.nr * (size_t)j.nu;
     long staged[4] = {0, 0, 0, 0};
     for (size_t k = 0; k < n; ++k) {
         int ir = (int)(k % (size_t)j.nr), iu = (int)(k / (size_t)j.nr);
@@ -210,11 +328,11 @@ mf_status mf_ltc_bake_texel_check(const mf_table *t, const mf_brdf_model *model,
              "max over texels of min over refits of d (gate polygons, > 0.02 albedo); refits 1/2/3: %ld/%ld/%ld",
              staged[1], staged[2], staged[3]);
     mf_check_finish(c);
-    free(j.val);
-    free(j.stage);
-    if (j.status != MF_OK) {
+    mf_status st = j.status;
+    texel_job_free(&j);
+    if (st != MF_OK) {
         mf_check_fail(c, "out of memory");
-        return j.status;
+        return st;
     }
     return MF_OK;
 }
