@@ -506,8 +506,8 @@ int main(int argc, char **argv)
                br.fit_seconds, br.fit_cpu_seconds, br.gate_seconds, br.gate_cpu_seconds, br.export_seconds,
                br.export_cpu_seconds, bake_wall, bake_cpu);
         for (int c = 0; c < br.nchecks; ++c)
-            printf("  %-20s worst %-10.4g bound %-10.4g %s  %s\n", br.checks[c].name, br.checks[c].worst,
-                   br.checks[c].bound, br.checks[c].passed ? "pass" : "FAIL", br.checks[c].what);
+            printf("  %-20s worst %-10.4g bound %-10.4g %s  %s; worst at %s\n", br.checks[c].name, br.checks[c].worst,
+                   br.checks[c].bound, br.checks[c].passed ? "pass" : "FAIL", br.checks[c].what, br.checks[c].worst_at);
         mf_ltc_bake_report_free(&br);
         if (st != MF_OK)
             return 1;

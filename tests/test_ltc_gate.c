@@ -93,6 +93,19 @@ static void power_test(void)
     if (good_fails)
         MF_FAIL_AT("false alarm: the fitted 16 x 16 GGX table fails the gate (ltc_texel_refit worst %.4g)", tw);
 
+    /* The issue's own example: one texel's minv_00 times 1.3 in a 16 x 16 table passed the old
+     * gate, quick and full, while that texel shaded -20 % to +34 % wrong. */
+    {
+        mf_table bad13;
+        CHECK(mf_table_copy(&bad13, &good) == MF_OK);
+        int idx[2] = {5, 9};
+        mf_table_record(&bad13, idx)[MF_LTC_F_MINV_00] *= 1.3;
+        int failed = full_gate_fails(&bad13, ggx, &fo, &tf, &af, &tw);
+        printf("power: texel (5, 9) minv_00 x 1.3: gate %s, ltc_texel_refit %.4g\n", failed ? "fails" : "passes", tw);
+        CHECK(failed && tf);
+        mf_table_free(&bad13);
+    }
+
     const double dm[6] = {0.01, 0.03, 0.1, 0.2, 0.3, 1.0}, dg[4] = {5e-4, 3e-3, 1e-2, 0.1};
     const int fields[5] = {MF_LTC_F_MINV_00, MF_LTC_F_MINV_20, MF_LTC_F_MINV_02, MF_LTC_F_MINV_22, MF_LTC_F_MAGNITUDE};
     mf_pcg32 rng;

@@ -82,8 +82,9 @@ void mf_ltc_bake_options_default(mf_ltc_bake_options *o);
  *   2. where 1 gave d > MF_LTC_GATE_TEXEL_REL / 2 or a residual above 2 x its neighbours' largest
  *      + 0.01 (a refit stuck near a grossly wrong texel): the same with fit->samples directions
  *      and fit->max_iterations steps;
- *   3. in the same cases (iu > 0): started from the stored texel before it along the view axis,
- *      as the table's fitter starts it (where the fit is not unique, this is the fit's own branch).
+ *   3, 4. in the same cases (iu > 0): started from the stored texel before it along the view
+ *      axis, as stored and turned about y by the change of view angle (the table's fitter starts
+ *      from that texel; where the fit is not unique, this finds the fit's own branch).
  * The value is the smallest d among the refits whose residual is within 2 x the best + 0.01.
  * Writes one check into *c (+inf for a texel that cannot be unpacked or refitted).  `threads`
  * (>= 1) workers share the texels; the result does not depend on it.  MF_ERR_DOMAIN (bad table
@@ -92,7 +93,7 @@ mf_status mf_ltc_bake_texel_check(const mf_table *t, const mf_brdf_model *model,
                                   uint64_t gate_seed, int threads, mf_check *c) MF_WARN_UNUSED;
 /* The value of that check at one texel (ir, iu): the smallest d of the refits tried (+inf for a
  * texel that cannot be unpacked or refitted, NaN for bad arguments); *refit (may be NULL) gets the
- * refit (1..3) that gave it, 0 if none.  For studies of the check's power (analysis/bench_ltc). */
+ * refit (1..4) that gave it, 0 if none.  For studies of the check's power (analysis/bench_ltc). */
 double mf_ltc_bake_texel_value(const mf_table *t, const mf_brdf_model *model, const mf_ltcfit_options *fit,
                                uint64_t gate_seed, int ir, int iu, int *refit);
 
