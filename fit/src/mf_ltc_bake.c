@@ -54,7 +54,7 @@ static double cpu_seconds(void)
  * Why a fresh fit and not the BRDF: a good table's own error against the BRDF exceeds 10 % at
  * many texels (its shape family cannot follow the BRDF), so no bound on that error both passes a
  * good table and catches a texel changed by 10 %; the issue's "10 % from the fitted texel" needs
- * the fitted texel, which only the fitter can recompute.  Why three starts: a refit from the
+ * the fitted texel, which only the fitter can recompute.  Why several starts: a refit from the
  * stored texel converges to the same texel within 1 % at 98.5 % of the default table's texels
  * (measured, 4096 samples), but where the objective is flat (grazing views of low roughness)
  * the table's fitter keeps its texel near the previous texel of the column (its proximal terms)
@@ -66,12 +66,12 @@ static double cpu_seconds(void)
  * below the bound (Beckmann 32 x 32 read 0.098 at alpha 0.23, 34.5 deg when only texels above
  * the bound got them), and a corrupted one reads about the same in every refit. */
 #define TEXEL_ESCALATE (0.5 * MF_LTC_GATE_TEXEL_REL)
-/* A first refit whose residual is above 2 x its neighbours' largest (+ 0.01) is an outlier and gets
- * the further refits; among the refits of a texel, only those within 2 x the best residual
- * (+ 0.01) count.  Why: a refit started from a grossly wrong texel can stay stuck near it (a
- * minv_22 set to 0 turned a GGX texel (alpha 0.82, 18 deg) into a needle lobe, and 3 steps from it gave
- * d = 0.0001 against the corrupted texel while the fitted one differed by 1.13); a stuck refit
- * fits the lights much worse than its neighbours do. */
+/* A first refit whose residual is above 2 x its neighbours' largest (+ 0.01) is an outlier and
+ * gets the further refits; among the refits of a texel, only those within 2 x the best residual
+ * (+ 0.01) count.  Why: a refit started from a grossly wrong texel can stay stuck near it
+ * (minv_22 set to 0 turned a GGX texel, alpha 0.82, 18 deg, into a needle lobe; 3 steps from it
+ * gave d = 0.0001 against the corrupted texel, which differed from the fitted one by 1.13); a
+ * stuck refit fits the lights much worse than its neighbours' refits do. */
 #define TEXEL_RESIDUAL_OUTLIER 2.0
 #define TEXEL_RESIDUAL_FLOOR 0.01
 #define MF_LTC_BAKE_GATE_MC_SAMPLES 16384 /* Monte Carlo samples of the gate's polygon checks (see mf_ltc_bake) */

@@ -27,6 +27,9 @@
  *   ltc_polygon_entry   the same mean per texel, worst texel <= budget                 (model)
  * where LTC = magnitude * mf_ltc_integrate_polygon (clipped after the transform, one-sided) and
  * MC the Monte Carlo integral of f cos over the polygon (the model's sampler, its weights).
+ * The fit side adds one check that needs the fitter (mf_ltc_bake_texel_check, run by
+ * `mfkit fit ltc`): ltc_texel_refit, every texel against a fresh fit of it, with the building
+ * blocks at the end of this header.
  *
  * Deterministic: every random number comes from PCG32 streams keyed by (seed, texel, purpose),
  * so a result depends on the seed only (the gate is single-threaded; `threads` is accepted for
