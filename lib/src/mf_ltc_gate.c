@@ -848,3 +848,52 @@ mf_status mf_ltc_gate_run(const mf_table *t, const mf_brdf_model *model, const m
     }
     return st;
 }
+
+/* ---- the texel check's building blocks (mf_ltc_gate.h; the fit side runs the check) ---------- */
+
+void mf_ltc_gate_texel_polygons(const mf_table *t, const mf_brdf_model *model, uint64_t seed, int ir, int iu, int n,
+                                mf_polygon *out)
+{
+    size_t texel = (size_t)ir + (size_t)t->axes[0].size * (size_t)iu;
+    mf_ltc_gate_random_polygons(model, mf_ltc_table_alpha(t, ir), mf_ltc_gate_view(mf_ltc_table_cos_theta(t, iu)),
+                                seed, stream_id(STREAM_POLY, texel), n, out);
+}
+
+mf_status mf_ltc_gate_texel(const mf_table *t, int ir, int iu, mf_ltc *ltc, double *magnitude)
+{
+    gate_layout L;
+    if (!ltc || !magnitude || !layout_of(t, &L) || ir < 0 || iu < 0 || ir >= L.nr || iu >= L.nu)
+        return MF_ERR_DOMAIN;
+    double mag = rec(t, ir, iu)[L.f[MF_LTC_F_MAGNITUDE]];
+    if (!isfinite(mag) || !unpack_at(t, &L, ir, iu, ltc))
+        return MF_ERR_DOMAIN;
+    *magnitude = mag;
+    return MF_OK;
+}
+
+double mf_ltc_gate_texel_difference(const mf_ltc *ltc, double magnitude, const mf_ltc *ref, double ref_magnitude,
+                                    const mf_polygon *p, int n, int *worst)
+{
+    const double floor = MF_LTC_GATE_TEXEL_FLOOR * ref_magnitude;
+    double d = 0.0;
+    int at = -1;
+    for (int i = 0; i < n; ++i) {
+        double s = magnitude * mf_ltc_integrate_polygon(ltc, &p[i], MF_POLYGON_ONE_SIDED);
+        double r = ref_magnitude * mf_ltc_integrate_polygon(ref, &p[i], MF_POLYGON_ONE_SIDED);
+        if (isnan(s) || isnan(r)) {
+            if (worst)
+                *worst = i;
+            return NAN;
+        }
+        if (!(s > floor) && !(r > floor))
+            continue;
+        double v = fabs(s - r) / (r > floor ? r : floor);
+        if (v > d || at < 0) {
+            d = v;
+            at = i;
+        }
+    }
+    if (worst)
+        *worst = at;
+    return d;
+}

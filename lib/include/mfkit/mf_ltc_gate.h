@@ -27,6 +27,9 @@
  *   ltc_polygon_entry   the same mean per texel, worst texel <= budget                 (model)
  * where LTC = magnitude * mf_ltc_integrate_polygon (clipped after the transform, one-sided) and
  * MC the Monte Carlo integral of f cos over the polygon (the model's sampler, its weights).
+ * The fit side adds one check that needs the fitter (mf_ltc_bake_texel_check, run by
+ * `mfkit fit ltc`): ltc_texel_refit, every texel against a fresh fit of it, with the building
+ * blocks at the end of this header.
  *
  * Deterministic: every random number comes from PCG32 streams keyed by (seed, texel, purpose),
  * so a result depends on the seed only (the gate is single-threaded; `threads` is accepted for
@@ -128,6 +131,33 @@ void mf_ltc_gate_random_polygons_params(const mf_brdf_model *model, const mf_brd
 mf_status mf_ltc_gate_polygon_mc_params(const mf_brdf_model *model, const mf_brdf_params *prm, mf_vec3 wo,
                                         const mf_polygon *p, int n, int nsamples, uint64_t seed, uint64_t stream,
                                         double *val, double *se, mf_result *albedo) MF_WARN_UNUSED;
+
+/* ---- the texel check (one texel against a fresh fit of it; the fit side runs it) -------------
+ * A texel "shades a light differently" from a reference texel (a fresh fit of the same texel) by
+ *   d = max over the polygons P with max(s, r) > 0.02 A of |s - r| / max(r, 0.02 A),
+ *   s = magnitude * E(P; stored LTC),  r = ref_magnitude * E(P; reference LTC),
+ * E the LTC polygon integral (mf_ltc_integrate_polygon, one-sided), A = ref_magnitude (the albedo).
+ * The issue's definition of a bad texel is d > 0.1 on the texel's gate polygons
+ * (mf_ltc_gate_texel_polygons); docs/validation.md ("The texel check") says how the fit side gets
+ * the reference texel and why. */
+#define MF_LTC_GATE_TEXEL_REL 0.10   /* a texel fails when d > 0.1 */
+#define MF_LTC_GATE_TEXEL_FLOOR 0.02 /* polygons shaded below 0.02 albedo by both texels do not count */
+#define MF_LTC_GATE_TEXEL_POLYGONS 24 /* the polygon checks' default count per texel */
+
+/* The n gate polygons of texel (ir, iu) of t for the given seed: the polygons the polygon checks
+ * use at that texel (mf_ltc_gate_random_polygons with the texel's stream), for any texel. */
+void mf_ltc_gate_texel_polygons(const mf_table *t, const mf_brdf_model *model, uint64_t seed, int ir, int iu, int n,
+                                mf_polygon *out);
+
+/* The stored LTC and magnitude of texel (ir, iu) of an LTC table t (layout as mf_ltc_gate_run).
+ * MF_ERR_DOMAIN for a non-finite field, a matrix that cannot be unpacked or a bad layout/index. */
+mf_status mf_ltc_gate_texel(const mf_table *t, int ir, int iu, mf_ltc *ltc, double *magnitude) MF_WARN_UNUSED;
+
+/* d above for the stored texel (ltc, magnitude) against the reference (ref, ref_magnitude) over
+ * p[0..n-1]; *worst (may be NULL) gets the index of the polygon that gave d (-1 if no polygon
+ * counted: d = 0).  NaN if an integral is NaN. */
+double mf_ltc_gate_texel_difference(const mf_ltc *ltc, double magnitude, const mf_ltc *ref, double ref_magnitude,
+                                    const mf_polygon *p, int n, int *worst);
 
 #ifdef __cplusplus
 }

@@ -68,9 +68,34 @@ typedef struct {
     char files[MF_LTC_BAKE_MAX_FILES][MF_LTC_BAKE_PATH_LEN];
     double fit_seconds, gate_seconds, export_seconds; /* wall clock, not written to any file */
     char message[1024];                   /* the reason of a failure (empty on success) */
+    double fit_cpu_seconds, gate_cpu_seconds, export_cpu_seconds; /* process CPU time (all threads) */
 } mf_ltc_bake_report;
 
 void mf_ltc_bake_options_default(mf_ltc_bake_options *o);
+
+/* The texel check "ltc_texel_refit" (docs/validation.md, "The texel check"), which the pipeline
+ * runs after mf_ltc_gate_run: every texel of the isotropic LTC table t is compared with a fresh
+ * fit of that texel by the fitter `fit` describes (its seed, samples, iterations), on the texel's
+ * gate polygons (mf_ltc_gate_texel_polygons with gate_seed), by d of mf_ltc_gate.h; the texel
+ * fails when d > MF_LTC_GATE_TEXEL_REL.  The fresh fits (mf_ltcfit_entry_fit):
+ *   1. warm-started from the stored texel, fit->samples / 4 directions, 3 solver steps;
+ *   2. where 1 gave d > MF_LTC_GATE_TEXEL_REL / 2 or a residual above 2 x its neighbours' largest
+ *      + 0.01 (a refit stuck near a grossly wrong texel): the same with fit->samples directions
+ *      and fit->max_iterations steps;
+ *   3, 4. in the same cases (iu > 0): started from the stored texel before it along the view
+ *      axis, as stored and turned about y by the change of view angle (the table's fitter starts
+ *      from that texel; where the fit is not unique, this finds the fit's own branch).
+ * The value is the smallest d among the refits whose residual is within 2 x the best + 0.01.
+ * Writes one check into *c (+inf for a texel that cannot be unpacked or refitted).  `threads`
+ * (>= 1) workers share the texels; the result does not depend on it.  MF_ERR_DOMAIN (bad table
+ * layout or arguments), MF_ERR_ALLOC. */
+mf_status mf_ltc_bake_texel_check(const mf_table *t, const mf_brdf_model *model, const mf_ltcfit_options *fit,
+                                  uint64_t gate_seed, int threads, mf_check *c) MF_WARN_UNUSED;
+/* The value of that check at one texel (ir, iu): the smallest d of the refits tried (+inf for a
+ * texel that cannot be unpacked or refitted, NaN for bad arguments); *refit (may be NULL) gets the
+ * refit (1..4) that gave it, 0 if none.  For studies of the check's power (analysis/bench_ltc). */
+double mf_ltc_bake_texel_value(const mf_table *t, const mf_brdf_model *model, const mf_ltcfit_options *fit,
+                               uint64_t gate_seed, int ir, int iu, int *refit);
 
 /* Runs the pipeline.  Returns MF_OK when the files were written (with force also after a gate
  * failure: report->gate_passed says which), MF_ERR_CHECK_FAILED when the gate failed and nothing
