@@ -4,6 +4,8 @@
 #include "mfkit/fit/mf_prefilter.h"
 
 #include "mfkit/fit/mf_ltcfit_aniso.h"
+#include "mfkit/mf_ltc.h"
+#include "mfkit/mf_polygon.h"
 
 #include <math.h>
 #include <pthread.h>
@@ -307,6 +309,15 @@ mf_status mf_prefilter_mix_albedo(const mf_prefilter_mix *m, const mf_brdf_param
     if (!m || !p || !out || !(wo.z > 0.0))
         return MF_ERR_DOMAIN;
     double val = 0.0, err = 0.0;
+    if (m->kind == MF_PREFILTER_BASE_LAMBERT) {
+        /* the clamped cosine about n(q) over the geometric hemisphere: (1 + n(q).z) / 2 (the view
+         * factor of the sky hemisphere from a plane tilted by acos n.z), independent of wo */
+        for (int j = 0; j < m->n; ++j)
+            val += m->w[j] * 0.5 * (1.0 + m->rot[9 * j + 8]);
+        out->val = val;
+        out->err = 0.0;
+        return MF_OK;
+    }
     for (int j = 0; j < m->n; ++j) {
         mf_prefilter_mix one = *m; /* the one-texel mixture of component j */
         one.n = 1;
@@ -341,6 +352,7 @@ void mf_prefilter_options_default(mf_prefilter_options *o)
     o->max_iterations = 100;
     o->seed = 1;
     o->cluster_cell = MF_PREFILTER_CLUSTER_CELL;
+    o->keep_albedo = 1;
 }
 
 void mf_prefilter_options_default_diffuse(mf_prefilter_options *o)
@@ -359,7 +371,7 @@ void mf_prefilter_levels_free(mf_prefilter_level *levels, int nlevels)
     if (!levels)
         return;
     for (int l = 0; l < nlevels; ++l)
-        free(levels[l].m), free(levels[l].magnitude);
+        free(levels[l].m), free(levels[l].magnitude), free(levels[l].albedo);
     free(levels);
 }
 
@@ -581,12 +593,20 @@ static void canonical_order(double *nrm, double *w, int n, wnormal *tmp)
 
 /* ---- one footprint ---------------------------------------------------------------------------- */
 
+/* The mass of the LTC M above the horizon: the clamped cosine over the half-space (M^T z).w > 0,
+ * (1 + n.z) / 2 with n = M^T z / |M^T z| (row 2 of M). */
+static double horizon_mass(const double m[9])
+{
+    return 0.5 * (1.0 + m[8] / sqrt(m[6] * m[6] + m[7] * m[7] + m[8] * m[8]));
+}
+
 static void store(pjob *j, mf_prefilter_level *lv, size_t idx, const double m[9], const double lobe[7], double alb,
                   double err, const mf_ltcfit_aniso_entry *e, int count)
 {
     for (int i = 0; i < 9; ++i)
         lv->m[9 * idx + i] = (float)m[i];
-    lv->magnitude[idx] = (float)alb;
+    lv->albedo[idx] = (float)alb;
+    lv->magnitude[idx] = (float)(j->o->keep_albedo ? alb / fmax(horizon_mass(m), MF_PREFILTER_HORIZON_MIN) : alb);
     memcpy(j->lobes[lv->level - 1] + MF_LTCFIT_ANISO_NPARAMS * idx, lobe, sizeof(double) * MF_LTCFIT_ANISO_NPARAMS);
     if (!count)
         return;
@@ -853,8 +873,9 @@ mf_status mf_prefilter_run(const double *normals, int width, int height, const m
         size_t n = (size_t)lv[l].width * lv[l].height * nv;
         lv[l].m = malloc(sizeof(float) * 9 * n);
         lv[l].magnitude = malloc(sizeof(float) * n);
+        lv[l].albedo = malloc(sizeof(float) * n);
         lobes[l] = malloc(sizeof(double) * MF_LTCFIT_ANISO_NPARAMS * n);
-        if (!lv[l].m || !lv[l].magnitude || !lobes[l])
+        if (!lv[l].m || !lv[l].magnitude || !lv[l].albedo || !lobes[l])
             st = MF_ERR_ALLOC;
     }
     if (st == MF_OK) {
@@ -916,5 +937,167 @@ mf_status mf_prefilter_run(const double *normals, int width, int height, const m
     }
     *levels = lv;
     *nlevels = nl;
+    return MF_OK;
+}
+
+/* ---- the gate ---------------------------------------------------------------------------------- */
+
+void mf_prefilter_gate_bounds_default(mf_prefilter_gate *g)
+{
+    memset(g, 0, sizeof *g);
+    g->max_energy = MF_PREFILTER_GATE_ENERGY;
+    g->max_level = MF_PREFILTER_GATE_LEVEL;
+    g->max_view_spike = MF_PREFILTER_GATE_VIEW_SPIKE;
+    g->max_texel_spike = MF_PREFILTER_GATE_TEXEL_SPIKE;
+}
+
+/* The gate's lights, in the view-azimuth-aligned frame of view theta: quads of half-width
+ * 0.05, 0.2, 0.8 (tangent-plane units) about the mirror direction (-sin theta, 0, cos theta) and
+ * about the normal. */
+#define GATE_NLIGHTS 6
+
+static void gate_lights(double theta, mf_polygon *out)
+{
+    for (int k = 0; k < GATE_NLIGHTS; ++k) {
+        double h = 0.05 * pow(4.0, k % 3), tl = k < 3 ? theta : 0.0;
+        mf_vec3 c = mf_vec3_make(-sin(tl), 0.0, cos(tl));
+        mf_vec3 t1 = mf_vec3_make(cos(tl), 0.0, sin(tl)), t2 = mf_vec3_make(0.0, 1.0, 0.0);
+        static const double sx[4] = {-1, 1, 1, -1}, sy[4] = {-1, -1, 1, 1};
+        mf_vec3 v[4];
+        for (int i = 0; i < 4; ++i)
+            v[i] = mf_vec3_add(c, mf_vec3_add(mf_vec3_scale(t1, h * sx[i]), mf_vec3_scale(t2, h * sy[i])));
+        out[k] = mf_polygon_make(4, v);
+    }
+}
+
+/* magnitude * the LTC integral of each gate light; NAN where the matrix is not invertible. */
+static void gate_shade(const float *m9, float mag, const mf_polygon *lights, double *s)
+{
+    mf_mat3 m;
+    for (int i = 0; i < 9; ++i)
+        m.m[i / 3][i % 3] = m9[i];
+    mf_ltc ltc;
+    int ok = mf_ltc_init(&ltc, m) == MF_OK;
+    for (int k = 0; k < GATE_NLIGHTS; ++k)
+        s[k] = ok ? mag * mf_ltc_integrate_polygon(&ltc, &lights[k], MF_POLYGON_ONE_SIDED) : NAN;
+}
+
+static void gate_worst(double v, double *worst, char *where, size_t n, const char *what, int level, int row, int col,
+                       int a, int b)
+{
+    if (v > *worst) {
+        *worst = v;
+        snprintf(where, n, "%s at level %d, texel (%d, %d), view (%d, %d)", what, level, col, row, a, b);
+    }
+}
+
+mf_status mf_prefilter_gate_run(const mf_prefilter_level *levels, int nlevels, mf_prefilter_gate *g)
+{
+    if (!levels || nlevels < 1 || !g)
+        return MF_ERR_DOMAIN;
+    g->nan_entries = 0;
+    g->worst_energy = g->worst_level = g->worst_view_spike = g->worst_texel_spike = 0.0;
+    g->where_energy[0] = g->where_level[0] = g->where_view[0] = g->where_texel[0] = '\0';
+    int nt = levels[0].n_theta, np = levels[0].n_phi, nv = nt * np;
+    mf_polygon *lights = malloc(sizeof *lights * GATE_NLIGHTS * (size_t)nt);
+    double *sh = NULL;
+    if (!lights)
+        return MF_ERR_ALLOC;
+    for (int a = 0; a < nt; ++a)
+        gate_lights(a / (double)(nt - 1) * MF_PREFILTER_THETA_MAX, lights + GATE_NLIGHTS * a);
+    /* the shading of every entry of every level (levels are small next to the fits' cost) */
+    double **S = calloc((size_t)nlevels, sizeof *S);
+    mf_status st = S ? MF_OK : MF_ERR_ALLOC;
+    for (int l = 0; l < nlevels && st == MF_OK; ++l) {
+        const mf_prefilter_level *lv = &levels[l];
+        if (lv->n_theta != nt || lv->n_phi != np)
+            st = MF_ERR_DOMAIN;
+        size_t ne = (size_t)lv->width * lv->height * nv;
+        if (st == MF_OK && !(S[l] = malloc(sizeof(double) * GATE_NLIGHTS * ne)))
+            st = MF_ERR_ALLOC;
+        for (size_t e = 0; st == MF_OK && e < ne; ++e) {
+            int a = (int)(e / np % nt), b = (int)(e % np), t = (int)(e / nv);
+            const float *m = lv->m + 9 * e;
+            float mag = lv->magnitude[e];
+            int bad = !isfinite(mag) || !(mag >= 0.0f);
+            for (int i = 0; i < 9; ++i)
+                bad |= !isfinite(m[i]);
+            double n2 = (double)m[6] * m[6] + (double)m[7] * m[7] + (double)m[8] * m[8];
+            if (!bad) {
+                /* the lobe's albedo: magnitude * its mass above the horizon, (1 + n.z) / 2 with
+                 * n = M^T z / |M^T z| (the clamped cosine over the half-space (M^T z).w > 0) */
+                double frac = 0.5 * (1.0 + m[8] / sqrt(n2));
+                double alb = lv->albedo ? lv->albedo[e] : mag;
+                gate_worst(alb > 0.0 ? fabs(mag * frac / alb - 1.0) : fabs(mag * frac), &g->worst_energy, g->where_energy, sizeof g->where_energy,
+                           "energy", lv->level, t / lv->width, t % lv->width, a, b);
+            }
+            gate_shade(m, mag, lights + GATE_NLIGHTS * a, S[l] + GATE_NLIGHTS * e);
+            for (int k = 0; k < GATE_NLIGHTS; ++k)
+                bad |= !isfinite(S[l][GATE_NLIGHTS * e + k]);
+            g->nan_entries += bad;
+        }
+    }
+    for (int l = 0; l < nlevels && st == MF_OK; ++l) {
+        const mf_prefilter_level *lv = &levels[l];
+        const double *s = S[l];
+        for (int row = 0; row < lv->height; ++row)
+            for (int col = 0; col < lv->width; ++col)
+                for (int a = 0; a < nt; ++a)
+                    for (int b = 0; b < np; ++b) {
+                        size_t e = (((size_t)row * lv->width + col) * nt + a) * np + b;
+                        double alb = fmax(lv->albedo ? lv->albedo[e] : lv->magnitude[e], 1e-6);
+                        for (int k = 0; k < GATE_NLIGHTS; ++k) {
+                            double x = s[GATE_NLIGHTS * e + k];
+                            /* views: second differences along theta (interior) and phi (periodic) */
+                            if (a > 0 && a + 1 < nt) {
+                                double d = fabs(2.0 * x - s[GATE_NLIGHTS * (e - np) + k] - s[GATE_NLIGHTS * (e + np) + k]);
+                                gate_worst(0.5 * d / alb, &g->worst_view_spike, g->where_view, sizeof g->where_view,
+                                           "theta spike", lv->level, row, col, a, b);
+                            }
+                            if (np >= 3 && a > 0) {
+                                size_t em = e - b + (b + np - 1) % np, ep = e - b + (b + 1) % np;
+                                double d = fabs(2.0 * x - s[GATE_NLIGHTS * em + k] - s[GATE_NLIGHTS * ep + k]);
+                                gate_worst(0.5 * d / alb, &g->worst_view_spike, g->where_view, sizeof g->where_view,
+                                           "phi spike", lv->level, row, col, a, b);
+                            }
+                            /* texels: a lone texel above or below both neighbours along x or y */
+                            for (int ax = 0; ax < 2; ++ax) {
+                                int r0 = row - (ax == 1), r1 = row + (ax == 1), c0 = col - (ax == 0), c1 = col + (ax == 0);
+                                if (r0 < 0 || c0 < 0 || r1 >= lv->height || c1 >= lv->width)
+                                    continue;
+                                double y0 = s[GATE_NLIGHTS * ((((size_t)r0 * lv->width + c0) * nt + a) * np + b) + k];
+                                double y1 = s[GATE_NLIGHTS * ((((size_t)r1 * lv->width + c1) * nt + a) * np + b) + k];
+                                double up = fmin(x - y0, x - y1), dn = fmin(y0 - x, y1 - x);
+                                gate_worst(fmax(fmax(up, dn), 0.0) / alb, &g->worst_texel_spike, g->where_texel,
+                                           sizeof g->where_texel, "texel spike", lv->level, row, col, a, b);
+                            }
+                            /* levels: the effective BRDF of a footprint is the mean of its four
+                             * children's (equal areas), so the parent's shading is compared with
+                             * the mean of the children's */
+                            if (l > 0 && levels[l - 1].width == 2 * lv->width && levels[l - 1].height == 2 * lv->height) {
+                                const mf_prefilter_level *cl = &levels[l - 1];
+                                double m = 0.0;
+                                for (int dy = 0; dy < 2; ++dy)
+                                    for (int dx = 0; dx < 2; ++dx)
+                                        m += S[l - 1][GATE_NLIGHTS * ((((size_t)(2 * row + dy) * cl->width + 2 * col + dx) * nt + a) * np + b) + k];
+                                gate_worst(fabs(x - 0.25 * m) / alb, &g->worst_level, g->where_level, sizeof g->where_level,
+                                           "parent vs children", lv->level, row, col, a, b);
+                            }
+                        }
+                    }
+    }
+    for (int l = 0; S && l < nlevels; ++l)
+        free(S[l]);
+    free(S), free(lights), free(sh);
+    if (st != MF_OK)
+        return st;
+    g->pass_energy = g->worst_energy <= g->max_energy;
+    g->pass_nan = g->nan_entries == 0;
+    g->pass_level = g->worst_level <= g->max_level;
+    g->pass_view = g->worst_view_spike <= g->max_view_spike;
+    g->pass_texel = g->worst_texel_spike <= g->max_texel_spike;
+    /* the view and texel spikes are reported, not gated: a coarse view grid and a sharp map give
+     * genuine spikes (the V-groove's level-1 texels alternate between two tilts) */
+    g->pass = g->pass_energy && g->pass_nan && g->pass_level;
     return MF_OK;
 }

@@ -69,6 +69,7 @@ extern "C" {
 #define MF_PREFILTER_MULTISTART_COS 0.2
 /* Mirror symmetry of a footprint's normals is detected on this grid (mf_prefilter_run). */
 #define MF_PREFILTER_MIRROR_TOL 1e-9
+#define MF_PREFILTER_HORIZON_MIN 0.5
 
 /* The effective BRDF of a footprint as an mf_brdf_model: `model` is the first member, so the
  * fitters take &mix->model (its functions cast back).  eval_cos, sample (pick a texel by weight
@@ -113,6 +114,10 @@ typedef struct mf_prefilter_options {
     int samples;         /* directions per fit (mf_ltcfit_aniso_options; default 4096) */
     int max_iterations;  /* per fit (default 100) */
     uint64_t seed;       /* default 1 */
+    int keep_albedo;     /* 1 (default): magnitude = albedo / (the lobe's mass above the horizon,
+                            (1 + n.z) / 2, n = M^T z / |M^T z|; floored at MF_PREFILTER_HORIZON_MIN), so
+                            that the lobe's albedo is the effective BRDF's; 0: magnitude = albedo (the
+                            mass an LTC puts below the horizon is lost, as in the thesis) */
     double cluster_cell; /* slope-space cell of the normal clusters, in units of alpha (GGX) or of
                             MF_PREFILTER_CLUSTER_LAMBERT (default MF_PREFILTER_CLUSTER_CELL); 0: none */
 } mf_prefilter_options;
@@ -125,7 +130,10 @@ void mf_prefilter_options_default_diffuse(mf_prefilter_options *o);
 typedef struct mf_prefilter_level {
     int level, width, height, n_theta, n_phi;
     float *m;          /* (h, w, n_theta, n_phi, 3, 3): forward M, row-major */
-    float *magnitude;  /* (h, w, n_theta, n_phi): the effective BRDF's albedo */
+    float *magnitude;  /* (h, w, n_theta, n_phi): the lobe's magnitude: the effective BRDF's albedo,
+                          divided by the lobe's mass above the horizon when options.keep_albedo */
+    float *albedo;     /* (h, w, n_theta, n_phi): the effective BRDF's albedo (the exact mixture of the
+                          texels' albedos) */
     double worst_residual, worst_albedo_err;
     int not_converged;
     long iterations, lobes;
@@ -138,6 +146,44 @@ typedef struct mf_prefilter_level {
 mf_status mf_prefilter_run(const double *normals, int width, int height, const mf_prefilter_options *o,
                            mf_prefilter_level **levels, int *nlevels, char *msg, size_t msg_size) MF_WARN_UNUSED;
 void mf_prefilter_levels_free(mf_prefilter_level *levels, int nlevels);
+
+/* The gate before export (mf_prefilter_gate_run), over all levels of one table.  Lights: quads of
+ * half-width 0.05, 0.2 and 0.8 about the view's mirror direction and about the normal (aligned
+ * frame); a lobe's shading is magnitude * its LTC integral (one-sided, clipped at the horizon).
+ *   energy: the lobe's albedo, magnitude * (1 + n.z) / 2 with n = M^T z / |M^T z| (its mass above
+ *     the horizon), against the effective BRDF's albedo (the stored magnitude, the exact mixture of
+ *     the texels' albedos): worst |ratio - 1| <= max_energy (default 0.01);
+ *   nan: no non-finite matrix entry, magnitude or shading, no singular M;
+ *   level: the effective BRDF of a footprint is exactly the mean of its four children's, so
+ *     |parent shading - mean of the children's| / parent albedo <= max_level;
+ *     (bound 0.5: one LTC cannot follow a two-lobed mixture, and the V-groove's level-2 lobe
+ *     differs from the mean of its children's single lobes by up to 0.19 (3 x 4 views) and 0.33
+ *     (8 x 16 views) of the albedo; a lobe mirrored into the wrong half-space differs by more);
+ *   view (reported, pass_view, NOT part of pass): half the second difference of the shading
+ *     along theta (interior rows) and phi (periodic), / albedo, against max_view_spike;
+ *   texel (reported, pass_texel, NOT part of pass): a lone texel whose shading is above (or
+ *     below) both neighbours along x or y by more than max_texel_spike albedo.
+ * The view and texel measures have no reference: a coarse view grid or a sharp map gives genuine
+ * spikes (measured on the V-groove: view 1.8 with 4 azimuths, texel 5.3: its level-1 texels
+ * alternate between two tilts), so they cannot tell a local-minimum jump from the effective
+ * BRDF's own variation; a reference (the effective BRDF's shading of the same lights) is open. */
+#define MF_PREFILTER_GATE_ENERGY 0.01
+#define MF_PREFILTER_GATE_LEVEL 0.5
+#define MF_PREFILTER_GATE_VIEW_SPIKE 0.1
+#define MF_PREFILTER_GATE_TEXEL_SPIKE 0.25
+typedef struct mf_prefilter_gate {
+    double max_energy, max_level, max_view_spike, max_texel_spike; /* bounds (inputs) */
+    double worst_energy, worst_level, worst_view_spike, worst_texel_spike;
+    long nan_entries;
+    int pass, pass_energy, pass_nan, pass_level, pass_view, pass_texel;
+    char where_energy[128], where_level[128], where_view[128], where_texel[128];
+} mf_prefilter_gate;
+
+/* Sets the default bounds and clears the results. */
+void mf_prefilter_gate_bounds_default(mf_prefilter_gate *g);
+/* Runs every check on levels[0 .. nlevels - 1] (mf_prefilter_run's output, all with the same
+ * views) with g's bounds; MF_OK whether or not it passes (g->pass), MF_ERR_DOMAIN, MF_ERR_ALLOC. */
+mf_status mf_prefilter_gate_run(const mf_prefilter_level *levels, int nlevels, mf_prefilter_gate *g) MF_WARN_UNUSED;
 
 /* The view of table index (i_theta, i_phi). */
 double mf_prefilter_theta(const mf_prefilter_options *o, int i);
