@@ -352,7 +352,7 @@ void mf_prefilter_options_default(mf_prefilter_options *o)
     o->max_iterations = 100;
     o->seed = 1;
     o->cluster_cell = MF_PREFILTER_CLUSTER_CELL;
-    o->keep_albedo = 1;
+    o->keep_albedo = 0;
 }
 
 void mf_prefilter_options_default_diffuse(mf_prefilter_options *o)
