@@ -322,6 +322,14 @@ mf_status mf_prefilter_mix_albedo(const mf_prefilter_mix *m, const mf_brdf_param
         mf_prefilter_mix one = *m; /* the one-texel mixture of component j */
         one.n = 1;
         one.cache = NULL;
+        double c4[4];
+        if (m->kind == MF_PREFILTER_BASE_GGX && p->alpha_x == p->alpha_y) { /* the fused evaluation */
+            mf_vec3 vo = texel_view(m->rot + 9 * j, wo);
+            c4[0] = vo.x, c4[1] = vo.y, c4[2] = vo.z, c4[3] = ggx_lambda_iso(p->alpha_x * p->alpha_x, vo);
+            one.cache = c4;
+            one.cache_wo[0] = wo.x, one.cache_wo[1] = wo.y, one.cache_wo[2] = wo.z;
+            one.cache_a = p->alpha_x;
+        }
         one.rot = m->rot + 9 * j;
         double w1 = 1.0, c1 = 1.0;
         one.w = &w1;
