@@ -34,11 +34,41 @@
  * the forward LTC in that frame (a shader rotates the polygon by -phi about the normal, then
  * applies M^-1), divided by the norm of its last column (mf_ltcfit_aniso.h).
  *
+ * Fits (mf_prefilter_run).  Levels coarse to fine; per footprint:
+ *   - its normals, clustered when it has >= MF_PREFILTER_CLUSTER_MIN texels: cells of side
+ *     cluster_cell * alpha in slope space, each cell one component (the normalised sum of its
+ *     normals, weight count / N).  Measured (tests/test_prefilter.c, test_clusters, 8 x 8 map of
+ *     slopes up to 0.3): the lobes' shading of 6 quad lights moves by at most 3e-4 of the albedo
+ *     at every level; on a 16 x 16 bump map (slopes up to 0.6, 256-texel top footprint, and 1024
+ *     instead of 4096 samples per fit at the same time) mean 0.003, worst 0.021.
+ *   - mirror symmetry: a footprint whose normals (aligned frame) are, as a weighted set, invariant
+ *     under y -> -y (checked on a MF_PREFILTER_MIRROR_TOL grid) is snapped to an exactly
+ *     symmetric set and fitted with the phi = 0 zero pattern held exactly (as the anisotropic
+ *     fitter does for plain GGX): the V-groove's lobes are symmetric, and a flat map gives the
+ *     plain-GGX fit at every elevation, 89.9 deg included.
+ *   - canonical order: the components are sorted (x, y, z, weight) before the mixture is built,
+ *     so the same set gives the same quasi-random samples and the same fit (phi and phi + pi of a
+ *     V-groove agree to 1e-5; any texel order gives the same lobe).
+ *   - theta = 0 is fitted once: M_phi = R_z(-phi) M_0 R_z(phi) (the view along z does not depend
+ *     on phi; the conjugation keeps the polar gauge and the last column's norm).
+ *   - each (phi) row is a chain along theta: the previous elevation's lobe is the warm start
+ *     (with the fitter's proximal residuals), the parent level's lobe at the same view is offered
+ *     as a second start (taken where its cost is lower); rows with cos theta <
+ *     MF_PREFILTER_MULTISTART_COS get a second solve from the closed-form start, the lower
+ *     residual kept.
+ * The stored M is in the fitter's canonical gauge (one representation per lobe, the polar gauge
+ * of the upper-left block), so neighbouring texels, views and levels whose lobes are close have
+ * close matrices, which is what trilinear MIP filtering and bilinear view interpolation of M
+ * need.  Not verified: that the lobes themselves vary continuously across texels and views (the
+ * gate's view and texel measures have no reference; see mf_prefilter_gate).
+ *
  * Magnitude: the effective BRDF's albedo, exactly the mixture of the texels' albedos
  * (1/N) sum_q rho_q(wo), rho_q the integral over the geometric hemisphere of the texel's
  * cosine-weighted lobe, each by mf_model_albedo (n = MF_PREFILTER_ALBEDO_N) of the one-texel
  * mixture (the clip at the geometric horizon is a discontinuity of the integrand: its error is
- * the stored error estimate |Q(n) - Q(n/2)|).
+ * the stored error estimate |Q(n) - Q(n/2)|; measured against n = 512 for 40 normals of slope
+ * up to 0.5 and 48 views: worst 2.3e-3 at n = 128, 4.8e-3 at n = 64).  Optionally divided by the
+ * lobe's mass above the horizon (options.keep_albedo).  Lambert: (1 + n.z) / 2 per texel, exact.
  */
 #ifndef MF_PREFILTER_H
 #define MF_PREFILTER_H
