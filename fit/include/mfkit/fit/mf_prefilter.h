@@ -48,7 +48,7 @@
  *     plain-GGX fit at every elevation, 89.9 deg included.
  *   - canonical order: the components are sorted (x, y, z, weight) before the mixture is built,
  *     so the same set gives the same quasi-random samples and the same fit (phi and phi + pi of a
- *     V-groove agree to 1e-5; any texel order gives the same lobe).
+ *     V-groove agree to 1e-5; a permutation of unclustered texels gives the same mixture).
  *   - theta = 0 is fitted once: M_phi = R_z(-phi) M_0 R_z(phi) (the view along z does not depend
  *     on phi; the conjugation keeps the polar gauge and the last column's norm).
  *   - each (phi) row is a chain along theta: the previous elevation's lobe is the warm start
