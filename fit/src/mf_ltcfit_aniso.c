@@ -823,6 +823,28 @@ mf_status mf_ltcfit_aniso_entry_fit_general(const mf_brdf_model *model, mf_brdf_
     return st;
 }
 
+mf_status mf_ltcfit_aniso_entry_fit_mirrored(const mf_brdf_model *model, mf_brdf_params prm, double theta, int mirrors,
+                                             double magnitude, double magnitude_err, const double *lobe_start,
+                                             const double *alt_start, const mf_ltcfit_aniso_options *o,
+                                             mf_ltcfit_aniso_entry *out)
+{
+    if (!model || !model->eval_cos || !check_options(o) || !(prm.alpha_x > 0.0) || !(prm.alpha_y > 0.0) ||
+        !(theta >= 0.0 && theta < 0.5 * MF_PI) || !out || !(magnitude >= 0.0 && magnitude < INFINITY) ||
+        !(magnitude_err >= 0.0) || (mirrors & ~(SYM_X | SYM_Y)) || ((mirrors & SYM_X) && theta != 0.0))
+        return MF_ERR_DOMAIN;
+    workspace ws;
+    if (!ws_init(&ws, o->samples)) {
+        ws_free(&ws);
+        return MF_ERR_ALLOC;
+    }
+    uint32_t scr[2];
+    sobol_scramble(o->seed, scr);
+    double mag[2] = {magnitude, magnitude_err};
+    mf_status st = fit_entry(model, prm, theta, 0.0, mirrors, FAMILY_SHAPED, mag, lobe_start, alt_start, o, scr, &ws, out);
+    ws_free(&ws);
+    return st;
+}
+
 /* ---- the table: (alpha_x, alpha_y) jobs over threads ------------------------------------------ */
 
 typedef struct {

@@ -4,9 +4,12 @@
 #include "mfkit/fit/mf_prefilter.h"
 
 #include "mfkit/fit/mf_ltcfit_aniso.h"
+#include "mfkit/mf_ltc.h"
+#include "mfkit/mf_polygon.h"
 
 #include <math.h>
 #include <pthread.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -41,16 +44,71 @@ static mf_vec3 texel_view(const double *r, mf_vec3 wo)
     return mf_vec3_make(v.x / h * s, v.y / h * s, MF_PREFILTER_COS_MIN);
 }
 
+/* Isotropic GGX in closed form (the "ggx" model's formulas, mf_model_ggx.c: f = D G2 / (4 wo.z wi.z),
+ * height-correlated G2 [Heitz 2014], density G1(wo) D(h) / (4 wo.z) [Heitz 2018; Walter 2007,
+ * Eq. 14]), f cos and density sharing D(h) and Lambda(wo) -- one component of the mixture. */
+static double ggx_lambda_iso(double a2, mf_vec3 w)
+{
+    double t = a2 * (w.x * w.x + w.y * w.y) / (w.z * w.z);
+    return 0.5 * t / (1.0 + sqrt(1.0 + t));
+}
+
+static void ggx_fpdf(double a2, mf_vec3 vo, double lo, mf_vec3 vi, double *f, double *pdf)
+{
+    *f = *pdf = 0.0;
+    if (!(vi.z > 0.0))
+        return;
+    mf_vec3 h = mf_vec3_add(vo, vi);
+    double s2 = h.x * h.x + h.y * h.y, z2 = h.z * h.z;
+    double den = a2 * z2 + s2, l2 = s2 + z2;
+    double d = a2 * l2 * l2 / (MF_PI * den * den);
+    double q = 1.0 / (4.0 * vo.z);
+    *f = d / (1.0 + lo + ggx_lambda_iso(a2, vi)) * q;
+    if (h.z > 0.0 && mf_vec3_dot(vo, h) > 0.0)
+        *pdf = d / (1.0 + lo) * q;
+}
+
+/* Per view, per component: the texel-frame view and Lambda there (mix_set_view). */
+static const double *view_cache(const mf_prefilter_mix *x, const mf_brdf_params *p, mf_vec3 wo)
+{
+    if (x->cache && x->cache_wo[0] == wo.x && x->cache_wo[1] == wo.y && x->cache_wo[2] == wo.z &&
+        x->cache_a == p->alpha_x && p->alpha_x == p->alpha_y)
+        return x->cache;
+    return NULL;
+}
+
 /* f cos and pdf of the mixture at (wo, wi), wo.z > 0 and wi.z > 0 (one pass over the components). */
 static void mix_eval_pdf(const mf_prefilter_mix *x, const mf_brdf_params *p, mf_vec3 wo, mf_vec3 wi, double *f,
                          double *pdf)
 {
     double sf = 0.0, sp = 0.0;
-    for (int j = 0; j < x->n; ++j) {
-        const double *r = x->rot + 9 * j;
-        mf_vec3 vo = texel_view(r, wo), vi = rot_t(r, wi);
-        sf += x->w[j] * x->base->eval_cos(x->base, p, vo, vi);
-        sp += x->w[j] * x->base->pdf(x->base, p, vo, vi);
+    if (x->kind == MF_PREFILTER_BASE_LAMBERT) {
+        for (int j = 0; j < x->n; ++j) {
+            const double *r = x->rot + 9 * j;
+            double c = r[2] * wi.x + r[5] * wi.y + r[8] * wi.z; /* n(q) . wi */
+            if (c > 0.0)
+                sf += x->w[j] * c;
+        }
+        *f = *pdf = sf * MF_INV_PI;
+        return;
+    }
+    const double *vc = x->kind == MF_PREFILTER_BASE_GGX ? view_cache(x, p, wo) : NULL;
+    if (vc) {
+        double a2 = p->alpha_x * p->alpha_x;
+        for (int j = 0; j < x->n; ++j) {
+            const double *r = x->rot + 9 * j, *c = vc + 4 * j;
+            double fj, pj;
+            ggx_fpdf(a2, mf_vec3_make(c[0], c[1], c[2]), c[3], rot_t(r, wi), &fj, &pj);
+            sf += x->w[j] * fj;
+            sp += x->w[j] * pj;
+        }
+    } else {
+        for (int j = 0; j < x->n; ++j) {
+            const double *r = x->rot + 9 * j;
+            mf_vec3 vo = texel_view(r, wo), vi = rot_t(r, wi);
+            sf += x->w[j] * x->base->eval_cos(x->base, p, vo, vi);
+            sp += x->w[j] * x->base->pdf(x->base, p, vo, vi);
+        }
     }
     *f = sf;
     *pdf = sp;
@@ -93,6 +151,12 @@ static mf_vec3 mix_sample_texel(const mf_prefilter_mix *x, const mf_brdf_params 
     double v[2] = {(u[0] - c0) / x->w[lo], u[1]};
     v[0] = fmin(fmax(v[0], 0.0), nextafter(1.0, 0.0));
     const double *r = x->rot + 9 * lo;
+    if (x->kind == MF_PREFILTER_BASE_LAMBERT) { /* the cosine about n(q) (Malley) */
+        double rr = sqrt(v[0]), ph = 2.0 * MF_PI * v[1];
+        double z = sqrt(fmax(0.0, 1.0 - v[0]));
+        *base_pdf = z * MF_INV_PI;
+        return rot_apply(r, mf_vec3_make(rr * cos(ph), rr * sin(ph), z));
+    }
     mf_vec3 wi_t = x->base->sample(x->base, p, texel_view(r, wo), v, base_pdf);
     return rot_apply(r, wi_t);
 }
@@ -144,26 +208,36 @@ static void min_rotation(const double *n, double *r)
     r[6] = -ky, r[7] = kx, r[8] = n[2];
 }
 
-mf_status mf_prefilter_mix_init(mf_prefilter_mix *m, const mf_brdf_model *base, const double *normals, int count)
+/* The mixture of `count` unit normals with weights wt (NULL: 1/count each; else positive, summing
+ * to 1), bitwise equal normals merged. */
+static mf_status mix_build(mf_prefilter_mix *m, const mf_brdf_model *base, const double *normals, const double *wt,
+                           int count)
 {
     if (!m)
         return MF_ERR_DOMAIN;
     memset(m, 0, sizeof *m);
-    if (!base || !base->sample || !base->pdf || !base->eval_cos || !normals || count < 1)
+    if (!base || !base->eval_cos || !normals || count < 1)
+        return MF_ERR_DOMAIN;
+    int kind = !strcmp(base->name, "ggx") ? MF_PREFILTER_BASE_GGX
+               : !strcmp(base->name, "lambert") ? MF_PREFILTER_BASE_LAMBERT : MF_PREFILTER_BASE_OTHER;
+    if (kind != MF_PREFILTER_BASE_LAMBERT && (!base->sample || !base->pdf))
         return MF_ERR_DOMAIN;
     for (int i = 0; i < count; ++i)
-        if (!(normals[3 * i + 2] > 0.0) || !isfinite(normals[3 * i]) || !isfinite(normals[3 * i + 1]))
+        if (!(normals[3 * i + 2] > 0.0) || !isfinite(normals[3 * i]) || !isfinite(normals[3 * i + 1]) ||
+            (wt && !(wt[i] > 0.0)))
             return MF_ERR_DOMAIN;
     m->rot = malloc(sizeof(double) * 9 * (size_t)count);
     m->w = malloc(sizeof(double) * (size_t)count);
     m->cdf = malloc(sizeof(double) * (size_t)count);
-    int *cnt = calloc((size_t)count, sizeof *cnt), *first = malloc(sizeof(int) * (size_t)count);
-    if (!m->rot || !m->w || !m->cdf || !cnt || !first) {
-        free(cnt), free(first);
+    double *acc_w = calloc((size_t)count, sizeof *acc_w);
+    int *first = malloc(sizeof(int) * (size_t)count);
+    if (!m->rot || !m->w || !m->cdf || !acc_w || !first) {
+        free(acc_w), free(first);
         mf_prefilter_mix_free(m);
         return MF_ERR_ALLOC;
     }
-    /* merge bitwise equal normals (quadratic: footprints of a few thousand texels at most here) */
+    /* merge bitwise equal normals (quadratic in the components: footprints are clustered to at
+     * most MF_PREFILTER_CLUSTER_MAX components before they get here, see fit_footprint) */
     int n = 0;
     for (int i = 0; i < count; ++i) {
         int j = 0;
@@ -171,19 +245,22 @@ mf_status mf_prefilter_mix_init(mf_prefilter_mix *m, const mf_brdf_model *base, 
             ++j;
         if (j == n)
             first[n++] = i;
-        cnt[j]++;
+        acc_w[j] += wt ? wt[i] : 1.0;
     }
-    double acc = 0.0;
+    double acc = 0.0, tot = 0.0;
+    for (int j = 0; j < n; ++j)
+        tot += acc_w[j];
     for (int j = 0; j < n; ++j) {
         min_rotation(normals + 3 * first[j], m->rot + 9 * j);
-        m->w[j] = (double)cnt[j] / count;
-        acc += cnt[j];
-        m->cdf[j] = acc / count;
+        m->w[j] = acc_w[j] / tot;
+        acc += acc_w[j];
+        m->cdf[j] = acc / tot;
     }
     m->cdf[n - 1] = 1.0;
-    free(cnt), free(first);
+    free(acc_w), free(first);
     m->n = n;
     m->base = base;
+    m->kind = kind;
     m->model.name = "prefilter-mix";
     m->model.description = "effective BRDF of a normal-map footprint (Nahmias 2022, Eq. 2.36)";
     m->model.flags = MF_MODEL_ANISOTROPIC;
@@ -194,12 +271,36 @@ mf_status mf_prefilter_mix_init(mf_prefilter_mix *m, const mf_brdf_model *base, 
     return MF_OK;
 }
 
+mf_status mf_prefilter_mix_init(mf_prefilter_mix *m, const mf_brdf_model *base, const double *normals, int count)
+{
+    return mix_build(m, base, normals, NULL, count);
+}
+
+/* The fits' per-view cache (GGX only): the texel-frame view of every component and Lambda there,
+ * valid while eval/pdf are called with this wo and an isotropic alpha (checked per call). */
+static mf_status mix_set_view(mf_prefilter_mix *m, const mf_brdf_params *p, mf_vec3 wo)
+{
+    if (m->kind != MF_PREFILTER_BASE_GGX || p->alpha_x != p->alpha_y)
+        return MF_OK;
+    if (!m->cache && !(m->cache = malloc(sizeof(double) * 4 * (size_t)m->n)))
+        return MF_ERR_ALLOC;
+    double a2 = p->alpha_x * p->alpha_x;
+    for (int j = 0; j < m->n; ++j) {
+        mf_vec3 vo = texel_view(m->rot + 9 * j, wo);
+        double *c = m->cache + 4 * j;
+        c[0] = vo.x, c[1] = vo.y, c[2] = vo.z, c[3] = ggx_lambda_iso(a2, vo);
+    }
+    m->cache_wo[0] = wo.x, m->cache_wo[1] = wo.y, m->cache_wo[2] = wo.z;
+    m->cache_a = p->alpha_x;
+    return MF_OK;
+}
+
 void mf_prefilter_mix_free(mf_prefilter_mix *m)
 {
     if (!m)
         return;
-    free(m->rot), free(m->w), free(m->cdf);
-    m->rot = m->w = m->cdf = NULL;
+    free(m->rot), free(m->w), free(m->cdf), free(m->cache);
+    m->rot = m->w = m->cdf = m->cache = NULL;
     m->n = 0;
 }
 
@@ -208,9 +309,27 @@ mf_status mf_prefilter_mix_albedo(const mf_prefilter_mix *m, const mf_brdf_param
     if (!m || !p || !out || !(wo.z > 0.0))
         return MF_ERR_DOMAIN;
     double val = 0.0, err = 0.0;
+    if (m->kind == MF_PREFILTER_BASE_LAMBERT) {
+        /* the clamped cosine about n(q) over the geometric hemisphere: (1 + n(q).z) / 2 (the view
+         * factor of the sky hemisphere from a plane tilted by acos n.z), independent of wo */
+        for (int j = 0; j < m->n; ++j)
+            val += m->w[j] * 0.5 * (1.0 + m->rot[9 * j + 8]);
+        out->val = val;
+        out->err = 0.0;
+        return MF_OK;
+    }
     for (int j = 0; j < m->n; ++j) {
         mf_prefilter_mix one = *m; /* the one-texel mixture of component j */
         one.n = 1;
+        one.cache = NULL;
+        double c4[4];
+        if (m->kind == MF_PREFILTER_BASE_GGX && p->alpha_x == p->alpha_y) { /* the fused evaluation */
+            mf_vec3 vo = texel_view(m->rot + 9 * j, wo);
+            c4[0] = vo.x, c4[1] = vo.y, c4[2] = vo.z, c4[3] = ggx_lambda_iso(p->alpha_x * p->alpha_x, vo);
+            one.cache = c4;
+            one.cache_wo[0] = wo.x, one.cache_wo[1] = wo.y, one.cache_wo[2] = wo.z;
+            one.cache_a = p->alpha_x;
+        }
         one.rot = m->rot + 9 * j;
         double w1 = 1.0, c1 = 1.0;
         one.w = &w1;
@@ -232,6 +351,7 @@ mf_status mf_prefilter_mix_albedo(const mf_prefilter_mix *m, const mf_brdf_param
 void mf_prefilter_options_default(mf_prefilter_options *o)
 {
     memset(o, 0, sizeof *o);
+    o->base = MF_PREFILTER_BASE_GGX;
     o->alpha = 0.1;
     o->n_theta = 8;
     o->n_phi = 16;
@@ -239,6 +359,16 @@ void mf_prefilter_options_default(mf_prefilter_options *o)
     o->samples = 4096;
     o->max_iterations = 100;
     o->seed = 1;
+    o->cluster_cell = MF_PREFILTER_CLUSTER_CELL;
+    o->keep_albedo = 0;
+}
+
+void mf_prefilter_options_default_diffuse(mf_prefilter_options *o)
+{
+    mf_prefilter_options_default(o);
+    o->base = MF_PREFILTER_BASE_LAMBERT;
+    o->n_theta = 2;
+    o->n_phi = 4;
 }
 
 double mf_prefilter_theta(const mf_prefilter_options *o, int i) { return i / (double)(o->n_theta - 1) * MF_PREFILTER_THETA_MAX; }
@@ -249,7 +379,7 @@ void mf_prefilter_levels_free(mf_prefilter_level *levels, int nlevels)
     if (!levels)
         return;
     for (int l = 0; l < nlevels; ++l)
-        free(levels[l].m), free(levels[l].magnitude);
+        free(levels[l].m), free(levels[l].magnitude), free(levels[l].albedo);
     free(levels);
 }
 
@@ -259,10 +389,12 @@ typedef struct {
     const mf_prefilter_options *o;
     const mf_brdf_model *base;
     mf_prefilter_level *levels;
+    double **lobes; /* per level: the lobe-frame parameters of every entry (the children's starts) */
     /* albedo cache: per level-0 texel and view, the one-texel albedo (value, error) */
     double *alb, *alb_err;
-    int *uniq;   /* per texel: the index of the first texel with its (bitwise) normal */
-    int job_kind; /* 0: albedo cache over texels, 1: fits over the footprints of all levels */
+    int *uniq;    /* per texel: the index of the first texel with its (bitwise) normal */
+    int job_kind; /* 0: albedo cache over texels, 1: fits over the footprints of one level */
+    int level;    /* job_kind 1 */
     long next, total;
     mf_status status;
     char *msg;
@@ -286,6 +418,11 @@ static mf_vec3 view_dir(double theta, double phi)
     return mf_vec3_make(sin(theta) * cos(phi), sin(theta) * sin(phi), cos(theta));
 }
 
+static mf_brdf_params base_params(const mf_prefilter_options *o)
+{
+    return mf_brdf_params_iso(o->base == MF_PREFILTER_BASE_LAMBERT ? 1.0 : o->alpha);
+}
+
 static mf_status albedo_texel(pjob *j, int t)
 {
     const mf_prefilter_options *o = j->o;
@@ -296,7 +433,7 @@ static mf_status albedo_texel(pjob *j, int t)
     mf_status st = mf_prefilter_mix_init(&one, j->base, j->normals + 3 * (size_t)t, 1);
     if (st != MF_OK)
         return st;
-    mf_brdf_params p = mf_brdf_params_iso(o->alpha);
+    mf_brdf_params p = base_params(o);
     for (int a = 0; a < o->n_theta && st == MF_OK; ++a)
         for (int b = 0; b < o->n_phi && st == MF_OK; ++b) {
             mf_result r;
@@ -308,85 +445,347 @@ static mf_status albedo_texel(pjob *j, int t)
     return st;
 }
 
-/* One footprint: every view, chained along theta for each phi (warm start from the previous
- * elevation's lobe-frame parameters, taken by the fitter only where its cost is not above the
- * closed-form start's). */
-static mf_status fit_footprint(pjob *j, int level, int row, int col, double *buf)
+/* ---- clusters and mirror symmetry ------------------------------------------------------------- */
+
+typedef struct {
+    int64_t k[4];
+} qkey;
+
+static int qkey_cmp(const void *a, const void *b)
+{
+    const qkey *x = a, *y = b;
+    for (int i = 0; i < 4; ++i)
+        if (x->k[i] != y->k[i])
+            return x->k[i] < y->k[i] ? -1 : 1;
+    return 0;
+}
+
+/* Whether the weighted normals (nrm, w) are, as a multiset, invariant under the mirror of
+ * coordinate `axis` (0: x -> -x, 1: y -> -y) to MF_PREFILTER_MIRROR_TOL (normals and weights
+ * compared on that grid: a tie at a grid boundary can only miss a symmetry, never invent one);
+ * if so, they are replaced by an exactly symmetric multiset of the same size (those with a
+ * positive coordinate and their exact mirrors; those on the plane with the coordinate set to 0,
+ * renormalised), moving no normal by more than the tolerance.  key: 2 n scratch keys. */
+static int mirror_snap(double *nrm, double *w, int n, int axis, qkey *key)
+{
+    const double q = 1.0 / MF_PREFILTER_MIRROR_TOL;
+    for (int i = 0; i < n; ++i)
+        for (int m = 0; m < 2; ++m) {
+            qkey *k = &key[m * n + i];
+            for (int c = 0; c < 3; ++c)
+                k->k[c] = llround(nrm[3 * i + c] * q * (m && c == axis ? -1.0 : 1.0));
+            k->k[3] = llround(w[i] * q);
+        }
+    qsort(key, (size_t)n, sizeof *key, qkey_cmp);
+    qsort(key + n, (size_t)n, sizeof *key, qkey_cmp);
+    if (memcmp(key, key + n, sizeof *key * (size_t)n) != 0)
+        return 0;
+    /* the snapped set, written after the positive ones' (reads stay ahead of writes) */
+    int pos = 0, on = 0;
+    for (int i = 0; i < n; ++i) {
+        int64_t s = llround(nrm[3 * i + axis] * q);
+        pos += s > 0, on += s == 0;
+    }
+    if (2 * pos + on != n)
+        return 0;
+    double *tn = malloc(sizeof(double) * 3 * (size_t)n), *tw = malloc(sizeof(double) * (size_t)n);
+    if (!tn || !tw) {
+        free(tn), free(tw);
+        return 0;
+    }
+    int k = 0;
+    for (int i = 0; i < n; ++i) {
+        int64_t s = llround(nrm[3 * i + axis] * q);
+        if (s < 0)
+            continue;
+        memcpy(tn + 3 * k, nrm + 3 * i, 3 * sizeof(double));
+        tw[k] = w[i];
+        if (s == 0) {
+            tn[3 * k + axis] = 0.0;
+            double l = sqrt(tn[3 * k] * tn[3 * k] + tn[3 * k + 1] * tn[3 * k + 1] + tn[3 * k + 2] * tn[3 * k + 2]);
+            for (int c = 0; c < 3; ++c)
+                tn[3 * k + c] /= l;
+            ++k;
+        } else {
+            ++k;
+            memcpy(tn + 3 * k, nrm + 3 * i, 3 * sizeof(double));
+            tn[3 * k + axis] = -tn[3 * k + axis];
+            tw[k++] = w[i];
+        }
+    }
+    memcpy(nrm, tn, sizeof(double) * 3 * (size_t)n);
+    memcpy(w, tw, sizeof(double) * (size_t)n);
+    free(tn), free(tw);
+    return 1;
+}
+
+typedef struct {
+    int64_t cx, cy;
+    int idx;
+} cell_item;
+
+static int cell_cmp(const void *a, const void *b)
+{
+    const cell_item *x = a, *y = b;
+    if (x->cx != y->cx)
+        return x->cx < y->cx ? -1 : 1;
+    if (x->cy != y->cy)
+        return x->cy < y->cy ? -1 : 1;
+    return (x->idx > y->idx) - (x->idx < y->idx);
+}
+
+/* Weighted clusters of n unit normals: cells of side h in slope space (n.x / n.z, n.y / n.z),
+ * centred on the origin (cell index round(slope / h): the grid is symmetric under the x and y
+ * mirrors and the diagonal swap), each cell one component: the normalised sum of its normals
+ * (summed in texel order), weight count / n.  Returns the number of components (out: 3 per
+ * component, wout: weights); -1 on allocation failure. */
+static int cluster_normals(const double *nrm, int n, double h, double *out, double *wout)
+{
+    cell_item *it = malloc(sizeof *it * (size_t)n);
+    if (!it)
+        return -1;
+    for (int i = 0; i < n; ++i) {
+        const double *v = nrm + 3 * i;
+        it[i].cx = (int64_t)floor(v[0] / v[2] / h + 0.5);
+        it[i].cy = (int64_t)floor(v[1] / v[2] / h + 0.5);
+        it[i].idx = i;
+    }
+    qsort(it, (size_t)n, sizeof *it, cell_cmp);
+    int nc = 0;
+    for (int i = 0; i < n;) {
+        int e = i;
+        double sx = 0.0, sy = 0.0, sz = 0.0;
+        while (e < n && it[e].cx == it[i].cx && it[e].cy == it[i].cy) {
+            const double *v = nrm + 3 * it[e].idx;
+            sx += v[0], sy += v[1], sz += v[2];
+            ++e;
+        }
+        double l = sqrt(sx * sx + sy * sy + sz * sz);
+        out[3 * nc] = sx / l, out[3 * nc + 1] = sy / l, out[3 * nc + 2] = sz / l;
+        wout[nc++] = (double)(e - i) / n;
+        i = e;
+    }
+    free(it);
+    return nc;
+}
+
+typedef struct {
+    double v[4]; /* x, y, z, weight */
+} wnormal;
+
+static int wnormal_cmp(const void *a, const void *b)
+{
+    const wnormal *x = a, *y = b;
+    for (int i = 0; i < 4; ++i)
+        if (x->v[i] != y->v[i])
+            return x->v[i] < y->v[i] ? -1 : 1;
+    return 0;
+}
+
+/* The canonical order of a weighted normal set (lexicographic in x, y, z, weight): the mixture's
+ * sampler assigns the quasi-random points to components in their order, so two views or texels
+ * whose footprints hold the same set (e.g. phi and phi + pi of a V-groove, or permuted texels) get
+ * the same points and the same fit, whatever the texels' order. */
+static void canonical_order(double *nrm, double *w, int n, wnormal *tmp)
+{
+    for (int i = 0; i < n; ++i) {
+        memcpy(tmp[i].v, nrm + 3 * i, 3 * sizeof(double));
+        tmp[i].v[3] = w[i];
+    }
+    qsort(tmp, (size_t)n, sizeof *tmp, wnormal_cmp);
+    for (int i = 0; i < n; ++i) {
+        memcpy(nrm + 3 * i, tmp[i].v, 3 * sizeof(double));
+        w[i] = tmp[i].v[3];
+    }
+}
+
+/* ---- one footprint ---------------------------------------------------------------------------- */
+
+/* The mass of the LTC M above the horizon: the clamped cosine over the half-space (M^T z).w > 0,
+ * (1 + n.z) / 2 with n = M^T z / |M^T z| (row 2 of M). */
+static double horizon_mass(const double m[9])
+{
+    return 0.5 * (1.0 + m[8] / sqrt(m[6] * m[6] + m[7] * m[7] + m[8] * m[8]));
+}
+
+static void store(pjob *j, mf_prefilter_level *lv, size_t idx, const double m[9], const double lobe[7], double alb,
+                  double err, const mf_ltcfit_aniso_entry *e, int count)
+{
+    for (int i = 0; i < 9; ++i)
+        lv->m[9 * idx + i] = (float)m[i];
+    lv->albedo[idx] = (float)alb;
+    lv->magnitude[idx] = (float)(j->o->keep_albedo ? alb / fmax(horizon_mass(m), MF_PREFILTER_HORIZON_MIN) : alb);
+    memcpy(j->lobes[lv->level - 1] + MF_LTCFIT_ANISO_NPARAMS * idx, lobe, sizeof(double) * MF_LTCFIT_ANISO_NPARAMS);
+    if (!count)
+        return;
+    pthread_mutex_lock(&j->lock);
+    if (e->residual > lv->worst_residual)
+        lv->worst_residual = e->residual;
+    if (err > lv->worst_albedo_err)
+        lv->worst_albedo_err = err;
+    lv->not_converged += !e->converged;
+    lv->iterations += e->iterations;
+    lv->lobes++;
+    pthread_mutex_unlock(&j->lock);
+}
+
+/* One footprint: its (clustered) normals; theta = 0 fitted once (the view along the normal does not
+ * depend on phi: the lobe at phi is the phi = 0 lobe rotated, M_phi = R_z(-phi) M_0 R_z(phi)); for
+ * every phi the normals in the view-azimuth-aligned frame, their mirror symmetry y -> -y if they
+ * have it, then the chain along theta: each fit starts from the previous elevation's lobe (a
+ * proximal warm start) and is offered the parent level's lobe at the same view as a second
+ * start. */
+static mf_status fit_footprint(pjob *j, int level, int row, int col)
 {
     const mf_prefilter_options *o = j->o;
     mf_prefilter_level *lv = &j->levels[level - 1];
     int fw = j->width / lv->width, fh = j->height / lv->height, nfoot = fw * fh;
     int nv = o->n_theta * o->n_phi;
+    const double *parent = NULL;
+    size_t pidx = 0;
+    if (level < j->nlevels) {
+        const mf_prefilter_level *pl = &j->levels[level];
+        parent = j->lobes[level];
+        pidx = ((size_t)(row * pl->height / lv->height) * pl->width + (size_t)(col * pl->width / lv->width)) * nv;
+    }
     mf_ltcfit_aniso_options fo;
     mf_ltcfit_aniso_options_default(&fo);
     fo.samples = o->samples;
     fo.max_iterations = o->max_iterations;
     fo.seed = o->seed;
-    mf_brdf_params p = mf_brdf_params_iso(o->alpha);
-    mf_status st = MF_OK;
-    for (int b = 0; b < o->n_phi && st == MF_OK; ++b) {
-        double phi = mf_prefilter_phi(o, b), c = cos(phi), s = sin(phi);
-        /* the footprint's normals in the view-azimuth-aligned frame (rotated by -phi about z) */
+    mf_brdf_params p = base_params(o);
+    double *tex = malloc(sizeof(double) * 3 * (size_t)nfoot), *cn = malloc(sizeof(double) * 3 * (size_t)nfoot);
+    double *cw = malloc(sizeof(double) * (size_t)nfoot), *rn = malloc(sizeof(double) * 3 * (size_t)nfoot);
+    double *rw = malloc(sizeof(double) * (size_t)nfoot), *alb = malloc(sizeof(double) * 2 * (size_t)nv);
+    qkey *key = malloc(sizeof(qkey) * 2 * (size_t)nfoot);
+    mf_status st = tex && cn && cw && rn && rw && alb && key ? MF_OK : MF_ERR_ALLOC;
+    int nc = 0;
+    if (st == MF_OK) {
         int k = 0;
         for (int y = row * fh; y < (row + 1) * fh; ++y)
-            for (int x = col * fw; x < (col + 1) * fw; ++x, ++k) {
-                const double *n = j->normals + 3 * ((size_t)y * j->width + x);
-                buf[3 * k] = c * n[0] + s * n[1];
-                buf[3 * k + 1] = -s * n[0] + c * n[1];
-                buf[3 * k + 2] = n[2];
-            }
-        mf_prefilter_mix mix;
-        if ((st = mf_prefilter_mix_init(&mix, j->base, buf, nfoot)) != MF_OK)
-            break;
-        double prev[MF_LTCFIT_ANISO_NPARAMS];
-        int have_prev = 0;
-        for (int a = 0; a < o->n_theta; ++a) {
-            double alb = 0.0, err = 0.0;
+            for (int x = col * fw; x < (col + 1) * fw; ++x, ++k)
+                memcpy(tex + 3 * k, j->normals + 3 * ((size_t)y * j->width + x), 3 * sizeof(double));
+        double h = o->cluster_cell * (o->base == MF_PREFILTER_BASE_LAMBERT ? MF_PREFILTER_CLUSTER_LAMBERT : o->alpha);
+        if (h > 0.0 && nfoot >= MF_PREFILTER_CLUSTER_MIN) {
+            nc = cluster_normals(tex, nfoot, h, cn, cw);
+            if (nc < 0)
+                st = MF_ERR_ALLOC;
+        } else {
+            memcpy(cn, tex, sizeof(double) * 3 * (size_t)nfoot);
+            for (int i = 0; i < nfoot; ++i)
+                cw[i] = 1.0 / nfoot;
+            nc = nfoot;
+        }
+        /* the magnitudes: the exact mixture of the texels' albedos (not of the clusters') */
+        for (int v = 0; v < nv; ++v) {
+            double a = 0.0, e = 0.0;
             for (int y = row * fh; y < (row + 1) * fh; ++y)
                 for (int x = col * fw; x < (col + 1) * fw; ++x) {
                     size_t q = (size_t)y * j->width + x;
-                    alb += j->alb[q * nv + a * o->n_phi + b];
-                    err += j->alb_err[q * nv + a * o->n_phi + b];
+                    a += j->alb[q * nv + v];
+                    e += j->alb_err[q * nv + v];
                 }
-            alb /= nfoot, err /= nfoot;
+            alb[2 * v] = a / nfoot, alb[2 * v + 1] = e / nfoot;
+        }
+    }
+    size_t base_idx = ((size_t)row * lv->width + col) * nv;
+    /* theta = 0: once, at phi = 0 */
+    double lobe0[MF_LTCFIT_ANISO_NPARAMS];
+    if (st == MF_OK) {
+        memcpy(rn, cn, sizeof(double) * 3 * (size_t)nc);
+        memcpy(rw, cw, sizeof(double) * (size_t)nc);
+        int mir = 0;
+        if (mirror_snap(rn, rw, nc, 1, key))
+            mir |= MF_LTCFIT_ANISO_MIRROR_Y;
+        if (mirror_snap(rn, rw, nc, 0, key))
+            mir |= MF_LTCFIT_ANISO_MIRROR_X;
+        canonical_order(rn, rw, nc, (wnormal *)(void *)key);
+        mf_prefilter_mix mix;
+        st = mix_build(&mix, j->base, rn, rw, nc);
+        if (st == MF_OK) {
+            st = mix_set_view(&mix, &p, mf_vec3_make(0.0, 0.0, 1.0));
             mf_ltcfit_aniso_entry e;
-            st = mf_ltcfit_aniso_entry_fit_general(&mix.model, p, mf_prefilter_theta(o, a), 0.0, alb, err,
-                                                   have_prev ? prev : NULL, &fo, &e);
+            if (st == MF_OK)
+                st = mf_ltcfit_aniso_entry_fit_mirrored(&mix.model, p, 0.0, mir, alb[0], alb[1], NULL,
+                                                        parent ? parent + MF_LTCFIT_ANISO_NPARAMS * pidx : NULL, &fo, &e);
+            if (st == MF_OK && !(isfinite(e.m[0]) && isfinite(e.m[4]) && isfinite(e.m[8])))
+                st = MF_ERR_INTERNAL;
+            if (st == MF_OK) {
+                memcpy(lobe0, e.lobe, sizeof lobe0);
+                for (int b = 0; b < o->n_phi; ++b) {
+                    /* M_phi = R_z(-phi) M_0 R_z(phi) (b = 0: M_0 itself, bit for bit) */
+                    double ph = mf_prefilter_phi(o, b), c = b ? cos(ph) : 1.0, s = b ? sin(ph) : 0.0, t[9], m[9];
+                    for (int col2 = 0; col2 < 3; ++col2) {
+                        t[col2] = c * e.m[col2] + s * e.m[3 + col2];
+                        t[3 + col2] = -s * e.m[col2] + c * e.m[3 + col2];
+                        t[6 + col2] = e.m[6 + col2];
+                    }
+                    for (int r = 0; r < 3; ++r) {
+                        m[3 * r] = c * t[3 * r] + s * t[3 * r + 1];
+                        m[3 * r + 1] = -s * t[3 * r] + c * t[3 * r + 1];
+                        m[3 * r + 2] = t[3 * r + 2];
+                    }
+                    int v = b; /* i_theta = 0 */
+                    store(j, lv, base_idx + v, b ? m : e.m, e.lobe, alb[2 * v], alb[2 * v + 1], &e, 1);
+                }
+            }
+            mf_prefilter_mix_free(&mix);
+        }
+    }
+    for (int b = 0; b < o->n_phi && st == MF_OK; ++b) {
+        double phi = mf_prefilter_phi(o, b), c = cos(phi), s = sin(phi);
+        for (int i = 0; i < nc; ++i) { /* rotated by -phi about z */
+            rn[3 * i] = c * cn[3 * i] + s * cn[3 * i + 1];
+            rn[3 * i + 1] = -s * cn[3 * i] + c * cn[3 * i + 1];
+            rn[3 * i + 2] = cn[3 * i + 2];
+            rw[i] = cw[i];
+        }
+        int mir = mirror_snap(rn, rw, nc, 1, key) ? MF_LTCFIT_ANISO_MIRROR_Y : 0;
+        canonical_order(rn, rw, nc, (wnormal *)(void *)key);
+        mf_prefilter_mix mix;
+        if ((st = mix_build(&mix, j->base, rn, rw, nc)) != MF_OK)
+            break;
+        const double *prev = lobe0;
+        for (int a = 1; a < o->n_theta; ++a) {
+            double th = mf_prefilter_theta(o, a);
+            int v = a * o->n_phi + b;
+            if ((st = mix_set_view(&mix, &p, mf_vec3_make(sin(th), 0.0, cos(th)))) != MF_OK)
+                break;
+            mf_ltcfit_aniso_entry e;
+            st = mf_ltcfit_aniso_entry_fit_mirrored(&mix.model, p, th, mir, alb[2 * v], alb[2 * v + 1], prev,
+                                                    parent ? parent + MF_LTCFIT_ANISO_NPARAMS * (pidx + v) : NULL, &fo,
+                                                    &e);
+            if (st == MF_OK && cos(th) < MF_PREFILTER_MULTISTART_COS) {
+                /* grazing rows: a second solve from the closed-form start, the lower residual kept */
+                mf_ltcfit_aniso_entry e2;
+                st = mf_ltcfit_aniso_entry_fit_mirrored(&mix.model, p, th, mir, alb[2 * v], alb[2 * v + 1], NULL,
+                                                        parent ? parent + MF_LTCFIT_ANISO_NPARAMS * (pidx + v) : NULL,
+                                                        &fo, &e2);
+                if (st == MF_OK) {
+                    int it = e.iterations + e2.iterations;
+                    if (e2.residual < e.residual)
+                        e = e2;
+                    e.iterations = it;
+                }
+            }
             if (st != MF_OK)
                 break;
-            memcpy(prev, e.lobe, sizeof prev);
-            have_prev = 1;
-            size_t idx = (((size_t)row * lv->width + col) * o->n_theta + a) * o->n_phi + b;
-            for (int i = 0; i < 9; ++i)
-                lv->m[9 * idx + i] = (float)e.m[i];
-            lv->magnitude[idx] = (float)alb;
-            pthread_mutex_lock(&j->lock);
-            if (e.residual > lv->worst_residual)
-                lv->worst_residual = e.residual;
-            if (err > lv->worst_albedo_err)
-                lv->worst_albedo_err = err;
-            lv->not_converged += !e.converged;
-            lv->iterations += e.iterations;
-            lv->lobes++;
-            pthread_mutex_unlock(&j->lock);
             if (!(isfinite(e.m[0]) && isfinite(e.m[4]) && isfinite(e.m[8]))) {
                 st = MF_ERR_INTERNAL;
                 break;
             }
+            store(j, lv, base_idx + v, e.m, e.lobe, alb[2 * v], alb[2 * v + 1], &e, 1);
+            prev = j->lobes[level - 1] + MF_LTCFIT_ANISO_NPARAMS * (base_idx + v);
         }
         mf_prefilter_mix_free(&mix);
     }
+    free(tex), free(cn), free(cw), free(rn), free(rw), free(alb), free(key);
     return st;
 }
 
 static void *worker(void *arg)
 {
     pjob *j = arg;
-    double *buf = malloc(sizeof(double) * 3 * (size_t)j->width * j->height);
-    if (!buf) {
-        set_error(j, MF_ERR_ALLOC, "out of memory");
-        return NULL;
-    }
     for (;;) {
         pthread_mutex_lock(&j->lock);
         long t = j->status == MF_OK && j->next < j->total ? j->next++ : -1;
@@ -397,10 +796,8 @@ static void *worker(void *arg)
         if (j->job_kind == 0) {
             st = albedo_texel(j, (int)t);
         } else {
-            int l = 0;
-            while (t >= (long)j->levels[l].width * j->levels[l].height)
-                t -= (long)j->levels[l].width * j->levels[l].height, ++l;
-            st = fit_footprint(j, l + 1, (int)(t / j->levels[l].width), (int)(t % j->levels[l].width), buf);
+            const mf_prefilter_level *lv = &j->levels[j->level - 1];
+            st = fit_footprint(j, j->level, (int)(t / lv->width), (int)(t % lv->width));
         }
         if (st != MF_OK) {
             char text[128];
@@ -408,7 +805,6 @@ static void *worker(void *arg)
             set_error(j, st, text);
         }
     }
-    free(buf);
     return NULL;
 }
 
@@ -448,12 +844,16 @@ mf_status mf_prefilter_run_from(const double *normals, int width, int height, co
         return FAIL("null argument");
     *levels = NULL;
     *nlevels = 0;
-    if (!(o->alpha > 0.0 && o->alpha <= 1.0))
+    if (o->base != MF_PREFILTER_BASE_GGX && o->base != MF_PREFILTER_BASE_LAMBERT)
+        return FAIL("base %d: need MF_PREFILTER_BASE_GGX or MF_PREFILTER_BASE_LAMBERT", o->base);
+    if (o->base == MF_PREFILTER_BASE_GGX && !(o->alpha > 0.0 && o->alpha <= 1.0))
         return FAIL("roughness %g not in (0, 1]", o->alpha);
     if (o->n_theta < 2 || o->n_theta > 256 || o->n_phi < 1 || o->n_phi > 256)
         return FAIL("views %d x %d: need 2..256 elevations x 1..256 azimuths", o->n_theta, o->n_phi);
     if (o->threads < 1 || o->threads > 256)
         return FAIL("threads %d not in 1..256", o->threads);
+    if (!(o->cluster_cell >= 0.0 && o->cluster_cell <= 4.0))
+        return FAIL("cluster cell %g not in [0, 4]", o->cluster_cell);
     if (!is_pow2(width) || !is_pow2(height) || (width == 1 && height == 1) || width > 4096 || height > 4096)
         return FAIL("map size %d x %d: width and height must be powers of two, 1..4096, not both 1", width, height);
     for (long t = 0; t < (long)width * height; ++t) {
@@ -464,7 +864,7 @@ mf_status mf_prefilter_run_from(const double *normals, int width, int height, co
                         t / width, n[0], n[1], n[2]);
     }
 #undef FAIL
-    const mf_brdf_model *base = mf_brdf_model_find("ggx");
+    const mf_brdf_model *base = mf_brdf_model_find(o->base == MF_PREFILTER_BASE_LAMBERT ? "lambert" : "ggx");
     if (!base)
         return MF_ERR_INTERNAL;
     int nl = 0;
@@ -476,14 +876,14 @@ mf_status mf_prefilter_run_from(const double *normals, int width, int height, co
         return MF_ERR_DOMAIN;
     }
     mf_prefilter_level *lv = calloc((size_t)nl, sizeof *lv);
+    double **lobes = calloc((size_t)nl, sizeof *lobes);
     size_t ntex = (size_t)width * height, nv = (size_t)o->n_theta * o->n_phi;
     pjob j;
     memset(&j, 0, sizeof j);
     j.alb = malloc(sizeof(double) * ntex * nv);
     j.alb_err = malloc(sizeof(double) * ntex * nv);
     j.uniq = malloc(sizeof(int) * ntex);
-    mf_status st = lv && j.alb && j.alb_err && j.uniq ? MF_OK : MF_ERR_ALLOC;
-    long total = 0;
+    mf_status st = lv && lobes && j.alb && j.alb_err && j.uniq ? MF_OK : MF_ERR_ALLOC;
     for (int l = 0; l < nl && st == MF_OK; ++l) {
         lv[l].level = l + 1;
         lv[l].width = width >> (l + 1) > 0 ? width >> (l + 1) : 1;
@@ -497,18 +897,34 @@ mf_status mf_prefilter_run_from(const double *normals, int width, int height, co
         size_t n = (size_t)lv[l].width * lv[l].height * nv;
         lv[l].m = malloc(sizeof(float) * 9 * n);
         lv[l].magnitude = malloc(sizeof(float) * n);
-        if (!lv[l].m || !lv[l].magnitude)
+        lv[l].albedo = malloc(sizeof(float) * n);
+        lobes[l] = malloc(sizeof(double) * MF_LTCFIT_ANISO_NPARAMS * n);
+        if (!lv[l].m || !lv[l].magnitude || !lv[l].albedo || !lobes[l])
             st = MF_ERR_ALLOC;
-        total += (long)lv[l].width * lv[l].height;
     }
     if (st == MF_OK) {
-        /* texels with bitwise equal normals share their albedos: the first one computes them */
-        for (size_t t = 0; t < ntex; ++t) {
-            size_t u = 0;
-            while (memcmp(normals + 3 * u, normals + 3 * t, 3 * sizeof(double)) != 0)
-                ++u;
-            j.uniq[t] = (int)u;
+        /* texels with bitwise equal normals share their albedos: the first one computes them
+         * (sorted keys: n log n) */
+        qkey *key = malloc(sizeof *key * ntex);
+        if (!key)
+            st = MF_ERR_ALLOC;
+        for (size_t t = 0; key && t < ntex; ++t) {
+            for (int c = 0; c < 3; ++c)
+                memcpy(&key[t].k[c], normals + 3 * t + c, sizeof(double));
+            key[t].k[3] = (int64_t)t;
         }
+        if (key) {
+            qsort(key, ntex, sizeof *key, qkey_cmp);
+            for (size_t i = 0; i < ntex;) {
+                size_t e = i;
+                while (e < ntex && !memcmp(key[e].k, key[i].k, 3 * sizeof(int64_t)))
+                    j.uniq[key[e++].k[3]] = (int)key[i].k[3]; /* the smallest index: the first in the run */
+                i = e;
+            }
+        }
+        free(key);
+    }
+    if (st == MF_OK) {
         j.normals = normals;
         j.width = width;
         j.height = height;
@@ -516,6 +932,7 @@ mf_status mf_prefilter_run_from(const double *normals, int width, int height, co
         j.o = o;
         j.base = base;
         j.levels = lv;
+        j.lobes = lobes;
         j.msg = msg;
         j.msg_size = msg_size;
         pthread_mutex_init(&j.lock, NULL);
@@ -526,16 +943,185 @@ mf_status mf_prefilter_run_from(const double *normals, int width, int height, co
                     memcpy(j.alb + t * nv, j.alb + (size_t)j.uniq[t] * nv, sizeof(double) * nv);
                     memcpy(j.alb_err + t * nv, j.alb_err + (size_t)j.uniq[t] * nv, sizeof(double) * nv);
                 }
-            st = run_pass(&j, 1, total);
+            /* coarse to fine: each level's fits read the parent level's lobes */
+            for (int l = nl; l >= 1 && st == MF_OK; --l) {
+                j.level = l;
+                st = run_pass(&j, 1, (long)lv[l - 1].width * lv[l - 1].height);
+            }
         }
         pthread_mutex_destroy(&j.lock);
     }
     free(j.alb), free(j.alb_err), free(j.uniq);
+    for (int l = 0; lobes && l < nl; ++l)
+        free(lobes[l]);
+    free(lobes);
     if (st != MF_OK) {
         mf_prefilter_levels_free(lv, nl);
         return st;
     }
     *levels = lv;
     *nlevels = nl;
+    return MF_OK;
+}
+
+/* ---- the gate ---------------------------------------------------------------------------------- */
+
+void mf_prefilter_gate_bounds_default(mf_prefilter_gate *g)
+{
+    memset(g, 0, sizeof *g);
+    g->max_energy = MF_PREFILTER_GATE_ENERGY;
+    g->max_level = MF_PREFILTER_GATE_LEVEL;
+    g->max_view_spike = MF_PREFILTER_GATE_VIEW_SPIKE;
+    g->max_texel_spike = MF_PREFILTER_GATE_TEXEL_SPIKE;
+}
+
+/* The gate's lights, in the view-azimuth-aligned frame of view theta: quads of half-width
+ * 0.05, 0.2, 0.8 (tangent-plane units) about the mirror direction (-sin theta, 0, cos theta) and
+ * about the normal. */
+#define GATE_NLIGHTS 6
+
+static void gate_lights(double theta, mf_polygon *out)
+{
+    for (int k = 0; k < GATE_NLIGHTS; ++k) {
+        double h = 0.05 * pow(4.0, k % 3), tl = k < 3 ? theta : 0.0;
+        mf_vec3 c = mf_vec3_make(-sin(tl), 0.0, cos(tl));
+        mf_vec3 t1 = mf_vec3_make(cos(tl), 0.0, sin(tl)), t2 = mf_vec3_make(0.0, 1.0, 0.0);
+        static const double sx[4] = {-1, 1, 1, -1}, sy[4] = {-1, -1, 1, 1};
+        mf_vec3 v[4];
+        for (int i = 0; i < 4; ++i)
+            v[i] = mf_vec3_add(c, mf_vec3_add(mf_vec3_scale(t1, h * sx[i]), mf_vec3_scale(t2, h * sy[i])));
+        out[k] = mf_polygon_make(4, v);
+    }
+}
+
+/* magnitude * the LTC integral of each gate light; NAN where the matrix is not invertible. */
+static void gate_shade(const float *m9, float mag, const mf_polygon *lights, double *s)
+{
+    mf_mat3 m;
+    for (int i = 0; i < 9; ++i)
+        m.m[i / 3][i % 3] = m9[i];
+    mf_ltc ltc;
+    int ok = mf_ltc_init(&ltc, m) == MF_OK;
+    for (int k = 0; k < GATE_NLIGHTS; ++k)
+        s[k] = ok ? mag * mf_ltc_integrate_polygon(&ltc, &lights[k], MF_POLYGON_ONE_SIDED) : NAN;
+}
+
+static void gate_worst(double v, double *worst, char *where, size_t n, const char *what, int level, int row, int col,
+                       int a, int b)
+{
+    if (v > *worst) {
+        *worst = v;
+        snprintf(where, n, "%s at level %d, texel (%d, %d), view (%d, %d)", what, level, col, row, a, b);
+    }
+}
+
+mf_status mf_prefilter_gate_run(const mf_prefilter_level *levels, int nlevels, mf_prefilter_gate *g)
+{
+    if (!levels || nlevels < 1 || !g)
+        return MF_ERR_DOMAIN;
+    g->nan_entries = 0;
+    g->worst_energy = g->worst_level = g->worst_view_spike = g->worst_texel_spike = 0.0;
+    g->where_energy[0] = g->where_level[0] = g->where_view[0] = g->where_texel[0] = '\0';
+    int nt = levels[0].n_theta, np = levels[0].n_phi, nv = nt * np;
+    mf_polygon *lights = malloc(sizeof *lights * GATE_NLIGHTS * (size_t)nt);
+    double *sh = NULL;
+    if (!lights)
+        return MF_ERR_ALLOC;
+    for (int a = 0; a < nt; ++a)
+        gate_lights(a / (double)(nt - 1) * MF_PREFILTER_THETA_MAX, lights + GATE_NLIGHTS * a);
+    /* the shading of every entry of every level (levels are small next to the fits' cost) */
+    double **S = calloc((size_t)nlevels, sizeof *S);
+    mf_status st = S ? MF_OK : MF_ERR_ALLOC;
+    for (int l = 0; l < nlevels && st == MF_OK; ++l) {
+        const mf_prefilter_level *lv = &levels[l];
+        if (lv->n_theta != nt || lv->n_phi != np)
+            st = MF_ERR_DOMAIN;
+        size_t ne = (size_t)lv->width * lv->height * nv;
+        if (st == MF_OK && !(S[l] = malloc(sizeof(double) * GATE_NLIGHTS * ne)))
+            st = MF_ERR_ALLOC;
+        for (size_t e = 0; st == MF_OK && e < ne; ++e) {
+            int a = (int)(e / np % nt), b = (int)(e % np), t = (int)(e / nv);
+            const float *m = lv->m + 9 * e;
+            float mag = lv->magnitude[e];
+            int bad = !isfinite(mag) || !(mag >= 0.0f);
+            for (int i = 0; i < 9; ++i)
+                bad |= !isfinite(m[i]);
+            double n2 = (double)m[6] * m[6] + (double)m[7] * m[7] + (double)m[8] * m[8];
+            if (!bad) {
+                /* the lobe's albedo: magnitude * its mass above the horizon, (1 + n.z) / 2 with
+                 * n = M^T z / |M^T z| (the clamped cosine over the half-space (M^T z).w > 0) */
+                double frac = 0.5 * (1.0 + m[8] / sqrt(n2));
+                double alb = lv->albedo ? lv->albedo[e] : mag;
+                gate_worst(alb > 0.0 ? fabs(mag * frac / alb - 1.0) : fabs(mag * frac), &g->worst_energy, g->where_energy, sizeof g->where_energy,
+                           "energy", lv->level, t / lv->width, t % lv->width, a, b);
+            }
+            gate_shade(m, mag, lights + GATE_NLIGHTS * a, S[l] + GATE_NLIGHTS * e);
+            for (int k = 0; k < GATE_NLIGHTS; ++k)
+                bad |= !isfinite(S[l][GATE_NLIGHTS * e + k]);
+            g->nan_entries += bad;
+        }
+    }
+    for (int l = 0; l < nlevels && st == MF_OK; ++l) {
+        const mf_prefilter_level *lv = &levels[l];
+        const double *s = S[l];
+        for (int row = 0; row < lv->height; ++row)
+            for (int col = 0; col < lv->width; ++col)
+                for (int a = 0; a < nt; ++a)
+                    for (int b = 0; b < np; ++b) {
+                        size_t e = (((size_t)row * lv->width + col) * nt + a) * np + b;
+                        double alb = fmax(lv->albedo ? lv->albedo[e] : lv->magnitude[e], 1e-6);
+                        for (int k = 0; k < GATE_NLIGHTS; ++k) {
+                            double x = s[GATE_NLIGHTS * e + k];
+                            /* views: second differences along theta (interior) and phi (periodic) */
+                            if (a > 0 && a + 1 < nt) {
+                                double d = fabs(2.0 * x - s[GATE_NLIGHTS * (e - np) + k] - s[GATE_NLIGHTS * (e + np) + k]);
+                                gate_worst(0.5 * d / alb, &g->worst_view_spike, g->where_view, sizeof g->where_view,
+                                           "theta spike", lv->level, row, col, a, b);
+                            }
+                            if (np >= 3 && a > 0) {
+                                size_t em = e - b + (b + np - 1) % np, ep = e - b + (b + 1) % np;
+                                double d = fabs(2.0 * x - s[GATE_NLIGHTS * em + k] - s[GATE_NLIGHTS * ep + k]);
+                                gate_worst(0.5 * d / alb, &g->worst_view_spike, g->where_view, sizeof g->where_view,
+                                           "phi spike", lv->level, row, col, a, b);
+                            }
+                            /* texels: a lone texel above or below both neighbours along x or y */
+                            for (int ax = 0; ax < 2; ++ax) {
+                                int r0 = row - (ax == 1), r1 = row + (ax == 1), c0 = col - (ax == 0), c1 = col + (ax == 0);
+                                if (r0 < 0 || c0 < 0 || r1 >= lv->height || c1 >= lv->width)
+                                    continue;
+                                double y0 = s[GATE_NLIGHTS * ((((size_t)r0 * lv->width + c0) * nt + a) * np + b) + k];
+                                double y1 = s[GATE_NLIGHTS * ((((size_t)r1 * lv->width + c1) * nt + a) * np + b) + k];
+                                double up = fmin(x - y0, x - y1), dn = fmin(y0 - x, y1 - x);
+                                gate_worst(fmax(fmax(up, dn), 0.0) / alb, &g->worst_texel_spike, g->where_texel,
+                                           sizeof g->where_texel, "texel spike", lv->level, row, col, a, b);
+                            }
+                            /* levels: the effective BRDF of a footprint is the mean of its four
+                             * children's (equal areas), so the parent's shading is compared with
+                             * the mean of the children's */
+                            if (l > 0 && levels[l - 1].width == 2 * lv->width && levels[l - 1].height == 2 * lv->height) {
+                                const mf_prefilter_level *cl = &levels[l - 1];
+                                double m = 0.0;
+                                for (int dy = 0; dy < 2; ++dy)
+                                    for (int dx = 0; dx < 2; ++dx)
+                                        m += S[l - 1][GATE_NLIGHTS * ((((size_t)(2 * row + dy) * cl->width + 2 * col + dx) * nt + a) * np + b) + k];
+                                gate_worst(fabs(x - 0.25 * m) / alb, &g->worst_level, g->where_level, sizeof g->where_level,
+                                           "parent vs children", lv->level, row, col, a, b);
+                            }
+                        }
+                    }
+    }
+    for (int l = 0; S && l < nlevels; ++l)
+        free(S[l]);
+    free(S), free(lights), free(sh);
+    if (st != MF_OK)
+        return st;
+    g->pass_energy = g->worst_energy <= g->max_energy;
+    g->pass_nan = g->nan_entries == 0;
+    g->pass_level = g->worst_level <= g->max_level;
+    g->pass_view = g->worst_view_spike <= g->max_view_spike;
+    g->pass_texel = g->worst_texel_spike <= g->max_texel_spike;
+    /* the view and texel spikes are reported, not gated: a coarse view grid and a sharp map give
+     * genuine spikes (the V-groove's level-1 texels alternate between two tilts) */
+    g->pass = g->pass_energy && g->pass_nan && g->pass_level;
     return MF_OK;
 }

@@ -187,6 +187,20 @@ mf_status mf_ltcfit_aniso_entry_fit_general(const mf_brdf_model *model, mf_brdf_
  * s <= 0 or det(m0) <= 0 (the extrapolated lobe is degenerate), m0 = m_mid and 0 (a fallback). */
 int mf_ltcfit_aniso_anchor_matrix(const double m_mid[9], const double m_nb[9], double m0[9]);
 
+/* mf_ltcfit_aniso_entry_fit_general at phi = 0 (the view in the xz plane) for a model the caller
+ * knows to be mirror symmetric: mirrors MF_LTCFIT_ANISO_MIRROR_Y (f invariant under y -> -y)
+ * holds the phi = 0 zero pattern exactly, MF_LTCFIT_ANISO_MIRROR_X (under x -> -x; theta == 0
+ * only) the phi = pi/2 one, both at theta == 0 the diagonal one (see "Degenerate
+ * configurations"); 0 is mf_ltcfit_aniso_entry_fit_general at phi = 0.  alt_start (may be NULL):
+ * a second start, taken where its cost is below both the warm start's and the closed-form
+ * start's.  MF_ERR_DOMAIN also for MIRROR_X with theta != 0. */
+#define MF_LTCFIT_ANISO_MIRROR_Y 1
+#define MF_LTCFIT_ANISO_MIRROR_X 2
+mf_status mf_ltcfit_aniso_entry_fit_mirrored(const mf_brdf_model *model, mf_brdf_params p, double theta, int mirrors,
+                                             double magnitude, double magnitude_err, const double *lobe_start,
+                                             const double *alt_start, const mf_ltcfit_aniso_options *o,
+                                             mf_ltcfit_aniso_entry *out) MF_WARN_UNUSED;
+
 /* Writes the published layout: a little-endian float32 .npy of shape (n0, n1, n2, n3, 3, 3),
  * C order (the LAST table axis fastest, unlike mf_table's storage), the forward M of each entry
  * divided by the norm of its last column.  Atomic.  MF_ERR_DOMAIN (not an anisotropic LTC
