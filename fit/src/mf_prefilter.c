@@ -633,8 +633,9 @@ static void store(pjob *j, mf_prefilter_level *lv, size_t idx, const double m[9]
  * depend on phi: the lobe at phi is the phi = 0 lobe rotated, M_phi = R_z(-phi) M_0 R_z(phi)); for
  * every phi the normals in the view-azimuth-aligned frame, their mirror symmetry y -> -y if they
  * have it, then the chain along theta: each fit starts from the previous elevation's lobe (a
- * proximal warm start) and is offered the parent level's lobe at the same view as a second
- * start. */
+ * proximal warm start).  (Offering the parent level's lobe at the same view as a second start
+ * is implemented but off, PREFILTER_PARENT_STARTS: it breaks the tiling invariance.) */
+#define PREFILTER_PARENT_STARTS 0
 static mf_status fit_footprint(pjob *j, int level, int row, int col)
 {
     const mf_prefilter_options *o = j->o;
@@ -643,7 +644,10 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
     int nv = o->n_theta * o->n_phi;
     const double *parent = NULL;
     size_t pidx = 0;
-    if (level < j->nlevels) {
+    /* The parent level's lobe as a second start is off: a tile of the map (mf_prefilter_run_from)
+     * has no parent for its own top level, so the start would make the lobes depend on the tiling
+     * (and on the number of MPI ranks); the pipeline promises the same bits for any tiling. */
+    if (PREFILTER_PARENT_STARTS && level < j->nlevels) {
         const mf_prefilter_level *pl = &j->levels[level];
         parent = j->lobes[level];
         pidx = ((size_t)(row * pl->height / lv->height) * pl->width + (size_t)(col * pl->width / lv->width)) * nv;
