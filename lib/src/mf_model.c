@@ -13,7 +13,9 @@
     X(ggx)                                                                                                        \
     X(beckmann)                                                                                                   \
     X(lambert)                                                                                                    \
+    X(leadr_diffuse)                                                                                              \
     X(oren_nayar)                                                                                                 \
+    X(eon)                                                                                                        \
     X(disney)                                                                                                     \
     X(charlie)
 
@@ -59,4 +61,21 @@ void mf_model_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, mf
         wi[i] = mf_model_sample(m, p, wo, u + 2 * i, &pdf[i]);
         w[i] = pdf[i] > 0.0 && wi[i].z > 0.0 && mf_vec3_isfinite(wi[i]) ? m->eval_cos(m, p, wo, wi[i]) / pdf[i] : 0.0;
     }
+}
+
+mf_vec3 mf_model_sample_cosine_polar(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, const double u[2],
+                                     double *pdf)
+{
+    (void)m;
+    (void)p;
+    mf_vec3 wi = mf_sample_cosine_hemisphere_polar(u);
+    *pdf = wo.z > 0.0 && wi.z > 0.0 ? wi.z * MF_INV_PI : 0.0;
+    return wi;
+}
+
+double mf_model_pdf_cosine(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, mf_vec3 wi)
+{
+    (void)m;
+    (void)p;
+    return wo.z > 0.0 && wi.z > 0.0 ? wi.z * MF_INV_PI : 0.0;
 }
