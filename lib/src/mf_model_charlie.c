@@ -16,7 +16,12 @@
  * the microfacet model) and not the approximate 1 / (4 (wi.z + wo.z - wi.z wo.z)) visibility of
  * Neubelt & Pettineo 2013 used by some real-time engines.  F = 1.
  *
- * Sampler: the micro-normal wh with density D(wh) cos theta_h, reflected: wi = 2 (wo.wh) wh - wo.
+ * Sampler: a mixture, 1/4 the cosine hemisphere (polar map) for u1 < 1/4 and 3/4 the reflected
+ * micro-normals of D below, u1 rescaled to [0, 1) in each part; density 1/4 wi.z / pi + 3/4 the
+ * reflected density.  The split at u1 = 1/4 is an edge of mf_model_albedo's panels (n >= 32), so
+ * the albedo rule sees two smooth parts.  The cosine part covers the views where few micro-normals
+ * reflect above the horizon (near the normal at low roughness no node of the D part does).
+ * The D part: the micro-normal wh with density D(wh) cos theta_h, reflected: wi = 2 (wo.wh) wh - wo.
  * D is normalised so that integral D cos theta_h dw = (2 + k) integral_0^{pi/2} sin^(k+1) cos
  * d theta = 1 (k = 1/r), and its CDF in theta_h is sin^(k+2) theta_h, inverted exactly:
  * sin^2 theta_h = u0^(2/(k+2)), cos^2 theta_h = -expm1(2 ln(u0) / (k+2)) (no cancellation when
@@ -30,6 +35,8 @@
 #include "mfkit/mf_model.h"
 
 #include <stddef.h>
+
+#include "mfkit/mf_sample.h"
 
 static double charlie_l(double r, double x)
 {
@@ -71,21 +78,23 @@ static double charlie_eval_cos(const mf_brdf_model *m, const mf_brdf_params *p, 
     return d * g2 / (4.0 * wo.z);
 }
 
+#define CHARLIE_MIX 0.25 /* the cosine hemisphere's share of the sampler */
+
 static double charlie_pdf(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, mf_vec3 wi)
 {
     (void)m;
     double alpha = p->alpha_x;
     if (!(alpha > 0.0) || !(wo.z > 0.0) || !(wi.z > 0.0))
         return 0.0;
-    double r = fmin(alpha, 1.0);
+    double r = fmin(alpha, 1.0), cosine = CHARLIE_MIX * wi.z * MF_INV_PI;
     mf_vec3 h = mf_vec3_add(wo, wi);
     double len = mf_vec3_length(h);
     if (!(len > 0.0))
-        return 0.0;
+        return cosine;
     double wo_h = mf_vec3_dot(wo, h) / len, cos_h = h.z / len;
     if (!(wo_h > 0.0))
-        return 0.0;
-    return charlie_d(r, h) * cos_h / (4.0 * wo_h);
+        return cosine;
+    return cosine + (1.0 - CHARLIE_MIX) * charlie_d(r, h) * cos_h / (4.0 * wo_h);
 }
 
 static mf_vec3 charlie_sample(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, const double u[2],
@@ -95,15 +104,21 @@ static mf_vec3 charlie_sample(const mf_brdf_model *m, const mf_brdf_params *p, m
     *pdf = 0.0;
     if (!(alpha > 0.0) || !(wo.z > 0.0) || !mf_vec3_isfinite(wo))
         return mf_vec3_make(0.0, 0.0, 1.0);
-    double r = fmin(alpha, 1.0), k2 = 2.0 + 1.0 / r;
-    double e = u[0] > 0.0 ? 2.0 * log(u[0]) / k2 : -INFINITY;
-    double sin_sq = exp(e), cos_sq = -expm1(e); /* sin^2 theta_h = u0^(2/(k+2)) */
-    double st = sqrt(sin_sq), ct = sqrt(cos_sq), phi = 2.0 * MF_PI * u[1];
-    mf_vec3 wh = mf_vec3_make(st * cos(phi), st * sin(phi), ct);
-    double d = mf_vec3_dot(wo, wh);
-    if (!(d > 0.0))
-        return mf_vec3_make(0.0, 0.0, -1.0);
-    mf_vec3 wi = mf_vec3_normalize(mf_vec3_sub(mf_vec3_scale(wh, 2.0 * d), wo));
+    mf_vec3 wi;
+    if (u[1] < CHARLIE_MIX) {
+        double v[2] = {u[0], u[1] / CHARLIE_MIX};
+        wi = mf_sample_cosine_hemisphere_polar(v);
+    } else {
+        double r = fmin(alpha, 1.0), k2 = 2.0 + 1.0 / r;
+        double e = u[0] > 0.0 ? 2.0 * log(u[0]) / k2 : -INFINITY;
+        double sin_sq = exp(e), cos_sq = -expm1(e); /* sin^2 theta_h = u0^(2/(k+2)) */
+        double st = sqrt(sin_sq), ct = sqrt(cos_sq), phi = 2.0 * MF_PI * (u[1] - CHARLIE_MIX) / (1.0 - CHARLIE_MIX);
+        mf_vec3 wh = mf_vec3_make(st * cos(phi), st * sin(phi), ct);
+        double d = mf_vec3_dot(wo, wh);
+        if (!(d > 0.0))
+            return mf_vec3_make(0.0, 0.0, -1.0);
+        wi = mf_vec3_normalize(mf_vec3_sub(mf_vec3_scale(wh, 2.0 * d), wo));
+    }
     if (!(wi.z > 0.0))
         return wi;
     *pdf = charlie_pdf(m, p, wo, wi);
@@ -111,6 +126,6 @@ static mf_vec3 charlie_sample(const mf_brdf_model *m, const mf_brdf_params *p, m
 }
 
 const mf_brdf_model mf_model_charlie = {
-    "charlie", "Charlie sheen, Lambda fit, height-correlated G2, D cos sampling, not energy conserving [Estevez & Kulla 2017]",
+    "charlie", "Charlie sheen, Lambda fit, height-correlated G2, D cos + cosine sampling, not energy conserving [Estevez & Kulla 2017]",
     MF_MODEL_RECIPROCAL,
     charlie_eval_cos, charlie_sample, charlie_pdf, NULL};

@@ -22,7 +22,8 @@
  * below 1 at most views, but above 1 at grazing views for small sigma (measured by adaptive
  * quadrature in tests/test_models.c: 1.0042 at alpha 0.1, theta_o 89 deg; 1 + 5e-9 at alpha 1e-4):
  * the B term's tan b grows faster than A falls.  EON ("eon") is the energy-preserving variant.
- * Reciprocal.  Sampler: the cosine hemisphere by the polar map (mf_model_sample_cosine_polar).
+ * Reciprocal.  Sampler: the cosine hemisphere split at theta_i = theta_o (mf_model_sample_cosine_split), so
+ * that the albedo rule's panels end on the kink of max(0, s) / t.
  */
 #include "mfkit/mf_model.h"
 
@@ -43,4 +44,4 @@ static double qon_eval_cos(const mf_brdf_model *m, const mf_brdf_params *p, mf_v
 
 const mf_brdf_model mf_model_oren_nayar = {
     "oren-nayar", "Oren-Nayar qualitative model, sigma = alpha / sqrt(2), not energy conserving [Oren & Nayar 1994, Eq. 30]",
-    MF_MODEL_RECIPROCAL, qon_eval_cos, mf_model_sample_cosine_polar, mf_model_pdf_cosine, NULL};
+    MF_MODEL_RECIPROCAL, qon_eval_cos, mf_model_sample_cosine_split, mf_model_pdf_cosine_split, NULL};

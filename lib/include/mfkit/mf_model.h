@@ -134,6 +134,16 @@ void mf_model_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, mf
 mf_vec3 mf_model_sample_cosine_polar(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, const double u[2],
                                      double *pdf);
 double mf_model_pdf_cosine(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, mf_vec3 wi);
+/* The sampler of the models with a kink at theta_i = theta_o (QON's and EON's s / max(wi.z, wo.z)):
+ * theta_i piecewise uniform in u0, [0, u_b) onto [0, theta_o) and [u_b, 1) onto [theta_o, pi/2),
+ * phi = 2 pi u1, u_b an edge of mf_model_albedo's panels (37/64, 7/8 or 63/64, the one nearest
+ * sin^2 theta_o), so that the kink falls on a panel edge and every trigonometric function of wi is
+ * smooth in u; density per steradian p(theta) / (2 pi sin theta_i), p(theta) = u_b / theta_o below
+ * the kink and (1 - u_b) / (pi/2 - theta_o) above it (0 at the pole, a null set).  Views within
+ * 8 deg of the normal use mf_model_sample_cosine_polar. */
+mf_vec3 mf_model_sample_cosine_split(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, const double u[2],
+                                     double *pdf);
+double mf_model_pdf_cosine_split(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, mf_vec3 wi);
 
 /* ---- directional albedo ------------------------------------------------------------------------ */
 
