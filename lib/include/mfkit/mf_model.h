@@ -32,7 +32,9 @@
  *                albedo exactly 1
  *   disney       Disney / Burley 2012 diffuse; Burley's roughness R = sqrt(alpha) (his alpha = R^2, so
  *                the table axis r is R), no Fresnel of the specular; NOT energy conserving
- *   charlie      the Charlie sheen lobe (Estevez & Kulla 2017) with its Lambda fit, alpha as roughness
+ *   charlie      the Charlie sheen lobe (Estevez & Kulla 2017) with its Lambda fit, alpha as roughness;
+ *                NOT energy conserving; samples its NDF truncated to micro-normals that reflect above
+ *                the horizon
  */
 #ifndef MF_MODEL_H
 #define MF_MODEL_H
