@@ -93,7 +93,7 @@ else
 fi
 # LTC error per texel of each shipped BRDF: a 12 x 12 fit of each (--force: most fail their gate,
 # issue 7; the figures show where), 16 polygons and 16384 Monte Carlo samples per texel (~40 s in
-# all).  MFKIT_FIGURES_BRDFS chooses the BRDFs (default: all but oren-nayar, whose model integrates
+# all).  MFKIT_FIGURES_BRDFS chooses the BRDFs (default: all but leadr-diffuse, whose model integrates
 # numerically per evaluation (256 nodes): its 12 x 12 fit, gate and map take minutes; "" for none).
 if [ -x "$bin/study_ltc_texels" ] && [ -x "$build/bin/mfkit" ]; then
     for b in ${MFKIT_FIGURES_BRDFS-ggx beckmann lambert disney charlie}; do

@@ -10,7 +10,7 @@
  *    [Walter 2007, Eq. 20; Heitz 2014], without Fresnel (F = 1: the energy lost to single
  *    scattering is 1 - rho) and with Schlick F0 = 0.04 [Schlick 1994, Eq. 15], by the deterministic
  *    product quadrature mf_brdf_microfacet_albedo (N x N points; err is its own error estimate);
- *  - source "model": each LTC target model of mf_model.h (ggx, beckmann, lambert, oren-nayar,
+ *  - source "model": each LTC target model of mf_model.h (ggx, beckmann, lambert, leadr-diffuse, oren-nayar, eon,
  *    disney, charlie; F = 1), by stratified Monte Carlo (K x K jittered strata of the unit square,
  *    two points per stratum, pcg32 with the given seed) with a one-sample mixture of the model's
  *    own sampler (probability 7/8) and the cosine hemisphere (1/8): pdf = (7 p_model + p_cos) / 8,

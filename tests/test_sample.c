@@ -57,7 +57,7 @@
 static double gl_x[GL_ORDER], gl_w[GL_ORDER];
 
 /* ---- the distributions under test ------------------------------------------------------------ */
-typedef enum { K_SPHERE, K_HEMI, K_COSINE, K_NDF, K_VNDF, K_VNDF_REFLECTED } kind;
+typedef enum { K_SPHERE, K_HEMI, K_COSINE, K_NDF, K_VNDF, K_VNDF_REFLECTED, K_COSINE_POLAR } kind;
 
 /* A sampler or a pdf: kind, NDF (K_NDF: its type and alphas; K_VNDF*: GGX alphas), view. */
 typedef struct dist {
@@ -84,6 +84,7 @@ static mf_vec3 dist_sample(const dist *d, const double u[2])
     case K_SPHERE: return mf_sample_uniform_sphere(u);
     case K_HEMI: return mf_sample_uniform_hemisphere(u);
     case K_COSINE: return mf_sample_cosine_hemisphere(u);
+    case K_COSINE_POLAR: return mf_sample_cosine_hemisphere_polar(u);
     case K_NDF: return mf_sample_ndf_normal(d->ndf, u);
     case K_VNDF: return mf_sample_ggx_vndf(d->ndf.alpha_x, d->ndf.alpha_y, d->wo, u);
     case K_VNDF_REFLECTED:
@@ -98,7 +99,8 @@ static double dist_pdf(const dist *d, mf_vec3 w)
     switch (d->k) {
     case K_SPHERE: return mf_pdf_uniform_sphere();
     case K_HEMI: return mf_pdf_uniform_hemisphere(w);
-    case K_COSINE: return mf_pdf_cosine_hemisphere(w);
+    case K_COSINE:
+    case K_COSINE_POLAR: return mf_pdf_cosine_hemisphere(w);
     case K_NDF: return mf_pdf_ndf_normal(d->ndf, w);
     case K_VNDF: return mf_pdf_ggx_vndf(d->ndf.alpha_x, d->ndf.alpha_y, d->wo, w);
     case K_VNDF_REFLECTED: {
@@ -487,6 +489,7 @@ static void build_cases(void)
     add_case(make_simple(K_SPHERE), "uniform_sphere", 0, 0, 0);
     add_case(make_simple(K_HEMI), "uniform_hemisphere", 0, 0, 0);
     add_case(make_simple(K_COSINE), "cosine_hemisphere", 0, 0, 0);
+    add_case(make_simple(K_COSINE_POLAR), "cosine_hemisphere_polar", 0, 0, 0);
     static const double alphas[4][2] = {{0.05, 0.05}, {0.3, 0.3}, {1.0, 1.0}, {0.1, 0.6}};
     for (int t = 0; t < 2; ++t)
         for (int a = 0; a < 4; ++a)
@@ -593,6 +596,8 @@ static void test_extreme_inputs(void)
         w = mf_sample_uniform_hemisphere(u);
         CHECK(is_unit_finite(w) && w.z >= 0.0);
         w = mf_sample_cosine_hemisphere(u);
+        CHECK(is_unit_finite(w) && w.z >= 0.0);
+        w = mf_sample_cosine_hemisphere_polar(u);
         CHECK(is_unit_finite(w) && w.z >= 0.0);
         CHECK(isfinite(mf_pdf_cosine_hemisphere(w)) && isfinite(mf_pdf_uniform_hemisphere(w)));
         for (int a = 0; a < 6; ++a) {

@@ -13,7 +13,9 @@
     X(ggx)                                                                                                        \
     X(beckmann)                                                                                                   \
     X(lambert)                                                                                                    \
+    X(leadr_diffuse)                                                                                              \
     X(oren_nayar)                                                                                                 \
+    X(eon)                                                                                                        \
     X(disney)                                                                                                     \
     X(charlie)
 
@@ -59,4 +61,68 @@ void mf_model_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, mf
         wi[i] = mf_model_sample(m, p, wo, u + 2 * i, &pdf[i]);
         w[i] = pdf[i] > 0.0 && wi[i].z > 0.0 && mf_vec3_isfinite(wi[i]) ? m->eval_cos(m, p, wo, wi[i]) / pdf[i] : 0.0;
     }
+}
+
+mf_vec3 mf_model_sample_cosine_polar(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, const double u[2],
+                                     double *pdf)
+{
+    (void)m;
+    (void)p;
+    mf_vec3 wi = mf_sample_cosine_hemisphere_polar(u);
+    *pdf = wo.z > 0.0 && wi.z > 0.0 ? wi.z * MF_INV_PI : 0.0;
+    return wi;
+}
+
+double mf_model_pdf_cosine(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, mf_vec3 wi)
+{
+    (void)m;
+    (void)p;
+    return wo.z > 0.0 && wi.z > 0.0 ? wi.z * MF_INV_PI : 0.0;
+}
+
+/* The break u_b of mf_model_sample_cosine_split: an edge of both albedo rules' panels in t
+ * (u0 = 1 - (1 - t)^3 at t = 1/4, 1/2, 3/4), the one nearest the kink s_o^2 = sin^2 theta_o; 0 (no
+ * split) for views within 8 deg of the normal, where the kink is weak (s is proportional to
+ * sin theta_o) and the split would weigh the hemisphere unevenly. */
+static double split_break(double so2)
+{
+    if (so2 < 0.02)
+        return 0.0;
+    return so2 <= 0.75 ? 37.0 / 64.0 : (so2 <= 0.95 ? 7.0 / 8.0 : 63.0 / 64.0);
+}
+
+mf_vec3 mf_model_sample_cosine_split(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, const double u[2],
+                                     double *pdf)
+{
+    if (!(wo.z > 0.0) || !mf_vec3_isfinite(wo)) {
+        *pdf = 0.0;
+        return mf_vec3_make(0.0, 0.0, 1.0);
+    }
+    double so2 = wo.x * wo.x + wo.y * wo.y, ub = split_break(so2);
+    if (ub == 0.0)
+        return mf_model_sample_cosine_polar(m, p, wo, u, pdf);
+    double theta_o = atan2(sqrt(so2), wo.z), theta;
+    if (u[0] < ub)
+        theta = theta_o * (u[0] / ub);
+    else
+        theta = theta_o + (0.5 * MF_PI - theta_o) * ((u[0] - ub) / (1.0 - ub));
+    double r = sin(theta), z = cos(theta), phi = 2.0 * MF_PI * u[1];
+    mf_vec3 wi = mf_vec3_make(r * cos(phi), r * sin(phi), z);
+    *pdf = mf_model_pdf_cosine_split(m, p, wo, wi);
+    return wi;
+}
+
+double mf_model_pdf_cosine_split(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, mf_vec3 wi)
+{
+    if (!(wo.z > 0.0) || !(wi.z > 0.0))
+        return 0.0;
+    double so2 = wo.x * wo.x + wo.y * wo.y, ub = split_break(so2);
+    if (ub == 0.0)
+        return mf_model_pdf_cosine(m, p, wo, wi);
+    /* theta uniform on each piece: density per steradian p(theta) / (2 pi sin theta) */
+    double theta_o = atan2(sqrt(so2), wo.z), si = sqrt(wi.x * wi.x + wi.y * wi.y), theta_i = atan2(si, wi.z);
+    if (!(si > 0.0))
+        return 0.0; /* the pole: the density per steradian is singular there (measure 0: discarded) */
+    double p_theta = theta_i < theta_o ? ub / theta_o : (1.0 - ub) / (0.5 * MF_PI - theta_o);
+    return p_theta / (2.0 * MF_PI * si);
 }

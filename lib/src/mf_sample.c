@@ -49,6 +49,12 @@ mf_vec3 mf_sample_cosine_hemisphere(const double u[2])
     return mf_vec3_make(x, y, sqrt(fmax(0.0, 1.0 - x * x - y * y)));
 }
 
+mf_vec3 mf_sample_cosine_hemisphere_polar(const double u[2])
+{
+    double r = sqrt(u[0]), phi = 2.0 * MF_PI * u[1];
+    return mf_vec3_make(r * cos(phi), r * sin(phi), sqrt(1.0 - u[0]));
+}
+
 double mf_pdf_cosine_hemisphere(mf_vec3 w) { return w.z > 0.0 ? w.z * MF_INV_PI : 0.0; }
 
 mf_vec3 mf_sample_ndf_normal(mf_ndf ndf, const double u[2])

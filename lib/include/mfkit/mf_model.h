@@ -24,11 +24,17 @@
  *   ggx          Walter microfacet, GGX, height-correlated masking-shadowing, F = 1; anisotropic
  *   beckmann     the same with Beckmann; anisotropic
  *   lambert      1/pi (the identity LTC: a test of the pipeline)
- *   oren-nayar   LEADR's rough diffuse microfacet BRDF (Dupuy 2013, Eq. 21) for centred isotropic
- *                Beckmann slopes (alpha^2 = 2 sigma^2), which the paper relates to Oren-Nayar
+ *   leadr-diffuse  LEADR's rough diffuse microfacet BRDF (Dupuy 2013, Eq. 21) for centred isotropic
+ *                Beckmann slopes (alpha^2 = 2 sigma^2), by a quadrature with a measured error < 1e-8
+ *   oren-nayar   Oren & Nayar 1994's qualitative model (Eq. 30), sigma = alpha / sqrt(2); NOT energy
+ *                conserving (albedo up to 1.004 at grazing views, small sigma)
+ *   eon          the energy-preserving Oren-Nayar of OpenPBR (Portsmouth et al. 2025), r = sqrt(alpha):
+ *                albedo exactly 1
  *   disney       Disney / Burley 2012 diffuse; Burley's roughness R = sqrt(alpha) (his alpha = R^2, so
  *                the table axis r is R), no Fresnel of the specular; NOT energy conserving
- *   charlie      the Charlie sheen lobe (Estevez & Kulla 2017) with its Lambda fit, alpha as roughness
+ *   charlie      the Charlie sheen lobe (Estevez & Kulla 2017) with its Lambda fit, alpha as roughness;
+ *                NOT energy conserving; samples its NDF truncated to micro-normals that reflect above
+ *                the horizon
  */
 #ifndef MF_MODEL_H
 #define MF_MODEL_H
@@ -121,6 +127,25 @@ double mf_model_pdf(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo,
  * with wi.z > 0): the model's sample_weights when it has one, which gives the same bits. */
 void mf_model_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, int n, const double *u,
                              mf_vec3 *wi, double *pdf, double *w);
+
+/* The diffuse models' sampler (their `sample` and `pdf`): the cosine hemisphere by the polar map
+ * (mf_sample_cosine_hemisphere_polar), density wi.z / pi (0 for wo.z <= 0 or wi.z <= 0).  Unlike
+ * the fallback's concentric map, it is smooth in u and puts the horizon at u0 -> 1, where
+ * mf_model_albedo grades its nodes: the grazing features of the rough diffuse models (QON's and
+ * EON's s / max(wi.z, wo.z) at grazing views) converge there. */
+mf_vec3 mf_model_sample_cosine_polar(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, const double u[2],
+                                     double *pdf);
+double mf_model_pdf_cosine(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, mf_vec3 wi);
+/* The sampler of the models with a kink at theta_i = theta_o (QON's and EON's s / max(wi.z, wo.z)):
+ * theta_i piecewise uniform in u0, [0, u_b) onto [0, theta_o) and [u_b, 1) onto [theta_o, pi/2),
+ * phi = 2 pi u1, u_b an edge of mf_model_albedo's panels (37/64, 7/8 or 63/64, the one nearest
+ * sin^2 theta_o), so that the kink falls on a panel edge and every trigonometric function of wi is
+ * smooth in u; density per steradian p(theta) / (2 pi sin theta_i), p(theta) = u_b / theta_o below
+ * the kink and (1 - u_b) / (pi/2 - theta_o) above it (0 at the pole, a null set).  Views within
+ * 8 deg of the normal use mf_model_sample_cosine_polar. */
+mf_vec3 mf_model_sample_cosine_split(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, const double u[2],
+                                     double *pdf);
+double mf_model_pdf_cosine_split(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, mf_vec3 wi);
 
 /* ---- directional albedo ------------------------------------------------------------------------ */
 

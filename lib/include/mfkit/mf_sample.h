@@ -7,7 +7,7 @@
  *  sampler                       density of the result              measure
  *  uniform_sphere                1 / (4 pi)                         solid angle
  *  uniform_hemisphere            1 / (2 pi)  (z >= 0)               solid angle
- *  cosine_hemisphere             cos(theta) / pi                    solid angle
+ *  cosine_hemisphere(_polar)     cos(theta) / pi                    solid angle
  *  ndf_normal (GGX, Beckmann)    D(wm) wm.z                         solid angle of micro-normal
  *  ggx_vndf                      G1(wo) max(0, wo.wm) D(wm) / wo.z  solid angle of micro-normal
  *
@@ -36,6 +36,10 @@ double mf_pdf_uniform_hemisphere(mf_vec3 w); /* 0 for w.z < 0 */
 /* Concentric disk [Shirley & Chiu 1997] lifted to the hemisphere (Malley's method). */
 mf_vec3 mf_sample_cosine_hemisphere(const double u[2]);
 double mf_pdf_cosine_hemisphere(mf_vec3 w); /* max(0, w.z) / pi */
+/* The same density by the polar map sin^2 theta = u0, phi = 2 pi u1 (z = sqrt(1 - u0)): smooth in
+ * u, with the horizon at u0 -> 1 (where mf_model_albedo grades its nodes), which the concentric
+ * map spreads over the square's boundary.  The diffuse models' sampler. */
+mf_vec3 mf_sample_cosine_hemisphere_polar(const double u[2]);
 
 /* Micro-normal with density D(wm) wm.z; for Beckmann the slope radius is sqrt(-ln(1 - u0)),
  * for GGX sqrt(u0 / (1 - u0)), in the space stretched by 1/alpha.  NaN for an invalid NDF. */
