@@ -96,6 +96,7 @@ int cli_prefilter_eval(int argc, char **argv)
 
 #include <errno.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #define PE_MAX_LIGHTS 8
 #define PE_LIGHT_MAX_ELEV (75.0 * MF_PI / 180.0)
@@ -414,6 +415,8 @@ static int pe_main(int argc, char **argv)
     float *lm = NULL, *mg = NULL;
     FILE *fr = NULL, *fs = NULL;
     pe_acc *acc = NULL;
+    char rpath[4200], spath[4200], rtmp[4300], stmp[4300];
+    int created = 0; /* --out made here: removed again on failure (no partial output) */
     const int W = img.width, H = img.height;
     int is_int = strstr(info.pixel_type, "int") != NULL;
     int enc = v[E_ENCODING].set ? (int)v[E_ENCODING].i : 0;
@@ -460,11 +463,12 @@ static int pe_main(int argc, char **argv)
         rc = cli_error(k_cmd, "%s: %d x %d has no level >= 1", map, W, H);
         goto done;
     }
-    if (mkdir(out, 0777) != 0 && errno != EEXIST) {
+    if (mkdir(out, 0777) == 0)
+        created = 1;
+    else if (errno != EEXIST) {
         rc = CLI_EXIT_IO, cli_error(k_cmd, "--out %s: cannot create: %s", out, strerror(errno));
         goto done;
     }
-    char rpath[4200], spath[4200], rtmp[4300], stmp[4300];
     snprintf(rpath, sizeof rpath, "%s/prefilter_eval.csv", out);
     snprintf(spath, sizeof spath, "%s/prefilter_eval_summary.csv", out);
     snprintf(rtmp, sizeof rtmp, "%s.tmp", rpath);
@@ -577,6 +581,8 @@ done:
     }
     if (rc != 0 && fr)
         remove(rtmp), remove(stmp);
+    if (rc != 0 && created)
+        rmdir(out);
     free(acc), free(lm), free(mg), free(normals), free(foot);
     mf_image_free(&img);
     mf_image_info_free(&info);
