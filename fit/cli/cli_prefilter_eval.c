@@ -418,7 +418,7 @@ static int pe_main(int argc, char **argv)
     char rpath[4200], spath[4200], rtmp[4300], stmp[4300];
     int created = 0; /* --out made here: removed again on failure (no partial output) */
     const int W = img.width, H = img.height;
-    int is_int = info.pixel_type && !strncmp(info.pixel_type, "uint", 4); /* as mfkit prefilter decides */
+    int is_int = !strncmp(info.pixel_type, "uint", 4); /* as mfkit prefilter decides */
     int enc = v[E_ENCODING].set ? (int)v[E_ENCODING].i : 0;
     int unorm = enc == 1 || (enc == 0 && is_int);
     int green_down = v[E_GREEN].set && v[E_GREEN].i == 1;
