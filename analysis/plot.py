@@ -806,5 +806,44 @@ def main(argv):
     return status
 
 
+def plot_prefilter_eval(d, out_dir, made):
+    """mfkit prefilter-eval's summary: mean squared shading error of the prefiltered lobes and the
+    baselines against the Monte Carlo truth, per MIP level (the thesis' error against distance) and per
+    light size (its error against light size), each averaged over the tabulated view elevations."""
+    methods = [("mfkit", "mfkit lobes", "C3"), ("naive", "naive (mean normal)", "C0"),
+               ("toksvig", "Toksvig", "C1"), ("leadr", "LEADR", "C2")]
+    levels = np.unique(d["level"])
+    lights = np.unique(d["light_half_side"])
+    fig, axes = new_figure(2, 1, width=5.6)
+    ax = axes[0][0]
+    mid = lights[len(lights) // 2]
+    for key, label, colour in methods:
+        ys = [np.mean(d["mse_" + key][(d["level"] == k) & (d["light_half_side"] == mid)]) for k in levels]
+        ax.plot(levels, np.maximum(ys, 1e-12), "o-", color=colour, label=label)
+    ax.set_yscale("log")
+    ax.set_xlabel("MIP level (footprint 2^k x 2^k texels)")
+    ax.set_ylabel("MSE vs Monte Carlo truth (mean over elevations)")
+    ax.set_title("error against level, light half side %.3g" % mid)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    ax = axes[0][1]
+    for key, label, colour in methods:
+        ys = [np.mean(d["mse_" + key][d["light_half_side"] == h]) for h in lights]
+        ax.plot(lights, np.maximum(ys, 1e-12), "o-", color=colour, label=label)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("light half side (square at distance 1)")
+    ax.set_ylabel("MSE (mean over levels and elevations)")
+    ax.set_title("error against light size")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    finish(fig, d, out_dir, "prefilter_eval", made,
+           note="values 0 (a baseline exact on one-normal footprints) drawn at 1e-12")
+
+
+KINDS = KINDS + ((("level", "light_half_side", "i_theta", "mse_mfkit", "mse_naive", "mse_toksvig", "mse_leadr"),
+                  plot_prefilter_eval),)
+
+
 if __name__ == "__main__":
     sys.exit(main(sys.argv))

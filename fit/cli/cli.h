@@ -13,6 +13,7 @@ int cli_fit_aniso(int argc, char **argv); /* argv[0] = "fit", argv[1] = "ltc-ani
 int cli_maps(int argc, char **argv);     /* argv[0] = "maps"; an error without OpenImageIO */
 int cli_sh(int argc, char **argv);       /* argv[0] = "sh"; an error without OpenImageIO */
 int cli_prefilter(int argc, char **argv); /* argv[0] = "prefilter"; needs Ceres and OpenImageIO */
+int cli_prefilter_eval(int argc, char **argv); /* argv[0] = "prefilter-eval"; the same builds */
 
 int cli_compare(int argc, char **argv);  /* argv[0] = "compare"; EXR needs the image backend */
 

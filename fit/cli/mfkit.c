@@ -126,6 +126,10 @@ static const cli_entry k_commands[] = {
     {"prefilter", cli_prefilter, needs_image_solver,
      "prefilter NORMALMAP --out DIR\n"
      "                  LTC lobes of a normal map's footprints per MIP level and view (Ceres + OpenImageIO)"},
+    {"prefilter-eval", cli_prefilter_eval, needs_image_solver,
+     "prefilter-eval PREFILTER_DIR --out DIR\n"
+     "                  shading error of the prefiltered lobes against Monte Carlo ground truth, beside\n"
+     "                  naive, Toksvig and LEADR (Ceres + OpenImageIO)"},
 };
 #define N_COMMANDS ((int)(sizeof k_commands / sizeof k_commands[0]))
 

@@ -1,0 +1,596 @@
+/*
+ * cli_prefilter_eval.c -- `mfkit prefilter-eval PREFILTER_DIR`: the shading error of the
+ * prefiltered lobes of `mfkit prefilter` against ground truth, beside the baselines a renderer
+ * would otherwise use (issue 13, "Ground truth and evaluation").
+ *
+ * For every evaluated footprint (level k >= 1, texel (row, col)), every tabulated view
+ * (theta_i, phi_j) and every square light, all in the view-azimuth-aligned frame the prefilter
+ * uses (the footprint's normals rotated by -phi about z, view wo = (sin theta, 0, cos theta);
+ * docs/prefilter.md), with unit radiance on the light:
+ *
+ *   truth    (1/N) sum_q integral_light f(R_q^T wo, R_q^T wi) (R_q^T wi).z dwi
+ *            [Nahmias 2022, Eq. 2.36], wi.z > 0, with the prefilter's below-horizon rule
+ *            (mf_prefilter.h); Monte Carlo over the light's area (uniform points, fixed seed)
+ *            with its standard error;
+ *   mfkit    magnitude * integral_light D_M (the stored forward M; mf_ltc_integrate_polygon);
+ *   naive    the base GGX rotated to the footprint's normalised mean normal;
+ *   toksvig  the same with alpha' = sqrt(alpha^2 + 2 (1 - |n_a|) / |n_a|), |n_a| the length of the
+ *            mean normal [Toksvig 2005, "Mipmapping normal maps", JGT 10(3): 1/s' = 1/s + (1 - |n_a|)/|n_a|
+ *            for a Blinn-Phong exponent s, with s = 2/alpha^2 - 2 read as slope variance alpha^2/2]
+ *            (mf_toksvig_beckmann_alpha, applied to GGX's alpha as renderers do);
+ *   leadr    mfkit's LEADR specular [Dupuy 2013, Eq. 17], Fresnel 1: Gaussian slopes with the
+ *            footprint's mean and covariance of the texel slopes (-n.x/n.z, -n.y/n.z) plus the base
+ *            roughness as a Beckmann slope variance alpha^2/2 per axis.
+ *
+ * The baselines are integrated with the same light samples as the truth (so their differences
+ * from it carry little Monte Carlo noise); mfkit's lobe is integrated in closed form.
+ * The light: a square of half side h at distance 1, facing the origin, centred on the mirror
+ * direction of the view, its elevation clamped to at most 75 deg so the lights of grazing views
+ * stay mostly above the horizon; what lies below the geometric horizon contributes nothing.
+ */
+#include "cli.h"
+#include "cli_opt.h"
+#include "cli_util.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *const k_cmd = "prefilter-eval";
+static const char *const k_green_names[] = {"up", "down", NULL};
+static const char *const k_encoding_names[] = {"auto", "unorm", "raw", NULL};
+
+enum { E_OUT, E_LIGHTS, E_SAMPLES, E_TEXELS, E_SEED, E_MAP, E_GREEN, E_ENCODING, E_NOPTS };
+static const cli_opt k_opts[E_NOPTS] = {
+    {.name = "--out", .metavar = "DIR", .kind = CLI_OPT_STRING, .required = 1,
+     .help = "output directory (created if missing): prefilter_eval.csv (every record) and "
+             "prefilter_eval_summary.csv (per level, light and elevation)"},
+    {.name = "--lights", .metavar = "H,H,...", .kind = CLI_OPT_STRING, .def = "0.05,0.2,0.5",
+     .help = "half sides of the square lights at distance 1 (1 to 8 values in (0, 10])"},
+    {.name = "--samples", .metavar = "N", .kind = CLI_OPT_INT, .lo = 16, .hi = 1 << 24, .def = "4096",
+     .help = "Monte Carlo points on the light per record"},
+    {.name = "--texels", .metavar = "N", .kind = CLI_OPT_INT, .lo = 1, .hi = 1 << 24, .def = "16",
+     .help = "at most N texels per level, evenly spaced in row-major order"},
+    {.name = "--seed", .metavar = "S", .kind = CLI_OPT_INT, .lo = 0, .hi = 1L << 30, .def = "1",
+     .help = "Monte Carlo seed"},
+    {.name = "--map", .metavar = "NORMALMAP", .kind = CLI_OPT_STRING, .def = "the manifest's map",
+     .help = "the normal map the prefilter was run on"},
+    {.name = "--green", .kind = CLI_OPT_ENUM, .choices = k_green_names, .def = "up",
+     .help = "as given to mfkit prefilter"},
+    {.name = "--encoding", .kind = CLI_OPT_ENUM, .choices = k_encoding_names, .def = "auto",
+     .help = "as given to mfkit prefilter"},
+};
+static const cli_command k_eval_cmd = {
+    .name = "prefilter-eval",
+    .synopsis = "PREFILTER_DIR",
+    .min_pos = 1,
+    .max_pos = 1,
+    .description =
+        "Shading error of the prefiltered lobes (magnitude x LTC integral over square lights) against the\n"
+        "ground truth (the footprint average of the exact base-GGX integral, Monte Carlo with its standard\n"
+        "error), beside the baselines naive (mean normal), Toksvig (mean normal, widened roughness) and LEADR.\n"
+        "Reads PREFILTER_DIR/prefilter.json, ltc_mip<k>.npy, magnitude_mip<k>.npy and the normal map.\n",
+    .opts = k_opts,
+    .nopts = E_NOPTS,
+    .epilog = "exit status: 0 success, 2 usage or input error, 3 I/O error\n",
+};
+
+#if !defined(MFKIT_CLI_HAVE_IMAGE) || !defined(MFKIT_CLI_HAVE_SOLVER)
+
+int cli_prefilter_eval(int argc, char **argv)
+{
+    return cli_opt_unavailable(&k_eval_cmd, k_cmd, "Ceres and OpenImageIO", "MFKIT_WITH_CERES/MFKIT_WITH_OIIO",
+                               argc, argv);
+}
+
+#else
+
+#include "mfkit/fit/mf_prefilter.h"
+#include "mfkit/io/mf_image.h"
+#include "mfkit/mf_brdf.h"
+#include "mfkit/mf_ltc.h"
+#include "mfkit/mf_moments.h"
+#include "mfkit/mf_polygon.h"
+#include "mfkit/mf_rng.h"
+
+#include <errno.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#define PE_MAX_LIGHTS 8
+#define PE_LIGHT_MAX_ELEV (75.0 * MF_PI / 180.0)
+
+/* Reads a whole small file; NULL with msg on failure. */
+static char *slurp(const char *path, size_t *len, char *msg, size_t msz)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        snprintf(msg, msz, "%s: cannot open: %s", path, strerror(errno));
+        return NULL;
+    }
+    char *b = NULL;
+    size_t n = 0, cap = 0;
+    for (;;) {
+        if (n + 65536 > cap) {
+            cap = 2 * cap + 65536;
+            char *nb = realloc(b, cap + 1);
+            if (!nb) {
+                free(b), fclose(f);
+                snprintf(msg, msz, "out of memory");
+                return NULL;
+            }
+            b = nb;
+        }
+        size_t r = fread(b + n, 1, cap - n, f);
+        n += r;
+        if (r == 0)
+            break;
+    }
+    int bad = ferror(f);
+    fclose(f);
+    if (bad) {
+        free(b);
+        snprintf(msg, msz, "%s: read error", path);
+        return NULL;
+    }
+    b[n] = 0;
+    *len = n;
+    return b;
+}
+
+/* A float32 little-endian C-order .npy of the expected rank; shape in dims. */
+static float *read_npy(const char *path, int rank, long *dims, char *msg, size_t msz)
+{
+    size_t len;
+    char *b = slurp(path, &len, msg, msz);
+    if (!b)
+        return NULL;
+    float *out = NULL;
+    if (len < 10 || memcmp(b, "\x93NUMPY", 6) != 0) {
+        snprintf(msg, msz, "%s: not a .npy file", path);
+        goto done;
+    }
+    size_t hl, off;
+    if (b[6] == 1)
+        hl = (unsigned char)b[8] | (size_t)(unsigned char)b[9] << 8, off = 10;
+    else
+        hl = (unsigned char)b[8] | (size_t)(unsigned char)b[9] << 8 | (size_t)(unsigned char)b[10] << 16 |
+             (size_t)(unsigned char)b[11] << 24,
+        off = 12;
+    if (off + hl > len) {
+        snprintf(msg, msz, "%s: truncated header", path);
+        goto done;
+    }
+    char hdr[1024];
+    size_t cl = hl < sizeof hdr - 1 ? hl : sizeof hdr - 1;
+    memcpy(hdr, b + off, cl), hdr[cl] = 0;
+    const char *sh = strstr(hdr, "'shape': (");
+    if (!strstr(hdr, "'descr': '<f4'") || !strstr(hdr, "'fortran_order': False") || !sh) {
+        snprintf(msg, msz, "%s: expected little-endian float32 in C order", path);
+        goto done;
+    }
+    sh += 10;
+    size_t count = 1;
+    for (int i = 0; i < rank; ++i) {
+        char *end;
+        dims[i] = strtol(sh, &end, 10);
+        if (end == sh || dims[i] <= 0 || dims[i] > (1L << 24)) {
+            snprintf(msg, msz, "%s: expected a shape of rank %d", path, rank);
+            goto done;
+        }
+        count *= (size_t)dims[i];
+        sh = end;
+        while (*sh == ',' || *sh == ' ')
+            ++sh;
+    }
+    if (*sh != ')') {
+        snprintf(msg, msz, "%s: expected a shape of rank %d", path, rank);
+        goto done;
+    }
+    if (len - off - hl != count * 4) {
+        snprintf(msg, msz, "%s: %zu data bytes for %zu float32 values", path, len - off - hl, count);
+        goto done;
+    }
+    out = malloc(count * sizeof(float));
+    if (!out) {
+        snprintf(msg, msz, "out of memory");
+        goto done;
+    }
+    memcpy(out, b + off + hl, count * 4); /* little-endian hosts (checked by the build's io tests) */
+    for (size_t i = 0; i < count; ++i)
+        if (!isfinite(out[i])) {
+            snprintf(msg, msz, "%s: value %zu is not finite", path, i);
+            free(out), out = NULL;
+            break;
+        }
+done:
+    free(b);
+    return out;
+}
+
+/* The string value of "key": "..." in a JSON text (no escapes beyond \" and \\). */
+static int json_string(const char *js, const char *key, char *out, size_t osz)
+{
+    char pat[64];
+    snprintf(pat, sizeof pat, "\"%s\": \"", key);
+    const char *p = strstr(js, pat);
+    if (!p)
+        return 0;
+    p += strlen(pat);
+    size_t n = 0;
+    for (; *p && *p != '"'; ++p) {
+        if (*p == '\\' && p[1])
+            ++p;
+        if (n + 1 >= osz)
+            return 0;
+        out[n++] = *p;
+    }
+    out[n] = 0;
+    return *p == '"';
+}
+
+static int parse_lights(const char *s, double *h, int *n)
+{
+    *n = 0;
+    const char *p = s;
+    for (;;) {
+        char *end;
+        double v = strtod(p, &end);
+        if (end == p || !(v > 0.0 && v <= 10.0) || *n >= PE_MAX_LIGHTS)
+            return -1;
+        h[(*n)++] = v;
+        if (*end == 0)
+            return 0;
+        if (*end != ',')
+            return -1;
+        p = end + 1;
+    }
+}
+
+typedef struct pe_acc {
+    double se2[5], sr[5], st, sse, cnt;
+} pe_acc;
+
+enum { M_MFKIT, M_NAIVE, M_TOKSVIG, M_LEADR, M_TRUTH_SE, M_N };
+static const char *const k_method[4] = {"mfkit", "naive", "toksvig", "leadr"};
+
+/* One record: truth (MC) and the four estimates. */
+typedef struct pe_rec {
+    double truth, se, est[4];
+} pe_rec;
+
+static int eval_record(const mf_brdf_model *ggx, double alpha, const double *nrm, int count, double theta,
+                       double hside, const float *m9, float magnitude, int samples, uint64_t seed, pe_rec *r,
+                       char *msg, size_t msz)
+{
+    mf_vec3 wo = mf_vec3_make(sin(theta), 0.0, cos(theta));
+    /* the light: square facing the origin, centred on the mirror direction (elevation <= 75 deg) */
+    double tl = theta < PE_LIGHT_MAX_ELEV ? theta : PE_LIGHT_MAX_ELEV;
+    mf_vec3 c = mf_vec3_make(-sin(tl), 0.0, cos(tl)), e1 = mf_vec3_make(cos(tl), 0.0, sin(tl)),
+            e2 = mf_vec3_make(0.0, 1.0, 0.0);
+    mf_vec3 v[4];
+    for (int k = 0; k < 4; ++k) {
+        double a = (k == 0 || k == 3) ? -hside : hside, b = (k < 2) ? -hside : hside;
+        v[k] = mf_vec3_make(c.x + a * e1.x + b * e2.x, c.y + a * e1.y + b * e2.y, c.z + a * e1.z + b * e2.z);
+    }
+    mf_polygon poly = mf_polygon_make(4, v);
+
+    /* mfkit's lobe */
+    mf_mat3 M;
+    for (int i = 0; i < 9; ++i)
+        M.m[i / 3][i % 3] = m9[i];
+    mf_ltc ltc;
+    if (mf_ltc_init(&ltc, M) != MF_OK) {
+        snprintf(msg, msz, "a stored LTC matrix is singular");
+        return CLI_EXIT_USAGE;
+    }
+    r->est[M_MFKIT] = (double)magnitude * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
+
+    /* the footprint's statistics */
+    double mean[3] = {0, 0, 0}, sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
+    for (int q = 0; q < count; ++q) {
+        const double *n = nrm + 3 * q;
+        for (int k = 0; k < 3; ++k)
+            mean[k] += n[k] / count;
+        double px = -n[0] / n[2], py = -n[1] / n[2];
+        sx += px, sy += py, sxx += px * px, syy += py * py, sxy += px * py;
+    }
+    double len = sqrt(mean[0] * mean[0] + mean[1] * mean[1] + mean[2] * mean[2]);
+    double nbar[3] = {mean[0] / len, mean[1] / len, mean[2] / len};
+    if (len > 1.0)
+        len = 1.0;
+    double alpha_t = mf_toksvig_beckmann_alpha(len, alpha);
+    mf_gaussian_slopes g;
+    g.mean_x = sx / count, g.mean_y = sy / count;
+    g.var_x = sxx / count - g.mean_x * g.mean_x + 0.5 * alpha * alpha;
+    g.var_y = syy / count - g.mean_y * g.mean_y + 0.5 * alpha * alpha;
+    g.cov_xy = sxy / count - g.mean_x * g.mean_y;
+    mf_fresnel fr;
+    memset(&fr, 0, sizeof fr);
+    fr.type = MF_FRESNEL_NONE;
+
+    mf_prefilter_mix truth, naive;
+    if (mf_prefilter_mix_init(&truth, ggx, nrm, count) != MF_OK) {
+        snprintf(msg, msz, "the footprint's normals are not valid unit normals with n.z > 0");
+        return CLI_EXIT_USAGE;
+    }
+    if (mf_prefilter_mix_init(&naive, ggx, nbar, 1) != MF_OK) {
+        mf_prefilter_mix_free(&truth);
+        snprintf(msg, msz, "out of memory");
+        return CLI_EXIT_IO;
+    }
+    mf_brdf_params p = mf_brdf_params_iso(alpha), pt = mf_brdf_params_iso(alpha_t);
+    mf_pcg32 rng;
+    mf_pcg32_seed(&rng, seed, 0);
+    double area = 4.0 * hside * hside;
+    double s[4] = {0, 0, 0, 0}, s2 = 0;
+    for (int i = 0; i < samples; ++i) {
+        double a = (2.0 * mf_pcg32_next_double(&rng) - 1.0) * hside;
+        double b = (2.0 * mf_pcg32_next_double(&rng) - 1.0) * hside;
+        mf_vec3 x = mf_vec3_make(c.x + a * e1.x + b * e2.x, c.y + a * e1.y + b * e2.y, c.z + a * e1.z + b * e2.z);
+        double r2 = x.x * x.x + x.y * x.y + x.z * x.z, rl = sqrt(r2);
+        mf_vec3 wi = mf_vec3_make(x.x / rl, x.y / rl, x.z / rl);
+        if (!(wi.z > 0.0))
+            continue; /* below the geometric horizon: contributes 0 to every method */
+        double jac = area * fabs(wi.x * c.x + wi.y * c.y + wi.z * c.z) / r2;
+        double ft = truth.model.eval_cos(&truth.model, &p, wo, wi) * jac;
+        s[0] += ft, s2 += ft * ft;
+        s[1] += naive.model.eval_cos(&naive.model, &p, wo, wi) * jac;
+        s[2] += naive.model.eval_cos(&naive.model, &pt, wo, wi) * jac;
+        s[3] += mf_leadr_specular(&g, fr, wo, wi) * jac;
+    }
+    mf_prefilter_mix_free(&truth);
+    mf_prefilter_mix_free(&naive);
+    r->truth = s[0] / samples;
+    double var = (s2 / samples - r->truth * r->truth) * samples / (samples - 1.0);
+    r->se = sqrt(var > 0.0 ? var / samples : 0.0);
+    r->est[M_NAIVE] = s[1] / samples;
+    r->est[M_TOKSVIG] = s[2] / samples;
+    r->est[M_LEADR] = s[3] / samples;
+    for (int k = 0; k < 4; ++k)
+        if (!isfinite(r->est[k]) || !isfinite(r->truth)) {
+            snprintf(msg, msz, "a non-finite shading value (%s)", k_method[k]);
+            return CLI_EXIT_IO;
+        }
+    return 0;
+}
+
+static int pe_main(int argc, char **argv)
+{
+    cli_val v[E_NOPTS];
+    const char *pos[1];
+    int npos = 0;
+    int prc = cli_opt_parse(&k_eval_cmd, argc - 1, argv + 1, ~0u, k_cmd, v, pos, &npos);
+    if (prc == CLI_PARSE_HELP) {
+        cli_opt_usage(&k_eval_cmd, stdout);
+        return 0;
+    }
+    if (prc != CLI_PARSE_OK)
+        return prc;
+    const char *dir = pos[0], *out = v[E_OUT].s;
+    double hs[PE_MAX_LIGHTS];
+    int nlights = 0;
+    if (parse_lights(v[E_LIGHTS].set ? v[E_LIGHTS].s : "0.05,0.2,0.5", hs, &nlights) != 0)
+        return cli_error(k_cmd, "--lights %s: expected 1 to %d comma-separated half sides in (0, 10]", v[E_LIGHTS].s,
+                         PE_MAX_LIGHTS);
+    int samples = v[E_SAMPLES].set ? (int)v[E_SAMPLES].i : 4096;
+    long max_texels = v[E_TEXELS].set ? v[E_TEXELS].i : 16;
+    uint64_t seed = v[E_SEED].set ? (uint64_t)v[E_SEED].i : 1;
+
+    char msg[8800], path[4200];
+    size_t jl;
+    snprintf(path, sizeof path, "%s/prefilter.json", dir);
+    char *js = slurp(path, &jl, msg, sizeof msg);
+    if (!js)
+        return cli_error(k_cmd, "%s", msg), CLI_EXIT_IO;
+    char mapbuf[4096];
+    const char *map = v[E_MAP].set ? v[E_MAP].s : NULL;
+    if (!map) {
+        if (!json_string(js, "map", mapbuf, sizeof mapbuf)) {
+            free(js);
+            return cli_error(k_cmd, "%s: no \"map\" entry (not a manifest of mfkit prefilter?)", path);
+        }
+        map = mapbuf;
+    }
+    double alpha = 0.1;
+    const char *ap = strstr(js, "\"base_brdf\": {\"model\": \"ggx\", \"alpha\": ");
+    if (!ap || sscanf(ap + strlen("\"base_brdf\": {\"model\": \"ggx\", \"alpha\": "), "%lf", &alpha) != 1 ||
+        !(alpha > 0.0 && alpha <= 1.0)) {
+        free(js);
+        return cli_error(k_cmd, "%s: no GGX base with an alpha in (0, 1]", path);
+    }
+    free(js);
+
+    /* the normal map, decoded as mfkit prefilter does */
+    mf_image img;
+    mf_image_info info;
+    mf_status st = mf_image_read_ex(map, &img, NULL, &info, msg, sizeof msg);
+    if (st != MF_OK) {
+        cli_error(k_cmd, "%s", msg[0] ? msg : mf_status_str(st));
+        return st == MF_ERR_UNSUPPORTED ? CLI_EXIT_USAGE : CLI_EXIT_IO;
+    }
+    int rc = 0;
+    double *normals = NULL, *foot = NULL;
+    float *lm = NULL, *mg = NULL;
+    FILE *fr = NULL, *fs = NULL;
+    pe_acc *acc = NULL;
+    char rpath[4200], spath[4200], rtmp[4300], stmp[4300];
+    int created = 0; /* --out made here: removed again on failure (no partial output) */
+    const int W = img.width, H = img.height;
+    int is_int = !strncmp(info.pixel_type, "uint", 4); /* as mfkit prefilter decides */
+    int enc = v[E_ENCODING].set ? (int)v[E_ENCODING].i : 0;
+    int unorm = enc == 1 || (enc == 0 && is_int);
+    int green_down = v[E_GREEN].set && v[E_GREEN].i == 1;
+    if (img.channels != 3 && img.channels != 4) {
+        rc = cli_error(k_cmd, "%s: a normal map needs 3 or 4 channels, it has %d", map, img.channels);
+        goto done;
+    }
+    normals = malloc(sizeof(double) * 3 * (size_t)W * H);
+    foot = malloc(sizeof(double) * 3 * (size_t)W * H);
+    if (!normals || !foot) {
+        rc = CLI_EXIT_IO, cli_error(k_cmd, "out of memory");
+        goto done;
+    }
+    for (size_t t = 0; t < (size_t)W * H; ++t) {
+        const float *px = img.pixels + t * (size_t)img.channels;
+        double n[3];
+        for (int c = 0; c < 3; ++c)
+            n[c] = unorm ? 2.0 * (double)px[c] - 1.0 : (double)px[c];
+        if (green_down)
+            n[1] = -n[1];
+        double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (!(len > 0.5 && len < 1.5) || !(n[2] > 0.0)) {
+            rc = cli_error(k_cmd, "%s: texel (%zu, %zu): not a unit normal with n.z > 0", map, t % (size_t)W,
+                           t / (size_t)W);
+            goto done;
+        }
+        for (int c = 0; c < 3; ++c)
+            normals[3 * t + c] = n[c] / len;
+    }
+    const mf_brdf_model *ggx = mf_brdf_model_find("ggx");
+    if (!ggx) {
+        rc = CLI_EXIT_IO, cli_error(k_cmd, "the model registry has no ggx");
+        goto done;
+    }
+
+    /* the levels present */
+    int nlev = 0;
+    for (int k = 1; (W >> k) >= 1 || (H >> k) >= 1; ++k)
+        if ((W >> (k - 1)) > 1 || (H >> (k - 1)) > 1)
+            nlev = k;
+    if (nlev < 1) {
+        rc = cli_error(k_cmd, "%s: %d x %d has no level >= 1", map, W, H);
+        goto done;
+    }
+    if (mkdir(out, 0777) == 0)
+        created = 1;
+    else if (errno != EEXIST) {
+        rc = CLI_EXIT_IO, cli_error(k_cmd, "--out %s: cannot create: %s", out, strerror(errno));
+        goto done;
+    }
+    snprintf(rpath, sizeof rpath, "%s/prefilter_eval.csv", out);
+    snprintf(spath, sizeof spath, "%s/prefilter_eval_summary.csv", out);
+    snprintf(rtmp, sizeof rtmp, "%s.tmp", rpath);
+    snprintf(stmp, sizeof stmp, "%s.tmp", spath);
+    fr = fopen(rtmp, "w");
+    fs = fr ? fopen(stmp, "w") : NULL;
+    if (!fr || !fs) {
+        rc = CLI_EXIT_IO, cli_error(k_cmd, "%s: cannot write: %s", fr ? stmp : rtmp, strerror(errno));
+        goto done;
+    }
+    fprintf(fr, "level,row,col,i_theta,theta,i_phi,phi,light_half_side,truth,truth_se,mfkit,naive,toksvig,leadr\n");
+    fprintf(fs, "level,light_half_side,i_theta,theta,records,mean_truth,mean_truth_se");
+    for (int k = 0; k < 4; ++k)
+        fprintf(fs, ",mse_%s,relrms_%s", k_method[k], k_method[k]);
+    fprintf(fs, "\n");
+
+    for (int lev = 1; lev <= nlev && rc == 0; ++lev) {
+        long d[6], dm[4];
+        snprintf(path, sizeof path, "%s/ltc_mip%d.npy", dir, lev);
+        lm = read_npy(path, 6, d, msg, sizeof msg);
+        if (!lm) {
+            rc = CLI_EXIT_IO, cli_error(k_cmd, "%s", msg);
+            break;
+        }
+        snprintf(path, sizeof path, "%s/magnitude_mip%d.npy", dir, lev);
+        mg = read_npy(path, 4, dm, msg, sizeof msg);
+        if (!mg) {
+            rc = CLI_EXIT_IO, cli_error(k_cmd, "%s", msg);
+            break;
+        }
+        int fw = 1 << lev, fh = 1 << lev;
+        if (fw > W)
+            fw = W;
+        if (fh > H)
+            fh = H;
+        int lw = W / fw, lh = H / fh;
+        if (d[0] != lh || d[1] != lw || d[4] != 3 || d[5] != 3 || dm[0] != lh || dm[1] != lw || dm[2] != d[2] ||
+            dm[3] != d[3] || d[2] < 2) {
+            rc = cli_error(k_cmd, "%s/ltc_mip%d.npy: shape does not match a %d x %d map's level %d (%d x %d)", dir, lev,
+                           W, H, lev, lw, lh);
+            break;
+        }
+        mf_prefilter_options o;
+        mf_prefilter_options_default(&o);
+        o.n_theta = (int)d[2], o.n_phi = (int)d[3];
+        long ntex = (long)lw * lh, step = ntex > max_texels ? ntex / max_texels : 1;
+        free(acc);
+        acc = calloc((size_t)nlights * o.n_theta, sizeof *acc);
+        if (!acc) {
+            rc = CLI_EXIT_IO, cli_error(k_cmd, "out of memory");
+            break;
+        }
+        for (long t = 0, used = 0; t < ntex && used < max_texels && rc == 0; t += step, ++used) {
+            int row = (int)(t / lw), col = (int)(t % lw), count = fw * fh;
+            for (int b = 0; b < o.n_phi && rc == 0; ++b) {
+                double phi = mf_prefilter_phi(&o, b), cp = cos(phi), sp = sin(phi);
+                int q = 0;
+                for (int y = row * fh; y < (row + 1) * fh; ++y)
+                    for (int x = col * fw; x < (col + 1) * fw; ++x, ++q) {
+                        const double *n = normals + 3 * ((size_t)y * W + x);
+                        foot[3 * q] = cp * n[0] + sp * n[1];
+                        foot[3 * q + 1] = -sp * n[0] + cp * n[1];
+                        foot[3 * q + 2] = n[2];
+                    }
+                for (int a = 0; a < o.n_theta && rc == 0; ++a) {
+                    double theta = mf_prefilter_theta(&o, a);
+                    size_t idx = (((size_t)row * lw + col) * o.n_theta + a) * o.n_phi + b;
+                    for (int l = 0; l < nlights; ++l) {
+                        pe_rec r;
+                        uint64_t rs = seed * 0x9e3779b97f4a7c15ull + ((((uint64_t)lev * 4096 + t) * 256 + a) * 256 + b) * 8 + l;
+                        rc = eval_record(ggx, alpha, foot, count, theta, hs[l], lm + 9 * idx, mg[idx], samples, rs, &r,
+                                         msg, sizeof msg);
+                        if (rc) {
+                            cli_error(k_cmd, "%s: level %d texel (%d, %d): %s", dir, lev, col, row, msg);
+                            break;
+                        }
+                        fprintf(fr, "%d,%d,%d,%d,%.17g,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", lev, row,
+                                col, a, theta, b, phi, hs[l], r.truth, r.se, r.est[0], r.est[1], r.est[2], r.est[3]);
+                        pe_acc *A = &acc[l * o.n_theta + a];
+                        for (int k = 0; k < 4; ++k)
+                            A->se2[k] += (r.est[k] - r.truth) * (r.est[k] - r.truth);
+                        A->st += r.truth, A->sse += r.se, A->cnt += 1;
+                    }
+                }
+            }
+        }
+        for (int l = 0; l < nlights && rc == 0; ++l)
+            for (int a = 0; a < o.n_theta; ++a) {
+                pe_acc *A = &acc[l * o.n_theta + a];
+                double mt = A->st / A->cnt;
+                fprintf(fs, "%d,%.17g,%d,%.17g,%.0f,%.17g,%.17g", lev, hs[l], a, mf_prefilter_theta(&o, a), A->cnt, mt,
+                        A->sse / A->cnt);
+                for (int k = 0; k < 4; ++k) {
+                    double mse = A->se2[k] / A->cnt;
+                    fprintf(fs, ",%.17g,%.17g", mse, mt > 0.0 ? sqrt(mse) / mt : 0.0);
+                }
+                fprintf(fs, "\n");
+            }
+        free(lm), lm = NULL;
+        free(mg), mg = NULL;
+    }
+done:
+    if (fr && fclose(fr) != 0 && rc == 0)
+        rc = CLI_EXIT_IO, cli_error(k_cmd, "%s: write error", rtmp);
+    if (fs && fclose(fs) != 0 && rc == 0)
+        rc = CLI_EXIT_IO, cli_error(k_cmd, "%s: write error", stmp);
+    if (fr && fs && rc == 0) {
+        if (rename(rtmp, rpath) != 0 || rename(stmp, spath) != 0)
+            rc = CLI_EXIT_IO, cli_error(k_cmd, "%s: cannot commit: %s", rpath, strerror(errno));
+    }
+    if (rc != 0 && fr)
+        remove(rtmp), remove(stmp);
+    if (rc != 0 && created)
+        rmdir(out);
+    free(acc), free(lm), free(mg), free(normals), free(foot);
+    mf_image_free(&img);
+    mf_image_info_free(&info);
+    if (rc == 0)
+        printf("wrote %s and %s\n", rpath, spath);
+    return rc;
+}
+
+int cli_prefilter_eval(int argc, char **argv) { return pe_main(argc, argv); }
+
+#endif
