@@ -16,12 +16,14 @@
  *   ranks   under mpirun (built with MFKIT_WITH_MPI) rank r of K fits every K-th tile from the
  *           r-th, largest footprints first; after a barrier rank 0 assembles.  One process and K
  *           ranks fit the same tiles with the same code: the same bits.
- *   output  rank 0 streams every level's .npy (header first, then rows, read tile by tile) and
+ *   output  rank 0 streams every level's .npy (matrices, magnitudes, albedos) (header first, then rows, read tile by tile) and
  *           its three EXR view atlases, writes the lookup snippets and prefilter.json, and commits
  *           them all together (mf_io_atomic_commit_all); then removes the work directory.
  * Memory: the map's normals, the fits of the tiles in flight (--threads N fits N tiles at once
  * when there are enough: each its footprints' albedo cache and lobes) and one row of a level.
- * Exit 0 success, 1 gate failed (nothing written), 2 usage or input error (one line, no output),
+ * Gate: rank 0 keeps the assembled levels (44 bytes per lobe) and runs mf_prefilter_gate_run over
+ * them before committing; its result goes into prefilter.json.
+ * Exit 0 success, 1 gate failed (nothing written unless --force), 2 usage or input error (one line, no output),
  * 3 I/O error, 4 fit failure, 75 stopped by --max-tiles and 130 interrupted (both resumable: rerun
  * the same command).
  */
@@ -66,7 +68,7 @@ static const cli_opt k_opts[P_NOPTS] = {
      .help = "magnitude = the effective BRDF's albedo (the lobe loses its mass below the horizon, as in Nahmias "
              "2022); the gate's energy check then fails at grazing views"},
     {.name = "--force", .kind = CLI_OPT_FLAG,
-     .help = "write the tables even when the gate fails (exit 1 all the same)"},
+     .help = "write the tables even when the gate fails (the manifest marks them: \"forced\": true)"},
 };
 static const cli_command k_prefilter_cmd = {
     .name = "prefilter",
@@ -78,10 +80,14 @@ static const cli_command k_prefilter_cmd = {
         "two), every texel and every view, one anisotropic LTC to the footprint's effective BRDF (the\n"
         "average of the base GGX rotated to each texel's normal, Nahmias 2022, Eq. 2.36, over all texels)\n"
         "in the view-azimuth-aligned frame.  Level 0: shade each texel with the isotropic GGX LTC table.\n"
+        "--base lambert: the diffuse table instead (its own directory; default views 2x4).\n"
         "Writes DIR/prefilter.json and per level DIR/ltc_mip<k>.npy (h, w, n_theta, n_phi, 3, 3) float32\n"
-        "forward matrices and DIR/magnitude_mip<k>.npy (h, w, n_theta, n_phi) float32 albedos, the EXR view\n"
-        "atlases DIR/prefilter_mip<k>_{0,1,2}.exr and the lookup DIR/prefilter_lookup.{glsl,hlsl}\n"
-        "(docs/prefilter.md).  Works tile by tile with a checkpoint in DIR/.prefilter-work: rerunning an\n"
+        "forward matrices, DIR/albedo_mip<k>.npy (h, w, n_theta, n_phi) float32 effective-BRDF albedos and\n"
+        "DIR/magnitude_mip<k>.npy, the magnitudes that keep them (albedo / the lobe's mass above the horizon:\n"
+        "may exceed 1), the EXR view atlases DIR/prefilter_mip<k>_{0,1,2}.exr and the lookup\n"
+        "DIR/prefilter_lookup.{glsl,hlsl} (docs/prefilter.md).  The gate (energy within 1 %, no NaN, parents\n"
+        "against children) runs before anything is written: on failure, exit 1 and nothing written unless\n"
+        "--force.  Works tile by tile with a checkpoint in DIR/.prefilter-work: rerunning an\n"
         "interrupted command resumes it.  Under mpirun (MFKIT_WITH_MPI builds) the ranks share the tiles\n"
         "and write the same bits as one process.\n",
     .opts = k_opts,
