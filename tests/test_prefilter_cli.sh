@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # test_prefilter_cli.sh MFKIT SRC -- `mfkit prefilter` end to end on the shipped 16 x 16 V-groove map
-# (tests/data/normalmaps/vgroove_16.png) with 2 x 2 views (about 4 s): every level >= 1 written with
-# the documented shapes, its magnitudes within [0, 1]; refusals give one line, exit 2 or 3, and no
+# (tests/data/normalmaps/vgroove_16.png) with 2 x 2 views (about 5 s of CPU): every level >= 1 written
+# with the documented shapes; the albedos in [0, 1] and the magnitudes keeping them (magnitude times
+# the lobe's mass above the horizon = albedo); the gate's result in the manifest; the Lambert table
+# (--base lambert, 2 x 4 views, about 9 s of CPU); --no-keep-albedo fails the gate (exit 1, one line
+# after the report, nothing written) unless --force; refusals give one line, exit 2 or 3, and no
 # output directory.
 mfkit="$1"; src="$2"
 source "$(dirname "$0")/cli_test_lib.sh"
@@ -10,27 +13,65 @@ map="$src/tests/data/normalmaps/vgroove_16.png"
 "$mfkit" prefilter "$map" --views 2x2 --threads 2 --out "$tmp/pf" >"$tmp/pf.log" 2>&1; rc=$?
 ok '[ $rc -eq 0 ]' "prefilter 2x2 views exits 0 (rc=$rc): $(tail -3 "$tmp/pf.log")"
 for k in 1 2 3 4; do
-  ok '[ -s "$tmp/pf/ltc_mip$k.npy" ] && [ -s "$tmp/pf/magnitude_mip$k.npy" ]' "level $k written"
+  ok '[ -s "$tmp/pf/ltc_mip$k.npy" ] && [ -s "$tmp/pf/magnitude_mip$k.npy" ] && [ -s "$tmp/pf/albedo_mip$k.npy" ]' \
+     "level $k written"
 done
 ok '[ ! -e "$tmp/pf/ltc_mip0.npy" ] && [ ! -e "$tmp/pf/ltc_mip5.npy" ]' "levels 1..4 only for a 16 x 16 map"
 ok '[ -s "$tmp/pf/prefilter.json" ]' "manifest written"
-# shapes (h, w, n_theta, n_phi, 3, 3) and (h, w, n_theta, n_phi), magnitudes in [0, 1]
-chk=$(/usr/bin/python3 - "$tmp/pf" <<'PY'
-import sys, numpy as np
-d = sys.argv[1]
-ok = True
+# shapes (h, w, n_theta, n_phi, 3, 3) and (h, w, n_theta, n_phi); albedos in [0, 1]; the lobe's albedo,
+# magnitude * (1 + n.z) / 2 with n = M^T z / |M^T z|, equal to the stored albedo within 1e-5 (float32
+# storage of M and the magnitude: a few 1e-7 each; the gate's bound is 1e-2); the manifest's gate.
+check_tables() { # check_tables DIR N_THETA N_PHI
+/usr/bin/python3 - "$@" <<'PY'
+import sys, json, numpy as np
+d, nt, nph = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+bad = []
+worst = 0.0
 for k in range(1, 5):
     n = 16 >> k
-    m = np.load(f"{d}/ltc_mip{k}.npy"); a = np.load(f"{d}/magnitude_mip{k}.npy")
-    ok &= m.shape == (n, n, 2, 2, 3, 3) and a.shape == (n, n, 2, 2) and m.dtype == np.float32
-    ok &= bool(np.all(np.isfinite(m))) and bool(np.all((a >= 0) & (a <= 1)))
-print("ok" if ok else "bad")
+    m = np.load(f"{d}/ltc_mip{k}.npy"); g = np.load(f"{d}/magnitude_mip{k}.npy"); a = np.load(f"{d}/albedo_mip{k}.npy")
+    if m.shape != (n, n, nt, nph, 3, 3) or g.shape != (n, n, nt, nph) or a.shape != g.shape or m.dtype != np.float32:
+        bad.append(f"level {k} shapes {m.shape} {g.shape} {a.shape}")
+        continue
+    if not (np.all(np.isfinite(m)) and np.all(np.isfinite(g)) and np.all((a >= 0) & (a <= 1))):
+        bad.append(f"level {k}: non-finite or albedo outside [0, 1]")
+    c = m[..., 2, :].astype(np.float64)  # rows of M^T z = M's last row
+    nz = c[..., 2] / np.linalg.norm(c, axis=-1)
+    kept = g * np.maximum((1 + nz) / 2, 0.5) / a
+    worst = max(worst, float(np.max(np.abs(kept - 1))))
+if worst > 1e-5:
+    bad.append(f"lobe albedo / albedo - 1 up to {worst:.3g}")
+gate = json.load(open(f"{d}/prefilter.json"))["gate"]
+if not (gate["passed"] and gate["energy"]["passed"] and gate["energy"]["worst"] <= 0.01 and gate["level"]["passed"]):
+    bad.append(f"gate {gate}")
+print("ok" if not bad else "; ".join(bad))
 PY
-)
-ok '[ "$chk" = ok ]' "level arrays have the documented shapes, finite matrices, magnitudes in [0, 1] ($chk)"
+}
+chk=$(check_tables "$tmp/pf" 2 2)
+ok '[ "$chk" = ok ]' "GGX: documented shapes, albedos in [0, 1], magnitudes keep the albedo, gate passed ($chk)"
+ok 'grep -q "gate passed: energy" "$tmp/pf.log"' "the gate report is printed: $(grep gate "$tmp/pf.log")"
+
+# the diffuse table: Lambert, default 2 x 4 views
+"$mfkit" prefilter "$map" --base lambert --threads 2 --out "$tmp/lam" >"$tmp/lam.log" 2>&1; rc=$?
+ok '[ $rc -eq 0 ]' "--base lambert exits 0 (rc=$rc): $(tail -3 "$tmp/lam.log")"
+chk=$(check_tables "$tmp/lam" 2 4)
+ok '[ "$chk" = ok ] && grep -q "\"model\": \"lambert\"" "$tmp/lam/prefilter.json"' \
+   "Lambert: 2 x 4 views, albedos kept, gate passed ($chk)"
+expect_error "--roughness with the Lambert base refused" 2 "\-\-roughness" prefilter "$map" --base lambert --roughness 0.2 --out "$tmp/bad3"
+
+# without keep_albedo the lobe loses its mass below the horizon at grazing views: the gate fails
+"$mfkit" prefilter "$map" --views 2x2 --samples 256 --no-keep-albedo --out "$tmp/nk" >"$tmp/nk.log" 2>&1; rc=$?
+ok '[ $rc -eq 1 ] && [ "$(grep -c "nothing written" "$tmp/nk.log")" -eq 1 ] && grep -q "gate FAILED: energy" "$tmp/nk.log"' \
+   "--no-keep-albedo: the gate fails, exit 1 (rc=$rc): $(cat "$tmp/nk.log")"
+ok '[ ! -e "$tmp/nk/prefilter.json" ] && [ -z "$(ls "$tmp/nk" | grep -v prefilter-work)" ]' \
+   "a failed gate writes no table: $(ls -A "$tmp/nk")"
+"$mfkit" prefilter "$map" --views 2x2 --samples 256 --no-keep-albedo --force --out "$tmp/nk" >"$tmp/nk2.log" 2>&1; rc=$?
+forced=$(/usr/bin/python3 -c 'import json, sys; g = json.load(open(sys.argv[1]))["gate"]; print(g["passed"], g["forced"], g["energy"]["passed"], g["energy"]["worst"] > 0.01)' "$tmp/nk/prefilter.json" 2>&1)
+ok '[ $rc -eq 0 ] && [ "$forced" = "False True False True" ]' \
+   "--force writes it, the manifest says failed and forced (rc=$rc, $forced): $(tail -2 "$tmp/nk2.log")"
 
 expect_error "views 0x2 refused" 2 "\-\-views" prefilter "$map" --views 0x2 --out "$tmp/bad1"
 expect_error "missing map" 3 "nonexistent" prefilter "$tmp/nonexistent.png" --out "$tmp/bad2"
-ok '[ ! -e "$tmp/bad1" ] && [ ! -e "$tmp/bad2" ]' "refusals create no output directory: $(ls "$tmp")"
+ok '[ ! -e "$tmp/bad1" ] && [ ! -e "$tmp/bad2" ] && [ ! -e "$tmp/bad3" ]' "refusals create no output directory: $(ls "$tmp")"
 
 finish test_prefilter_cli

@@ -19,7 +19,7 @@ same() { # same DIR1 DIR2 [with-manifest]: every output file of DIR1 equal to DI
   for f in "$a"/*.npy "$a"/*.exr "$a"/*.glsl "$a"/*.hlsl ${3:+"$a"/prefilter.json}; do
     n=$((n+1)); cmp -s "$f" "$b/$(basename "$f")" || { echo "differs: $(basename "$f")"; return 1; }
   done
-  local want=22; [ -n "${3:-}" ] && want=23 # 4 levels x (2 .npy + 3 .exr), 2 snippets, the manifest
+  local want=26; [ -n "${3:-}" ] && want=27 # 4 levels x (3 .npy + 3 .exr), 2 snippets, the manifest
   [ $n -eq $want ] || { echo "$n files"; return 1; }
 }
 

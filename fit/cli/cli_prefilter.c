@@ -16,12 +16,14 @@
  *   ranks   under mpirun (built with MFKIT_WITH_MPI) rank r of K fits every K-th tile from the
  *           r-th, largest footprints first; after a barrier rank 0 assembles.  One process and K
  *           ranks fit the same tiles with the same code: the same bits.
- *   output  rank 0 streams every level's .npy (header first, then rows, read tile by tile) and
+ *   output  rank 0 streams every level's .npy (matrices, magnitudes, albedos) (header first, then rows, read tile by tile) and
  *           its three EXR view atlases, writes the lookup snippets and prefilter.json, and commits
  *           them all together (mf_io_atomic_commit_all); then removes the work directory.
  * Memory: the map's normals, the fits of the tiles in flight (--threads N fits N tiles at once
  * when there are enough: each its footprints' albedo cache and lobes) and one row of a level.
- * Exit 0 success, 1 gate failed (nothing written), 2 usage or input error (one line, no output),
+ * Gate: rank 0 keeps the assembled levels (44 bytes per lobe) and runs mf_prefilter_gate_run over
+ * them before committing; its result goes into prefilter.json.
+ * Exit 0 success, 1 gate failed (nothing written unless --force), 2 usage or input error (one line, no output),
  * 3 I/O error, 4 fit failure, 75 stopped by --max-tiles and 130 interrupted (both resumable: rerun
  * the same command).
  */
@@ -36,14 +38,15 @@
 static const char *const k_cmd = "prefilter";
 static const char *const k_green_names[] = {"up", "down", NULL};
 static const char *const k_encoding_names[] = {"auto", "unorm", "raw", NULL};
+static const char *const k_base_names[] = {"ggx", "lambert", NULL};
 
-enum { P_OUT, P_ROUGHNESS, P_VIEWS, P_GREEN, P_ENCODING, P_TOLERANCE, P_THREADS, P_SAMPLES, P_TILE, P_MAX_TILES, P_NOPTS };
+enum { P_OUT, P_ROUGHNESS, P_VIEWS, P_GREEN, P_ENCODING, P_TOLERANCE, P_THREADS, P_SAMPLES, P_TILE, P_MAX_TILES, P_BASE, P_NO_KEEP_ALBEDO, P_FORCE, P_NOPTS };
 static const cli_opt k_opts[P_NOPTS] = {
     {.name = "--out", .metavar = "DIR", .kind = CLI_OPT_STRING, .required = 1,
      .help = "output directory (created if missing)"},
     {.name = "--roughness", .metavar = "A", .kind = CLI_OPT_DOUBLE, .dlo = 0.0, .dhi = 1.0, .lo_open = 1, .def = "0.1",
      .help = "base GGX roughness alpha"},
-    {.name = "--views", .metavar = "TxP", .kind = CLI_OPT_STRING, .def = "8x16",
+    {.name = "--views", .metavar = "TxP", .kind = CLI_OPT_STRING, .def = "8x16 (ggx), 2x4 (lambert)",
      .help = "elevations over [0, 0.999 pi/2] x azimuths over [0, 2 pi)"},
     {.name = "--green", .kind = CLI_OPT_ENUM, .choices = k_green_names, .def = "up",
      .help = "green is +y up (OpenGL) or down (DirectX)"},
@@ -59,6 +62,13 @@ static const cli_opt k_opts[P_NOPTS] = {
      .help = "tile side in level-0 texels (the lobes do not depend on it; memory and resume granularity do)"},
     {.name = "--max-tiles", .metavar = "N", .kind = CLI_OPT_INT, .lo = 0, .hi = 1 << 30, .def = "all",
      .help = "fit at most N new tiles in this process, then stop (exit 75; rerun to resume)"},
+    {.name = "--base", .kind = CLI_OPT_ENUM, .choices = k_base_names, .def = "ggx",
+     .help = "base BRDF: specular GGX (--roughness) or Lambert diffuse (its own table; default views 2x4)"},
+    {.name = "--no-keep-albedo", .kind = CLI_OPT_FLAG,
+     .help = "magnitude = the effective BRDF's albedo (the lobe loses its mass below the horizon, as in Nahmias "
+             "2022); the gate's energy check then fails at grazing views"},
+    {.name = "--force", .kind = CLI_OPT_FLAG,
+     .help = "write the tables even when the gate fails (the manifest marks them: \"forced\": true)"},
 };
 static const cli_command k_prefilter_cmd = {
     .name = "prefilter",
@@ -70,10 +80,14 @@ static const cli_command k_prefilter_cmd = {
         "two), every texel and every view, one anisotropic LTC to the footprint's effective BRDF (the\n"
         "average of the base GGX rotated to each texel's normal, Nahmias 2022, Eq. 2.36, over all texels)\n"
         "in the view-azimuth-aligned frame.  Level 0: shade each texel with the isotropic GGX LTC table.\n"
+        "--base lambert: the diffuse table instead (its own directory; default views 2x4).\n"
         "Writes DIR/prefilter.json and per level DIR/ltc_mip<k>.npy (h, w, n_theta, n_phi, 3, 3) float32\n"
-        "forward matrices and DIR/magnitude_mip<k>.npy (h, w, n_theta, n_phi) float32 albedos, the EXR view\n"
-        "atlases DIR/prefilter_mip<k>_{0,1,2}.exr and the lookup DIR/prefilter_lookup.{glsl,hlsl}\n"
-        "(docs/prefilter.md).  Works tile by tile with a checkpoint in DIR/.prefilter-work: rerunning an\n"
+        "forward matrices, DIR/albedo_mip<k>.npy (h, w, n_theta, n_phi) float32 effective-BRDF albedos and\n"
+        "DIR/magnitude_mip<k>.npy, the magnitudes that keep them (albedo / the lobe's mass above the horizon:\n"
+        "may exceed 1), the EXR view atlases DIR/prefilter_mip<k>_{0,1,2}.exr and the lookup\n"
+        "DIR/prefilter_lookup.{glsl,hlsl} (docs/prefilter.md).  The gate (energy within 1 %, no NaN, parents\n"
+        "against children) runs before anything is written: on failure, exit 1 and nothing written unless\n"
+        "--force.  Works tile by tile with a checkpoint in DIR/.prefilter-work: rerunning an\n"
         "interrupted command resumes it.  Under mpirun (MFKIT_WITH_MPI builds) the ranks share the tiles\n"
         "and write the same bits as one process.\n",
     .opts = k_opts,
@@ -113,7 +127,7 @@ int cli_prefilter(int argc, char **argv)
 
 enum { PF_EXIT_INCOMPLETE = 75 };
 #define PF_WORK ".prefilter-work"
-#define PF_TILE_MAGIC "MFPFTIL1"
+#define PF_TILE_MAGIC "MFPFTIL2"
 
 /* set by the handler; an int is written atomically on every platform mfkit builds on */
 static volatile int g_pf_cancel = 0;
@@ -144,7 +158,7 @@ typedef struct { int level, w, h, nx, ny, tw, th, rec; long base; } pf_plan;
 /* One level of a tile file (native byte order: the work files stay on the machines that wrote them). */
 typedef struct {
     int32_t level, w, h, not_converged;
-    int64_t iterations, lobes, off_m, off_mag;
+    int64_t iterations, lobes, off_m, off_mag, off_alb;
     double worst_residual, worst_albedo_err;
 } pf_rec;
 
@@ -218,8 +232,9 @@ static int pf_run_tile(const double *normals, int W, const mf_prefilter_options 
         const mf_prefilter_level *L = &lv[t->first - 1 + i];
         size_t n = (size_t)L->width * L->height * nv;
         rec[i] = (pf_rec){L->level, L->width, L->height, L->not_converged, L->iterations, L->lobes, off,
-                          off + (int64_t)(9 * n * sizeof(float)), L->worst_residual, L->worst_albedo_err};
-        off = rec[i].off_mag + (int64_t)(n * sizeof(float));
+                          off + (int64_t)(9 * n * sizeof(float)), off + (int64_t)(10 * n * sizeof(float)),
+                          L->worst_residual, L->worst_albedo_err};
+        off = rec[i].off_alb + (int64_t)(n * sizeof(float));
     }
     mf_io_atomic a;
     int ok = mf_io_atomic_begin(&a, path, msg, sizeof msg) == MF_OK;
@@ -230,7 +245,8 @@ static int pf_run_tile(const double *normals, int W, const mf_prefilter_options 
         for (int i = 0; i < nrec && ok; ++i) {
             const mf_prefilter_level *L = &lv[t->first - 1 + i];
             size_t n = (size_t)L->width * L->height * nv;
-            ok = fwrite(L->m, sizeof(float), 9 * n, a.file) == 9 * n && fwrite(L->magnitude, sizeof(float), n, a.file) == n;
+            ok = fwrite(L->m, sizeof(float), 9 * n, a.file) == 9 * n && fwrite(L->magnitude, sizeof(float), n, a.file) == n &&
+                 fwrite(L->albedo, sizeof(float), n, a.file) == n;
         }
         if (!ok) {
             snprintf(msg, sizeof msg, "%.900s: write failed", path);
@@ -366,7 +382,7 @@ typedef struct {
     long lobes, iterations;
     int not_converged;
     double worst_residual, worst_albedo_err;
-    long nonfinite, magnitude_out;
+    long nonfinite, magnitude_neg;
     double mag_min, mag_max;
 } pf_stats;
 
@@ -376,7 +392,7 @@ typedef struct {
     const mf_prefilter_options *o;
     const pf_plan *plans;
     long ntiles;
-    int ranks;
+    int ranks, lambert, force;
 } pf_assembly;
 
 static int pf_open_tile(const char *dir, long k, int rec, FILE **f, pf_rec *r, char *msg, size_t msg_size)
@@ -489,13 +505,15 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
     const char *dir = A->dir;
     const int nv = o->n_theta * o->n_phi, nl = A->nl;
     char msg[1024] = "";
-    int nfiles_max = 5 * nl + 3, nf = 0, ok = 1;
+    int nfiles_max = 6 * nl + 3, nf = 0, ok = 1;
     mf_io_atomic *files = calloc((size_t)nfiles_max, sizeof *files);
     pf_stats *stats = calloc((size_t)nl, sizeof *stats);
+    /* the levels, kept whole for the gate (44 bytes per lobe: the assembly's memory peak) */
+    mf_prefilter_level *gl = calloc((size_t)nl, sizeof *gl);
     FILE **tf = NULL;
-    float *rm = NULL, *ra = NULL;
+    float *rm = NULL, *ra = NULL, *rb = NULL;
     mf_buf b = {0};
-    if (!files || !stats)
+    if (!files || !stats || !gl)
         ok = 0, snprintf(msg, sizeof msg, "out of memory");
     for (int li = 0; li < nl && ok; ++li) {
         const pf_plan *P = &A->plans[li];
@@ -506,6 +524,8 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
         snprintf(name, sizeof name, "ltc_mip%d.npy", P->level);
         ok = begin_file(files, &nf, dir, name, msg, sizeof msg);
         snprintf(name, sizeof name, "magnitude_mip%d.npy", P->level);
+        ok = ok && begin_file(files, &nf, dir, name, msg, sizeof msg);
+        snprintf(name, sizeof name, "albedo_mip%d.npy", P->level);
         ok = ok && begin_file(files, &nf, dir, name, msg, sizeof msg);
         for (int t = 0; t < 3 && ok; ++t) {
             snprintf(name, sizeof name, "prefilter_mip%d_%d.exr", P->level, t);
@@ -522,21 +542,28 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
         b.len = 0;
         snprintf(shape, sizeof shape, "(%d, %d, %d, %d)", P->h, P->w, o->n_theta, o->n_phi);
         npy_header(&b, shape);
-        ok = ok && put_file(files[f0 + 1].file, &b);
+        ok = ok && put_file(files[f0 + 1].file, &b) && put_file(files[f0 + 2].file, &b);
         b.len = 0;
         exr_header(&b, aw, ah, &exr_data);
         for (int t = 0; t < 3 && ok; ++t)
-            ok = put_file(files[f0 + 2 + t].file, &b);
+            ok = put_file(files[f0 + 3 + t].file, &b);
         if (!ok) {
             snprintf(msg, sizeof msg, "%.900s: write failed", files[f0].path);
             break;
         }
         size_t row = (size_t)P->w * nv;
-        free(rm), free(ra), free(tf);
+        free(rm), free(ra), free(rb), free(tf);
         rm = malloc(sizeof(float) * 9 * row);
         ra = malloc(sizeof(float) * row);
+        rb = malloc(sizeof(float) * row);
         tf = calloc((size_t)P->nx, sizeof *tf);
-        if (!rm || !ra || !tf) {
+        mf_prefilter_level *G = &gl[li];
+        *G = (mf_prefilter_level){.level = P->level, .width = P->w, .height = P->h, .n_theta = o->n_theta,
+                                  .n_phi = o->n_phi};
+        G->m = malloc(sizeof(float) * 9 * row * (size_t)P->h);
+        G->magnitude = malloc(sizeof(float) * row * (size_t)P->h);
+        G->albedo = malloc(sizeof(float) * row * (size_t)P->h);
+        if (!rm || !ra || !rb || !tf || !G->m || !G->magnitude || !G->albedo) {
             ok = 0, snprintf(msg, sizeof msg, "out of memory");
             break;
         }
@@ -570,18 +597,23 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
                 ok = fseek(f, (long)(recs[gx].off_m + (int64_t)(rr * seg * 9 * sizeof(float))), SEEK_SET) == 0 &&
                      fread(rm + gx * seg * 9, sizeof(float), 9 * seg, f) == 9 * seg &&
                      fseek(f, (long)(recs[gx].off_mag + (int64_t)(rr * seg * sizeof(float))), SEEK_SET) == 0 &&
-                     fread(ra + gx * seg, sizeof(float), seg, f) == seg;
+                     fread(ra + gx * seg, sizeof(float), seg, f) == seg &&
+                     fseek(f, (long)(recs[gx].off_alb + (int64_t)(rr * seg * sizeof(float))), SEEK_SET) == 0 &&
+                     fread(rb + gx * seg, sizeof(float), seg, f) == seg;
                 if (!ok)
                     snprintf(msg, sizeof msg, "%s/" PF_WORK ": tile %ld truncated", dir, P->base + (long)gy * P->nx + gx);
             }
             if (!ok)
                 break;
-            /* gate counts, then the rows */
+            /* the level for the gate, counts, then the rows */
+            memcpy(G->m + 9 * row * (size_t)r, rm, sizeof(float) * 9 * row);
+            memcpy(G->magnitude + row * (size_t)r, ra, sizeof(float) * row);
+            memcpy(G->albedo + row * (size_t)r, rb, sizeof(float) * row);
             for (size_t i = 0; i < 9 * row; ++i)
                 S->nonfinite += !isfinite(rm[i]);
             for (size_t i = 0; i < row; ++i) {
-                S->nonfinite += !isfinite(ra[i]);
-                S->magnitude_out += !(ra[i] >= 0.0f && ra[i] <= 1.0f);
+                S->nonfinite += !isfinite(ra[i]) + !isfinite(rb[i]);
+                S->magnitude_neg += !(ra[i] >= 0.0f && rb[i] >= 0.0f);
                 S->mag_min = fmin(S->mag_min, ra[i]), S->mag_max = fmax(S->mag_max, ra[i]);
             }
             b.len = 0;
@@ -592,9 +624,13 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
             for (size_t i = 0; i < row; ++i)
                 mf_buf_f32le(&b, ra[i]);
             ok = ok && put_file(files[f0 + 1].file, &b);
+            b.len = 0;
+            for (size_t i = 0; i < row; ++i)
+                mf_buf_f32le(&b, rb[i]);
+            ok = ok && put_file(files[f0 + 2].file, &b);
             /* EXR rows y = i_theta * h + r: x = i_phi * w + column; channels A, B, G, R planes */
             for (int t = 0; t < 3 && ok; ++t) {
-                FILE *f = files[f0 + 2 + t].file;
+                FILE *f = files[f0 + 3 + t].file;
                 for (int a = 0; a < o->n_theta && ok; ++a) {
                     int y = a * P->h + r;
                     b.len = 0;
@@ -621,12 +657,29 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
                 fclose(tf[gx]), tf[gx] = NULL;
     }
     /* the snippets and the manifest */
-    long lobes = 0, nonfinite = 0, magout = 0;
+    long lobes = 0, nonfinite = 0, magneg = 0;
     double worst_alb = 0.0;
     for (int li = 0; li < nl; ++li)
-        lobes += stats[li].lobes, nonfinite += stats[li].nonfinite, magout += stats[li].magnitude_out,
+        lobes += stats[li].lobes, nonfinite += stats[li].nonfinite, magneg += stats[li].magnitude_neg,
             worst_alb = fmax(worst_alb, stats[li].worst_albedo_err);
-    int gate_ok = nonfinite == 0 && magout == 0;
+    /* the library's gate over the assembled levels (mf_prefilter_gate_run) */
+    mf_prefilter_gate g;
+    mf_prefilter_gate_bounds_default(&g);
+    if (ok && mf_prefilter_gate_run(gl, nl, &g) != MF_OK)
+        ok = 0, snprintf(msg, sizeof msg, "the gate could not run (out of memory)");
+    int gate_ok = nonfinite == 0 && magneg == 0 && g.pass;
+    if (ok) {
+        fprintf(stderr,
+                "mfkit prefilter: gate %s: energy %.4g (bound %.3g) %s, non-finite %ld %s, negative magnitudes %ld, "
+                "level %.4g (bound %.3g) %s; reported only: view spike %.4g (%.3g), texel spike %.4g (%.3g)\n",
+                gate_ok ? "passed" : "FAILED", g.worst_energy, g.max_energy, g.pass_energy ? "ok" : "FAIL",
+                g.nan_entries + nonfinite, g.pass_nan && !nonfinite ? "ok" : "FAIL", magneg, g.worst_level, g.max_level,
+                g.pass_level ? "ok" : "FAIL", g.worst_view_spike, g.max_view_spike, g.worst_texel_spike, g.max_texel_spike);
+        if (!g.pass_energy)
+            fprintf(stderr, "mfkit prefilter: worst energy at %s\n", g.where_energy);
+        if (!g.pass_level)
+            fprintf(stderr, "mfkit prefilter: worst level at %s\n", g.where_level);
+    }
     if (ok) {
         b.len = 0;
         write_glsl(&b, o);
@@ -639,16 +692,21 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
     }
     if (ok) {
         b.len = 0;
+        char base[128];
+        if (A->lambert)
+            snprintf(base, sizeof base, "{\"model\": \"lambert\"}");
+        else
+            snprintf(base, sizeof base, "{\"model\": \"ggx\", \"alpha\": %.17g}", o->alpha);
         mf_buf_printf(&b,
                       "{\n  \"kind\": \"ltc_prefilter\",\n  \"map\": ");
         mf_json_string(&b, A->input);
         mf_buf_printf(&b, ",\n  \"width\": %d,\n  \"height\": %d,\n"
-                      "  \"base_brdf\": {\"model\": \"ggx\", \"alpha\": %.17g},\n"
+                      "  \"base_brdf\": %s,\n"
                       "  \"frame\": \"view-azimuth-aligned: normals rotated by -phi about z, view (sin theta, 0, cos "
                       "theta); M forward, divided by the norm of its last column\",\n"
                       "  \"below_horizon\": \"texel-frame view cosine clamped to %.17g at its azimuth (Nahmias 2022)\",\n"
                       "  \"axes\": {\"theta\": [",
-                      A->W, A->H, o->alpha, MF_PREFILTER_COS_MIN);
+                      A->W, A->H, base, MF_PREFILTER_COS_MIN);
         for (int a = 0; a < o->n_theta; ++a)
             mf_buf_printf(&b, "%s%.17g", a ? ", " : "", mf_prefilter_theta(o, a));
         mf_buf_printf(&b, "], \"phi\": [");
@@ -657,7 +715,8 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
         mf_buf_printf(&b,
                       "]},\n  \"fit\": {\"fitter\": \"mf_ltcfit_aniso general entry, 7-parameter lobe chart\", "
                       "\"fitter_revision\": %d, \"mfkit\": \"%s\", \"samples\": %d, \"max_iterations\": %d, \"seed\": %llu},\n"
-                      "  \"level0\": \"not stored: isotropic GGX LTC per texel\",\n"
+                      "  \"level0\": \"not stored: %s\",\n"
+                      "  \"magnitude\": %s,\n"
                       "  \"textures\": {\"layout\": \"per level k: prefilter_mip<k>_<t>.exr, t = 0, 1, 2, RGBA float32, an "
                       "atlas of n_theta x n_phi view tiles of w_k x h_k texels, view (i_theta, i_phi) at column i_phi * w_k, "
                       "row i_theta * h_k; upload as layer i_theta * n_phi + i_phi of a 2D array texture, MIP level k - 1\", "
@@ -667,33 +726,61 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
                       "  \"tiling\": {\"tile\": %d, \"tiles\": %ld},\n"
                       "  \"levels\": [\n",
                       MF_PREFILTER_REVISION, MFKIT_VERSION, o->samples, o->max_iterations, (unsigned long long)o->seed,
+                      A->lambert ? "Lambert per texel (1/pi about the texel's normal)" : "isotropic GGX LTC per texel",
+                      o->keep_albedo
+                          ? "\"albedo kept: the effective BRDF's albedo (albedo_mip<k>.npy) divided by the lobe's mass above "
+                            "the horizon, (1 + n.z) / 2 with n = M^T z / |M^T z| (floored at 0.5), so that magnitude times the "
+                            "clipped LTC integrates to the albedo; may exceed 1 where the lobe reaches below the horizon\""
+                          : "\"the effective BRDF's albedo (as albedo_mip<k>.npy); the lobe's mass below the horizon is lost "
+                            "(--no-keep-albedo)\"",
                       A->T, A->ntiles);
         for (int li = 0; li < nl; ++li) {
             const pf_plan *P = &A->plans[li];
             const pf_stats *S = &stats[li];
             mf_buf_printf(&b,
                           "    {\"level\": %d, \"width\": %d, \"height\": %d, \"matrices\": \"ltc_mip%d.npy\", "
-                          "\"magnitude\": \"magnitude_mip%d.npy\", \"textures\": [\"prefilter_mip%d_0.exr\", "
+                          "\"magnitude\": \"magnitude_mip%d.npy\", \"albedo\": \"albedo_mip%d.npy\", \"textures\": [\"prefilter_mip%d_0.exr\", "
                           "\"prefilter_mip%d_1.exr\", \"prefilter_mip%d_2.exr\"], \"lobes\": %ld, \"iterations\": %ld, "
                           "\"worst_residual\": %.6g, \"worst_albedo_err\": %.6g, \"not_converged\": %d, "
                           "\"magnitude_range\": [%.9g, %.9g]}%s\n",
-                          P->level, P->w, P->h, P->level, P->level, P->level, P->level, P->level, S->lobes, S->iterations,
+                          P->level, P->w, P->h, P->level, P->level, P->level, P->level, P->level, P->level, S->lobes,
+                          S->iterations,
                           S->worst_residual, S->worst_albedo_err, S->not_converged, S->mag_min, S->mag_max,
                           li + 1 < nl ? "," : "");
         }
+        mf_buf_printf(&b, "  ],\n  \"lobes\": %ld,\n", lobes);
         mf_buf_printf(&b,
-                      "  ],\n  \"lobes\": %ld,\n"
-                      "  \"gate\": {\"passed\": %s, \"checked\": [\"every matrix entry and magnitude finite\", "
-                      "\"magnitudes in [0, 1]\"], \"nonfinite\": %ld, \"magnitude_outside_0_1\": %ld, "
-                      "\"worst_albedo_quadrature_err\": %.6g, \"not_checked\": \"lobe albedo against the effective "
-                      "BRDF's, continuity across texels, views and levels (not implemented yet)\"}\n}\n",
-                      lobes, gate_ok ? "true" : "false", nonfinite, magout, worst_alb);
+                      "  \"gate\": {\"passed\": %s, \"forced\": %s, \"function\": \"mf_prefilter_gate_run\",\n"
+                      "    \"energy\": {\"passed\": %s, \"worst\": %.6g, \"bound\": %.6g, \"where\": ",
+                      gate_ok ? "true" : "false", !gate_ok && A->force ? "true" : "false", g.pass_energy ? "true" : "false",
+                      g.worst_energy, g.max_energy);
+        mf_json_string(&b, g.where_energy);
+        mf_buf_printf(&b, ", \"measures\": \"|magnitude (1 + n.z) / 2 / albedo - 1|, n = M^T z / |M^T z|\"},\n"
+                          "    \"nan\": {\"passed\": %s, \"nonfinite_entries\": %ld, \"gate_nan_entries\": %ld, "
+                          "\"negative_magnitudes\": %ld},\n"
+                          "    \"level\": {\"passed\": %s, \"worst\": %.6g, \"bound\": %.6g, \"where\": ",
+                      g.pass_nan && !nonfinite && !magneg ? "true" : "false", nonfinite, g.nan_entries, magneg,
+                      g.pass_level ? "true" : "false", g.worst_level, g.max_level);
+        mf_json_string(&b, g.where_level);
+        mf_buf_printf(&b, ", \"measures\": \"|parent shading - mean of the 4 children's| / parent albedo, 6 quad lights\"},\n"
+                          "    \"view_spike\": {\"reported_only\": true, \"within\": %s, \"worst\": %.6g, \"bound\": %.6g, "
+                          "\"where\": ",
+                      g.pass_view ? "true" : "false", g.worst_view_spike, g.max_view_spike);
+        mf_json_string(&b, g.where_view);
+        mf_buf_printf(&b, "},\n    \"texel_spike\": {\"reported_only\": true, \"within\": %s, \"worst\": %.6g, "
+                          "\"bound\": %.6g, \"where\": ",
+                      g.pass_texel ? "true" : "false", g.worst_texel_spike, g.max_texel_spike);
+        mf_json_string(&b, g.where_texel);
+        mf_buf_printf(&b, "},\n    \"worst_albedo_quadrature_err\": %.6g,\n"
+                          "    \"not_checked\": \"continuity across texels and views against a reference (the view and "
+                          "texel spikes are reported only: a coarse view grid or a sharp map gives genuine spikes)\"}\n}\n",
+                      worst_alb);
         ok = begin_file(files, &nf, dir, "prefilter.json", msg, sizeof msg) && put_file(files[nf - 1].file, &b);
     }
     int rc = 0;
-    if (ok && !gate_ok) {
-        rc = cli_error(k_cmd, "%s: gate failed: %ld non-finite values, %ld magnitudes outside [0, 1]; nothing written",
-                       A->input, nonfinite, magout), rc = CLI_EXIT_CHECK_FAILED;
+    if (ok && !gate_ok && !A->force) {
+        rc = cli_error(k_cmd, "%s: the gate failed (see above); nothing written (--force writes it, marked unvalidated)",
+                       A->input), rc = CLI_EXIT_CHECK_FAILED;
         mf_io_atomic_abort_all(files, (size_t)nf);
     } else if (!ok) {
         mf_io_atomic_abort_all(files, (size_t)nf);
@@ -708,7 +795,9 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
                 lobes ? 1e3 * secs / lobes : 0.0);
     }
     mf_buf_free(&b);
-    free(files), free(stats), free(rm), free(ra), free(tf);
+    if (gl)
+        mf_prefilter_levels_free(gl, nl);
+    free(files), free(stats), free(rm), free(ra), free(rb), free(tf);
     return rc;
 }
 
@@ -843,7 +932,14 @@ static int pf_main(int argc, char **argv, const pf_mpi *mpi)
         return prc;
     const char *input = pos[0], *dir = v[P_OUT].s;
     mf_prefilter_options o;
-    mf_prefilter_options_default(&o);
+    int lambert = v[P_BASE].set && v[P_BASE].i == 1;
+    if (lambert)
+        mf_prefilter_options_default_diffuse(&o);
+    else
+        mf_prefilter_options_default(&o);
+    o.keep_albedo = !v[P_NO_KEEP_ALBEDO].set;
+    if (lambert && v[P_ROUGHNESS].set)
+        return cli_error(k_cmd, "--roughness: the Lambert base has no roughness (--base lambert)");
     if (v[P_ROUGHNESS].set)
         o.alpha = v[P_ROUGHNESS].d;
     if (v[P_THREADS].set)
@@ -933,9 +1029,9 @@ static int pf_main(int argc, char **argv, const pf_mpi *mpi)
         mf_buf key = {0};
         uint64_t h = fnv1a(1469598103934665603ull, normals, sizeof(double) * 3 * (size_t)W * H);
         mf_buf_printf(&key,
-                      "mfkit prefilter work 1\nrevision %d\nmap %d x %d fnv1a64 %016llx\nalpha %.17g\nviews %d x %d\n"
-                      "samples %d\nmax_iterations %d\nseed %llu\ntile %d\n",
-                      MF_PREFILTER_REVISION, W, H, (unsigned long long)h, o.alpha, o.n_theta, o.n_phi, o.samples,
+                      "mfkit prefilter work 2\nrevision %d\nmap %d x %d fnv1a64 %016llx\nbase %s\nkeep_albedo %d\n"
+                      "alpha %.17g\nviews %d x %d\nsamples %d\nmax_iterations %d\nseed %llu\ntile %d\n",
+                      MF_PREFILTER_REVISION, W, H, (unsigned long long)h, lambert ? "lambert" : "ggx", o.keep_albedo, o.alpha, o.n_theta, o.n_phi, o.samples,
                       o.max_iterations, (unsigned long long)o.seed, T);
         unsigned char *old = NULL;
         size_t oldlen = 0;
@@ -1019,7 +1115,7 @@ static int pf_main(int argc, char **argv, const pf_mpi *mpi)
     if (rc)
         goto done;
     if (mpi->rank == 0) {
-        pf_assembly A = {dir, input, W, H, nl, T, &o, plans, ntiles, mpi->size};
+        pf_assembly A = {dir, input, W, H, nl, T, &o, plans, ntiles, mpi->size, lambert, v[P_FORCE].set};
         rc = pf_assemble(&A, secs, resumed);
         if (!rc)
             pf_remove_work(dir);
