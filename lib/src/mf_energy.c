@@ -643,6 +643,11 @@ static int graded_around(double a, double b, double x0, double w, double *bp, in
         if (x0 + d < b)
             bp[n++] = x0 + d;
     }
+    /* and a uniform mesh of 16 panels, so that no feature narrower than the rules' node spacing
+     * away from x0 hides between the first nodes (measured without it: E_t 2.1e-6 low at alpha
+     * 0.5625, mu 0.25, eta 1/1.125, the rule converged to the wrong value) */
+    for (int u = 1; u < 16 && n < cap - 1; ++u)
+        bp[n++] = a + (b - a) * u / 16.0;
     bp[n++] = b;
     qsort(bp, (size_t)n, sizeof bp[0], cmp_dbl);
     return n;
@@ -652,8 +657,8 @@ static double tref_outer_f(double phi, void *user)
 {
     tref_ctx *c = user;
     c->phi = phi;
-    double bp[80], sum = 0.0;
-    int nb = graded_around(0.0, 0.5 * MF_PI, c->peak, 0.25 * c->alpha, bp, 80);
+    double bp[120], sum = 0.0;
+    int nb = graded_around(0.0, 0.5 * MF_PI, c->peak, 0.25 * c->alpha, bp, 120);
     for (int i = 0; i + 1 < nb; ++i) {
         mf_result q;
         mf_status st = mf_quad_adaptive(tref_inner_f, c, bp[i], bp[i + 1], c->tol_in / nb, 0.0, MF_QUAD_MAX_INTERVALS, &q);
@@ -685,8 +690,8 @@ mf_status mf_energy_dielectric_transmission_reference(mf_ndf ndf, mf_g2_form g2,
     c.peak = s < 1.0 ? asin(s) : 0.5 * MF_PI;
     /* the outer integral over phi in [0, pi] (symmetric: x 2) adds at most pi tol_in */
     c.tol_in = tol / (4.0 * MF_PI);
-    double bp[80], sum = 0.0, err = 0.0;
-    int nb = graded_around(0.0, MF_PI, MF_PI, 0.25 * c.alpha, bp, 80);
+    double bp[120], sum = 0.0, err = 0.0;
+    int nb = graded_around(0.0, MF_PI, MF_PI, 0.25 * c.alpha, bp, 120);
     for (int i = 0; i + 1 < nb; ++i) {
         mf_result q;
         mf_status st = mf_quad_adaptive(tref_outer_f, &c, bp[i], bp[i + 1], 0.25 * tol / nb, 0.0, MF_QUAD_MAX_INTERVALS, &q);
@@ -773,12 +778,20 @@ static void diel_reference(void *vctx, mf_check *c)
                     double eta = side ? 1.0 / eta0 : eta0;
                     mf_microfacet m = {mf_ndf_make(g->ndf, alpha, alpha), g->g2, {MF_FRESNEL_DIELECTRIC, 0.0, eta, 0.0}};
                     mf_result qr, qt;
-                    /* inside (eta < 1), F has the kink of total internal reflection, on which the
-                     * micro-normal reference does not end its intervals (measured: 1.6e-9 off, 500
-                     * times its own estimate, at alpha 0.77, mu 0.125, eta 0.97); the reference in
-                     * wi (the kink is smooth in wi's angles) converges there for alpha >= 0.01 */
-                    mf_status sr = side ? mf_albedo_microfacet_reference_wi(&m, view(mu), REF_TOL, &qr)
-                                        : mf_albedo_microfacet_reference(&m, view(mu), REF_TOL, &qr);
+                    /* inside (eta < 1), F has the kink of total internal reflection, on which
+                     * neither reference ends its intervals, and each is measured far off at some
+                     * texel while the other agrees with the table (alpha 0.77, mu 0.125: at eta 0.97
+                     * the micro-normal one 1.6e-9 off, 500 times its estimate; at eta 0.395 the wi
+                     * one 8e-7 off).  Inside, both run, and their disagreement joins the slack: the
+                     * check is then only as strong as the references agree. */
+                    mf_status sr = mf_albedo_microfacet_reference(&m, view(mu), REF_TOL, &qr);
+                    if (side && (sr == MF_OK || sr == MF_ERR_NO_CONVERGENCE)) {
+                        mf_result q2;
+                        mf_status s2 = mf_albedo_microfacet_reference_wi(&m, view(mu), REF_TOL, &q2);
+                        if (s2 != MF_OK && s2 != MF_ERR_NO_CONVERGENCE)
+                            sr = s2;
+                        qr.err = fmax(qr.err, q2.err) + fabs(qr.val - q2.val);
+                    }
                     mf_status stt = mf_energy_dielectric_transmission_reference(m.ndf, g->g2, mu, eta, REF_TOL, &qt);
                     if ((sr != MF_OK && sr != MF_ERR_NO_CONVERGENCE) || (stt != MF_OK && stt != MF_ERR_NO_CONVERGENCE)) {
                         mf_check_fail(c, "the reference quadrature failed");
@@ -805,6 +818,8 @@ static void diel_furnace(void *vctx, mf_check *c)
     for (int ck = 0; ck < 3; ++ck)
         for (int cj = 0; cj < 3; ++cj) {
             int j = cj * (nr - 1) / 2, k = ck * (nz - 1) / 2;
+            if ((cj > 0 && j == (cj - 1) * (nr - 1) / 2) || (ck > 0 && k == (ck - 1) * (nz - 1) / 2))
+                continue; /* a column already checked (small tables) */
             double alpha = axis_value(t, 1, j), eta0 = mf_energy_dielectric_eta(axis_value(t, 2, k));
             for (int side = 0; side < 2; ++side) {
                 double eta = side ? 1.0 / eta0 : eta0, avg, avg_b;
