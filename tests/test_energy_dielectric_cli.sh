@@ -4,7 +4,10 @@
 # 2 threads is bitwise identical, written in every format, tagged with its kind.  Full part (slow,
 # about 2 min of CPU): the gate's range and white-furnace checks pass when the table is read back
 # from the float32 .npy (range, references at the corners, white furnace), and a corrupted E_avg
-# fails the furnace.
+# fails the furnace.  Not asserted, and why: the gate of this table computed in memory (no storage
+# rounding) fails diel_reference at alpha 0.5625, mu 0.25, eta 0.47 inside (E_r 8e-9 below both
+# references, 4 times the slack; an open defect, docs/tables.md); read back from float32, the
+# storage rounding (6e-8) covers it, so the read-back check below is the weaker one.
 mfkit="$1"
 mode="${2:-fast}"
 source "$(dirname "$0")/cli_test_lib.sh"
