@@ -6,7 +6,8 @@
 # from the float32 .npy (range, references at the corners, white furnace), and a corrupted E_avg
 # fails the furnace.  Not asserted, and why: the gate of this table computed in memory (no storage
 # rounding) fails diel_reference at alpha 0.5625, mu 0.25, eta 0.47 inside (E_r 8e-9 below both
-# references, 4 times the slack; an open defect, docs/tables.md); read back from float32, the
+# references, 4 times the slack; a 32000^2 midpoint rule sides with the table; an open defect,
+# docs/tables.md); read back from float32, the
 # storage rounding (6e-8) covers it, so the read-back check below is the weaker one.
 mfkit="$1"
 mode="${2:-fast}"
