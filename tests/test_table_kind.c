@@ -13,7 +13,7 @@
 static void test_registry(void)
 {
     int n = mf_table_kind_count();
-    CHECK(n == 6);
+    CHECK(n == 7); /* ltc_isotropic, ggx_proxy, moment_map, dfg, kulla_conty, dielectric, ltc_anisotropic */
     CHECK(mf_table_kind_at(-1) == NULL && mf_table_kind_at(n) == NULL);
     CHECK(mf_table_kind_find("no_such_kind") == NULL && mf_table_kind_find(NULL) == NULL);
     for (int i = 0; i < n; ++i) {

@@ -1,6 +1,7 @@
 /*
  * cli_energy.c -- `mfkit energy KIND --out DIR`: the energy tables of mf_energy.h (kinds dfg,
- * kulla-conty), computed with the accurate albedo, gated, and exported as DIR/KIND.{json,npy,h,
+ * kulla-conty, dielectric; the dielectric one on --threads workers, each (alpha, eta) column
+ * computed independently and written by index, so the result does not depend on the count), computed with the accurate albedo, gated, and exported as DIR/KIND.{json,npy,h,
  * dds,exr} (.exr only in the build with the image bridge).  Needs only the core and table I/O.
  */
 #define _POSIX_C_SOURCE 200809L
@@ -12,24 +13,27 @@
 #include "mfkit/mfkit.h"
 
 #include <errno.h>
+#include <pthread.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
-static const char *const k_kinds[] = {"dfg", "kulla-conty", NULL};
+static const char *const k_kinds[] = {"dfg", "kulla-conty", "dielectric", NULL};
 static const char *const k_ndf[] = {"ggx", "beckmann", NULL};
 static const char *const k_g2[] = {"joint", "separable", NULL};
 
-enum { O_OUT, O_SIZE, O_NDF, O_G2, O_NO_GATE, O_QUIET, O_N };
+enum { O_OUT, O_SIZE, O_NDF, O_G2, O_NO_GATE, O_QUIET, O_THREADS, O_N };
 static const cli_opt k_opts[O_N] = {
     {.name = "--out", .metavar = "DIR", .kind = CLI_OPT_STRING, .required = 1,
      .help = "directory of the files KIND.json .npy .h .dds (and .exr with the image bridge); created if missing"},
     {.name = "--size", .metavar = "N", .kind = CLI_OPT_INT, .lo = 2, .hi = 1024,
-     .help = "texels per axis (default: dfg 128, kulla-conty 32)"},
+     .help = "texels per axis (default: dfg 128, kulla-conty 32, dielectric 16)"},
     {.name = "--ndf", .kind = CLI_OPT_ENUM, .choices = k_ndf, .def = "ggx", .help = "the NDF"},
     {.name = "--g2", .kind = CLI_OPT_ENUM, .choices = k_g2, .def = "joint", .help = "masking-shadowing"},
     {.name = "--no-gate", .kind = CLI_OPT_FLAG, .help = "skip the gate (the files are written unchecked)"},
     {.name = "--quiet", .kind = CLI_OPT_FLAG, .help = "no progress on a terminal"},
+    {.name = "--threads", .metavar = "N", .kind = CLI_OPT_INT, .lo = 1, .hi = 256, .def = "the number of online CPUs",
+     .help = "worker threads (dielectric); the result does not depend on it, bit for bit"},
 };
 static const cli_command k_cmd = {
     .name = "energy",
@@ -39,6 +43,8 @@ static const cli_command k_cmd = {
     .description = "Computes an energy table (KIND: dfg = split-sum Schlick scale and bias and the Charlie sheen\n"
                    "albedo (dfg.dds holds R scale, G bias, B Charlie), kulla-conty = E and\n"
                    "E_avg for multiple-scattering compensation) over (cos theta_o, sqrt(alpha)) at texel centres,\n"
+                   "dielectric = E_r, E_t, E, E_avg of a rough dielectric over (cos theta_o, sqrt(alpha), z) with\n"
+                   "eta = 1 + 2 z^2, outside (eta) and inside (1 / eta: fields _inv), Cycles' glass-table layout),\n"
                    "runs its gate and writes it.\n",
     .opts = k_opts,
     .nopts = O_N,
@@ -51,6 +57,57 @@ static void progress(void *user, long done, long total)
         fprintf(stderr, "\r  %ld / %ld texels", done, total), fflush(stderr);
     if (*(int *)user && done == total)
         fprintf(stderr, "\n");
+}
+
+/* the dielectric table's workers: each takes the next column under the lock and fills it */
+typedef struct {
+    mf_table *t;
+    long next, done, total;
+    mf_status st;
+    int show;
+    pthread_mutex_t lock;
+} diel_queue;
+
+static void *diel_worker(void *arg)
+{
+    diel_queue *q = arg;
+    for (;;) {
+        pthread_mutex_lock(&q->lock);
+        long c = q->st == MF_OK && q->next < q->total ? q->next++ : -1;
+        pthread_mutex_unlock(&q->lock);
+        if (c < 0)
+            return NULL;
+        mf_status st = mf_energy_dielectric_column(q->t, c);
+        pthread_mutex_lock(&q->lock);
+        if (st != MF_OK && q->st == MF_OK)
+            q->st = st;
+        ++q->done;
+        if (q->show)
+            fprintf(stderr, "\r  %ld / %ld (alpha, eta) columns", q->done, q->total), fflush(stderr);
+        pthread_mutex_unlock(&q->lock);
+    }
+}
+
+static mf_status dielectric_table(mf_table *t, mf_ndf_type ndf, mf_g2_form g2, int n, int threads, int show)
+{
+    mf_status st = mf_energy_dielectric_table_init(t, ndf, g2, n, n, n);
+    if (st != MF_OK)
+        return st;
+    diel_queue q = {t, 0, 0, (long)n * n, MF_OK, show, PTHREAD_MUTEX_INITIALIZER};
+    pthread_t th[256];
+    int started = 0;
+    for (; started < threads; ++started)
+        if (pthread_create(&th[started], NULL, diel_worker, &q) != 0)
+            break;
+    if (started == 0)
+        diel_worker(&q);
+    for (int i = 0; i < started; ++i)
+        pthread_join(th[i], NULL);
+    if (show)
+        fprintf(stderr, "\n");
+    if (q.st != MF_OK)
+        mf_table_free(t);
+    return q.st;
 }
 
 int cli_energy(int argc, char **argv)
@@ -70,9 +127,13 @@ int cli_energy(int argc, char **argv)
         if (!strcmp(pos[0], k_kinds[i]))
             kind = i;
     if (kind < 0)
-        return cli_error("energy", "unknown KIND '%s' (dfg, kulla-conty)", pos[0]);
+        return cli_error("energy", "unknown KIND '%s' (dfg, kulla-conty, dielectric)", pos[0]);
     const char *dir = v[O_OUT].s;
-    int n = v[O_SIZE].set ? (int)v[O_SIZE].i : (kind == 0 ? MF_DFG_DEFAULT_SIZE : MF_KULLA_CONTY_DEFAULT_SIZE);
+    int n = v[O_SIZE].set ? (int)v[O_SIZE].i
+                          : (kind == 0 ? MF_DFG_DEFAULT_SIZE
+                                       : kind == 1 ? MF_KULLA_CONTY_DEFAULT_SIZE : MF_DIELECTRIC_DEFAULT_SIZE);
+    long online = sysconf(_SC_NPROCESSORS_ONLN);
+    int threads = v[O_THREADS].set ? (int)v[O_THREADS].i : (online >= 1 ? (int)(online > 256 ? 256 : online) : 1);
     mf_ndf_type ndf = v[O_NDF].set && v[O_NDF].i == 1 ? MF_NDF_BECKMANN : MF_NDF_GGX;
     mf_g2_form g2 = v[O_G2].set && v[O_G2].i == 1 ? MF_G2_SEPARABLE : MF_G2_JOINT;
     struct stat sb;
@@ -81,8 +142,9 @@ int cli_energy(int argc, char **argv)
 
     int show = !v[O_QUIET].set && isatty(fileno(stderr));
     mf_table t;
-    mf_status st = kind == 0 ? mf_energy_dfg_table(&t, ndf, g2, n, n, progress, &show)
-                             : mf_energy_kulla_conty_table(&t, ndf, g2, n, n, progress, &show);
+    mf_status st = kind == 0   ? mf_energy_dfg_table(&t, ndf, g2, n, n, progress, &show)
+                   : kind == 1 ? mf_energy_kulla_conty_table(&t, ndf, g2, n, n, progress, &show)
+                               : dielectric_table(&t, ndf, g2, n, threads, show);
     if (st != MF_OK)
         return cli_error("energy", "%s: the table could not be computed (%s)", pos[0], mf_status_str(st));
     if (!v[O_NO_GATE].set) {
@@ -105,7 +167,7 @@ int cli_energy(int argc, char **argv)
         return cli_error("energy", "--out: %s: %s", dir, strerror(errno)), 3;
     }
     static const char *const exts[] = {"json", "npy", "h", "dds", "exr"};
-    const char *stem = kind == 0 ? "dfg" : "kulla_conty";
+    const char *stem = kind == 0 ? "dfg" : kind == 1 ? "kulla_conty" : "dielectric";
     for (int e = 0; e < 5; ++e) {
         char path[4096], msg[512];
         snprintf(path, sizeof path, "%s/%s.%s", dir, stem, exts[e]);
@@ -115,6 +177,12 @@ int cli_energy(int argc, char **argv)
             /* dfg.dds is the engine's texture: R scale, G bias, B Charlie, A zero (the bounds are in
              * the other files) */
             wo.dds_fields[0] = 0, wo.dds_fields[1] = 1, wo.dds_fields[2] = 4, wo.dds_fields[3] = -1;
+            wo.dds_fields_set = 1;
+        }
+        if (kind == 2 && e == 3) {
+            /* dielectric.dds: R E (outside), G E_inv (inside), B E_avg, A E_avg_inv (the 3D table as
+             * its n_z slices stacked along v, as for every table of more than 2 axes) */
+            wo.dds_fields[0] = 4, wo.dds_fields[1] = 11, wo.dds_fields[2] = 5, wo.dds_fields[3] = 12;
             wo.dds_fields_set = 1;
         }
         st = mf_table_write(path, &t, &wo, NULL, msg, sizeof msg);

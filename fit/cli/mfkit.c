@@ -99,7 +99,8 @@ static const cli_entry k_commands[] = {
      "                  mfkit eval --help)"},
     {"energy", cli_energy, needs_image_if_built,
      "energy KIND --out DIR\n"
-     "                  DFG (dfg) or Kulla-Conty (kulla-conty) energy tables, gated and exported"},
+     "                  DFG (dfg), Kulla-Conty (kulla-conty) or rough-dielectric (dielectric) energy\n"
+     "                  tables, gated and exported"},
     {"validate", cli_validate, needs_exr_args,
      "validate [TABLE]\n"
      "                  run the property checks of the core math, or the LTC gate on a table file"},

@@ -248,6 +248,19 @@ static int kc_layout_ok(const mf_table *t, char *why, size_t why_size)
     return layout_by_declaration(kind_named("kulla_conty"), t, why, why_size);
 }
 
+static int diel_layout_ok(const mf_table *t, char *why, size_t why_size)
+{
+    return layout_by_declaration(kind_named("dielectric"), t, why, why_size);
+}
+
+static mf_status diel_gate(const mf_table *t, const mf_brdf_model *model, const void *options, mf_check *checks,
+                           int cap, int *count)
+{
+    (void)model;
+    const mf_table_storage_options *o = options;
+    return mf_energy_dielectric_gate(t, o ? o->unit_roundoff : 0.0, checks, cap, count);
+}
+
 static mf_status dfg_gate(const mf_table *t, const mf_brdf_model *model, const void *options, mf_check *checks, int cap,
                           int *count)
 {
@@ -305,6 +318,13 @@ static const mf_table_kind_axis k_kc_axes[2] = {
     {"r", "alpha", MF_AXIS_SQUARE, MF_ENERGY_ALPHA_MIN, MF_KULLA_CONTY_DEFAULT_SIZE, 0.5 / MF_KULLA_CONTY_DEFAULT_SIZE,
      1.0 - 0.5 / MF_KULLA_CONTY_DEFAULT_SIZE},
 };
+#define DS MF_DIELECTRIC_DEFAULT_SIZE
+static const mf_table_kind_axis k_diel_axes[3] = {
+    {"mu", "cos_theta_o", MF_AXIS_IDENTITY, -INFINITY, DS, 0.5 / DS, 1.0 - 0.5 / DS},
+    {"r", "alpha", MF_AXIS_SQUARE, MF_ENERGY_ALPHA_MIN, DS, 0.5 / DS, 1.0 - 0.5 / DS},
+    {"z", "eta_z", MF_AXIS_IDENTITY, -INFINITY, DS, 0.5 / DS, 1.0 - 0.5 / DS},
+};
+#undef DS
 /* the published axes [Kt et al. 2022]: alpha = max(i/7, 1e-4), theta = i/7 0.9999 pi/2, phi = i/7 pi/2
  * (the (alpha, lambda) parameterisation has axes "a", "lambda" instead of "ax", "ay") */
 static const mf_table_kind_axis k_ltca_axes[4] = {
@@ -329,6 +349,9 @@ static const mf_table_kind k_kinds[] = {
     {"kulla_conty", "Kulla-Conty energy compensation: E(mu, alpha), E_avg(alpha) with F = 1", 2, k_kc_axes,
      MF_KULLA_CONTY_NFIELDS, mf_kulla_conty_table_fields, MF_KULLA_CONTY_NFIELDS, kc_layout_ok,
      mf_energy_kulla_conty_checks, 2, kc_gate},
+    {"dielectric", "rough dielectric energy: E_r, E_t, E_avg over (cos theta_o, sqrt alpha, eta = 1 + 2 z^2), outside and "
+     "inside", 3, k_diel_axes, MF_DIELECTRIC_NFIELDS, mf_dielectric_table_fields, MF_DIELECTRIC_NFIELDS, diel_layout_ok,
+     mf_energy_dielectric_checks, MF_ENERGY_DIELECTRIC_NCHECKS, diel_gate},
     {"ltc_anisotropic", "anisotropic LTC table: forward and inverse 3x3 matrices, magnitude, fresnel over (alpha_x, "
      "alpha_y, theta, phi)", 4, k_ltca_axes, MF_LTCA_NFIELDS, mf_ltc_aniso_table_fields, MF_LTCA_NFIELDS - 1,
      mf_ltc_aniso_layout_ok, mf_ltc_aniso_gate_check_table, MF_LTC_ANISO_GATE_MAX_CHECKS, ltca_gate},

@@ -20,8 +20,17 @@
  *    32 x 32 (the size of the tables of Kulla and Conty's talk); fields E, E_err, E_avg,
  *    E_avg_err (E_avg repeated along mu).  For conductors the Fresnel average
  *    F_avg = 2 integral F(mu) mu dmu: Schlick (20 F0 + 1) / 21 in closed form, the exact
- *    conductor by quadrature (mf_energy_favg_conductor).  The dielectric (mu, alpha, eta) table is
- *    not implemented (the pointwise reflection and transmission: mf_albedo_dielectric).
+ *    conductor by quadrature (mf_energy_favg_conductor).
+ *  the rough dielectric [Walter 2007, Eq. 20, 21; Kulla and Conty 2017; Turquin 2019]: per
+ *    (mu, alpha, eta) the reflected and transmitted energy E_r, E_t (mf_albedo_dielectric, exact
+ *    Fresnel), E = E_r + E_t, and per (alpha, eta) E_avg = 2 integral_0^1 E(mu) mu dmu, for the
+ *    view outside (eta > 1) and inside (the _inv fields, at 1 / eta).  Kind "dielectric": axes
+ *    "mu" (cos theta_o, identity), "r" (alpha = r^2, clamped to 1e-4), "z" (eta = 1 + 2 z^2,
+ *    identity; physical name "eta_z"), texel centres at (i + 0.5) / n, default 16 x 16 x 16 -- the
+ *    size and the mu and z parameterisation of Blender Cycles' table_ggx_glass_E / _inv_E (its
+ *    lookup: x = mu, y = 1 - sqrt(alpha), z = sqrt((ior - 1) / 2), texel centres; so eta covers
+ *    1.002 .. 2.88 and Cycles clamps beyond); Cycles' rough axis runs the other way (y = 1 - r).
+ *    Fields: E_r, E_r_err, E_t, E_t_err, E, E_avg, E_avg_err, then the same 7 at 1 / eta.
  *
  * Gates (mf_table_kind_gate): finite fields; dfg: scale, bias >= 0 and scale + bias <= 1 within
  * their bounds, and a sample of 3 x 3 texels (both ends of each axis) against the independent nested Gauss-Kronrod reference
@@ -61,6 +70,34 @@ double mf_energy_favg_schlick(double f0);
 /* F_avg of the exact conductor (mf_fresnel_conductor) by adaptive Gauss-Kronrod to 1e-13. */
 mf_status mf_energy_favg_conductor(double eta, double k, mf_result *out) MF_WARN_UNUSED;
 
+/* ---- the dielectric table (kind "dielectric") ---- */
+#define MF_DIELECTRIC_DEFAULT_SIZE 16
+#define MF_DIELECTRIC_NFIELDS 14
+extern const char *const mf_dielectric_table_fields[MF_DIELECTRIC_NFIELDS];
+#define MF_ENERGY_DIELECTRIC_NCHECKS 4
+/* eta of the z axis: 1 + 2 z^2 (Cycles' z = sqrt((eta - 1) / 2)). */
+double mf_energy_dielectric_eta(double z);
+/* E_avg = 2 integral_0^1 (E_r + E_t)(mu) mu dmu by global-adaptive Gauss-Kronrod in s = sqrt(mu)
+ * to 1e-9 (at most 200 intervals per panel), panels ending, for eta < 1, on the kinks of E(mu) at
+ * mu = eta and mu = sqrt(1 - eta^2) (total internal reflection); err = the rule's estimate + the
+ * largest albedo bound met.  (A fixed 12-point rule with |Q12 - Q8| as its bound was off by 140
+ * times that bound at alpha 0.77, eta 0.395: E(mu) has kinks.)  alpha in [1e-4, 1]. */
+mf_status mf_energy_dielectric_eavg(mf_ndf_type ndf, mf_g2_form g2, double alpha, double eta,
+                                    mf_result *eavg) MF_WARN_UNUSED;
+/* The independent reference of E_T for the gate: nested adaptive Gauss-Kronrod over the transmitted
+ * direction wt (polar angle from -z graded around the smooth refraction, azimuth graded around it),
+ * the integrand D (1 - F) G2 (wo.h) / wo.z times dh/dwt [Walter 2007, Eq. 16, 17].  tol absolute;
+ * MF_ERR_NO_CONVERGENCE if a rule ran out of intervals (out keeps its estimate). */
+mf_status mf_energy_dielectric_transmission_reference(mf_ndf ndf, mf_g2_form g2, double mu, double eta, double tol,
+                                                      mf_result *out) MF_WARN_UNUSED;
+/* Allocates and tags an n_mu x n_r x n_z dielectric table (values 0), then
+ * mf_energy_dielectric_column fills column c (all mu of (r index c % n_r, z index c / n_r), both
+ * sides) from nothing but t's axes and metadata: columns are independent, so any number of threads
+ * may fill distinct columns and the table is bitwise the same for any order. */
+mf_status mf_energy_dielectric_table_init(mf_table *t, mf_ndf_type ndf, mf_g2_form g2, int n_mu, int n_r,
+                                          int n_z) MF_WARN_UNUSED;
+mf_status mf_energy_dielectric_column(mf_table *t, long column) MF_WARN_UNUSED;
+
 /* Progress callback: done of total texels. */
 typedef void (*mf_energy_progress)(void *user, long done, long total);
 
@@ -70,6 +107,9 @@ mf_status mf_energy_dfg_table(mf_table *t, mf_ndf_type ndf, mf_g2_form g2, int n
                               mf_energy_progress progress, void *user) MF_WARN_UNUSED;
 mf_status mf_energy_kulla_conty_table(mf_table *t, mf_ndf_type ndf, mf_g2_form g2, int n_mu, int n_r,
                                       mf_energy_progress progress, void *user) MF_WARN_UNUSED;
+/* The dielectric table, one thread (progress counts (alpha, eta) columns). */
+mf_status mf_energy_dielectric_table(mf_table *t, mf_ndf_type ndf, mf_g2_form g2, int n_mu, int n_r, int n_z,
+                                     mf_energy_progress progress, void *user) MF_WARN_UNUSED;
 
 #define MF_DFG_NFIELDS 6
 extern const char *const mf_dfg_table_fields[MF_DFG_NFIELDS];
@@ -84,11 +124,19 @@ extern const char *const mf_kulla_conty_table_fields[MF_KULLA_CONTY_NFIELDS];
 mf_status mf_energy_dfg_gate(const mf_table *t, double storage_u, mf_check *checks, int cap, int *count) MF_WARN_UNUSED;
 mf_status mf_energy_kulla_conty_gate(const mf_table *t, double storage_u, mf_check *checks, int cap,
                                      int *count) MF_WARN_UNUSED;
+/* dielectric: finite; E_r, E_t >= 0, E_r + E_t <= 1 at every texel; E_r and E_t against independent
+ * references (mf_albedo_microfacet_reference, mf_energy_dielectric_transmission_reference) at the 8
+ * corner texels, both sides; the white furnace of the compensation lobe on E = E_r + E_t (as
+ * kulla_conty's) at every mu of 3 x 3 (alpha, eta) columns, both sides. */
+mf_status mf_energy_dielectric_gate(const mf_table *t, double storage_u, mf_check *checks, int cap,
+                                    int *count) MF_WARN_UNUSED;
 /* The gates' check tables (for the registry). */
 extern const mf_check_def mf_energy_dfg_checks[];
 extern const int mf_energy_dfg_nchecks;
 extern const mf_check_def mf_energy_kulla_conty_checks[];
 extern const int mf_energy_kulla_conty_nchecks;
+extern const mf_check_def mf_energy_dielectric_checks[];
+extern const int mf_energy_dielectric_nchecks;
 
 #ifdef __cplusplus
 }
