@@ -94,17 +94,17 @@ fi
 # LTC error per texel of each shipped BRDF: a 12 x 12 fit of each (--force: most fail their gate,
 # issue 7; the figures show where), 16 polygons and 16384 Monte Carlo samples per texel (~40 s in
 # all).  MFKIT_FIGURES_BRDFS chooses the BRDFs (default: all but leadr-diffuse, whose model integrates
-# numerically per evaluation (256 nodes): its 12 x 12 fit, gate and map take minutes; "" for none).
+# numerically per evaluation (adaptive panels): its 12 x 12 fit, gate and map take minutes; "" for none).
 if [ -x "$bin/study_ltc_texels" ] && [ -x "$build/bin/mfkit" ]; then
-    for b in ${MFKIT_FIGURES_BRDFS-ggx beckmann lambert disney charlie}; do
+    for b in ${MFKIT_FIGURES_BRDFS-ggx beckmann lambert disney charlie oren-nayar eon}; do
         echo "== fit ltc --brdf $b --size 12, study_ltc_texels"
         "$build/bin/mfkit" fit ltc --brdf "$b" --size 12 --force --quiet --out "$work/ltc_$b" >/dev/null
         gate_of "$work/ltc_$b/ltc_${b//-/_}.json"
         "$bin/study_ltc_texels" --polygons 16 --samples 16384 --out "$data/ltc_texels_$b.csv" \
             "$work/ltc_$b/ltc_${b//-/_}.json" >/dev/null
     done
-    [[ " ${MFKIT_FIGURES_BRDFS-ggx beckmann lambert disney charlie} " == *" oren-nayar "* ]] ||
-        skipped+=("ltc_texel_errors_oren_nayar: oren-nayar is not in MFKIT_FIGURES_BRDFS (its 12 x 12 fit takes minutes)")
+    [[ " ${MFKIT_FIGURES_BRDFS-ggx beckmann lambert disney charlie oren-nayar eon} " == *" leadr-diffuse "* ]] ||
+        skipped+=("ltc_texel_errors_leadr_diffuse: leadr-diffuse is not in MFKIT_FIGURES_BRDFS (its model integrates numerically per evaluation: its 12 x 12 fit takes minutes)")
 elif [ -x "$bin/study_ltc_texels" ]; then
     skipped+=("ltc_texel_errors_<brdf>: $build/bin/mfkit not built")
 fi
