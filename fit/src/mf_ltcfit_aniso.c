@@ -782,13 +782,11 @@ static int sym_of(double theta, double phi)
     return 0;
 }
 
-mf_status mf_ltcfit_aniso_entry_fit(const mf_brdf_model *model, double alpha_x, double alpha_y, double theta,
-                                    double phi, const double *lobe_start, const mf_ltcfit_aniso_options *o,
-                                    mf_ltcfit_aniso_entry *out)
+/* fit_entry for one entry on its own (the public one-entry fits): its own workspace and scramble. */
+static mf_status fit_entry_alone(const mf_brdf_model *model, mf_brdf_params prm, double theta, double phi, int sym,
+                                 int family, const double *given_mag, const double *lobe_start, const double *alt_start,
+                                 const mf_ltcfit_aniso_options *o, mf_ltcfit_aniso_entry *out)
 {
-    if (!model || !model->eval_cos || !check_options(o) || !(alpha_x > 0.0) || !(alpha_y > 0.0) ||
-        !(theta >= 0.0 && theta < 0.5 * MF_PI) || !(phi >= 0.0 && phi < 2.0 * MF_PI) || !out)
-        return MF_ERR_DOMAIN;
     workspace ws;
     if (!ws_init(&ws, o->samples)) {
         ws_free(&ws);
@@ -796,10 +794,20 @@ mf_status mf_ltcfit_aniso_entry_fit(const mf_brdf_model *model, double alpha_x, 
     }
     uint32_t scr[2];
     sobol_scramble(o->seed, scr);
-    mf_brdf_params prm = {alpha_x, alpha_y};
-    mf_status st = fit_entry(model, prm, theta, phi, sym_of(theta, phi), FAMILY_RANDOM, NULL, lobe_start, NULL, o, scr, &ws, out);
+    mf_status st = fit_entry(model, prm, theta, phi, sym, family, given_mag, lobe_start, alt_start, o, scr, &ws, out);
     ws_free(&ws);
     return st;
+}
+
+mf_status mf_ltcfit_aniso_entry_fit(const mf_brdf_model *model, double alpha_x, double alpha_y, double theta,
+                                    double phi, const double *lobe_start, const mf_ltcfit_aniso_options *o,
+                                    mf_ltcfit_aniso_entry *out)
+{
+    if (!model || !model->eval_cos || !check_options(o) || !(alpha_x > 0.0) || !(alpha_y > 0.0) ||
+        !(theta >= 0.0 && theta < 0.5 * MF_PI) || !(phi >= 0.0 && phi < 2.0 * MF_PI) || !out)
+        return MF_ERR_DOMAIN;
+    mf_brdf_params prm = {alpha_x, alpha_y};
+    return fit_entry_alone(model, prm, theta, phi, sym_of(theta, phi), FAMILY_RANDOM, NULL, lobe_start, NULL, o, out);
 }
 
 mf_status mf_ltcfit_aniso_entry_fit_general(const mf_brdf_model *model, mf_brdf_params prm, double theta, double phi,
@@ -810,17 +818,8 @@ mf_status mf_ltcfit_aniso_entry_fit_general(const mf_brdf_model *model, mf_brdf_
         !(theta >= 0.0 && theta < 0.5 * MF_PI) || !(phi >= 0.0 && phi < 2.0 * MF_PI) || !out ||
         !(magnitude >= 0.0 && magnitude < INFINITY) || !(magnitude_err >= 0.0))
         return MF_ERR_DOMAIN;
-    workspace ws;
-    if (!ws_init(&ws, o->samples)) {
-        ws_free(&ws);
-        return MF_ERR_ALLOC;
-    }
-    uint32_t scr[2];
-    sobol_scramble(o->seed, scr);
     double mag[2] = {magnitude, magnitude_err};
-    mf_status st = fit_entry(model, prm, theta, phi, 0, FAMILY_SHAPED, mag, lobe_start, NULL, o, scr, &ws, out);
-    ws_free(&ws);
-    return st;
+    return fit_entry_alone(model, prm, theta, phi, 0, FAMILY_SHAPED, mag, lobe_start, NULL, o, out);
 }
 
 mf_status mf_ltcfit_aniso_entry_fit_mirrored(const mf_brdf_model *model, mf_brdf_params prm, double theta, int mirrors,
@@ -832,17 +831,8 @@ mf_status mf_ltcfit_aniso_entry_fit_mirrored(const mf_brdf_model *model, mf_brdf
         !(theta >= 0.0 && theta < 0.5 * MF_PI) || !out || !(magnitude >= 0.0 && magnitude < INFINITY) ||
         !(magnitude_err >= 0.0) || (mirrors & ~(SYM_X | SYM_Y)) || ((mirrors & SYM_X) && theta != 0.0))
         return MF_ERR_DOMAIN;
-    workspace ws;
-    if (!ws_init(&ws, o->samples)) {
-        ws_free(&ws);
-        return MF_ERR_ALLOC;
-    }
-    uint32_t scr[2];
-    sobol_scramble(o->seed, scr);
     double mag[2] = {magnitude, magnitude_err};
-    mf_status st = fit_entry(model, prm, theta, 0.0, mirrors, FAMILY_SHAPED, mag, lobe_start, alt_start, o, scr, &ws, out);
-    ws_free(&ws);
-    return st;
+    return fit_entry_alone(model, prm, theta, 0.0, mirrors, FAMILY_SHAPED, mag, lobe_start, alt_start, o, out);
 }
 
 /* ---- the table: (alpha_x, alpha_y) jobs over threads ------------------------------------------ */

@@ -1,6 +1,7 @@
 /* mf_albedo.c -- the microfacet albedo by panels split at the horizon of wi (see mf_albedo.h). */
 #include "mfkit/mf_albedo.h"
 #include "mfkit/mf_quad.h"
+#include "mf_quad_internal.h"
 
 #include <float.h>
 #include <stddef.h>
@@ -140,20 +141,7 @@ static void integrand(const actx *c, double x, double sx, double sy, double k, d
 }
 
 /* QUADPACK's 15-point Kronrod rule (positive half, descending) and its embedded 7-point Gauss rule
- * (the nodes xgk[1], xgk[3], xgk[5], xgk[7]) [Piessens et al. 1983, QK15]. */
-static const double xgk[8] = {
-    0.991455371120812639206854697526329, 0.949107912342758524526189684047851,
-    0.864864423359769072789712788640926, 0.741531185599394439863864773280788,
-    0.586087235467691130294144845693013, 0.405845151377397166906606412076961,
-    0.207784955007898467600689403773245, 0.000000000000000000000000000000000};
-static const double wgk[8] = {
-    0.022935322010529224963732008058970, 0.063092092629978553290700663189204,
-    0.104790010322250183839876322541518, 0.140653259715525918745189590510238,
-    0.169004726639267902826583426598550, 0.190350578064785409913256402421014,
-    0.204432940075298892414161999234649, 0.209482141084727828012999174891714};
-static const double wg[4] = {
-    0.129484966168869693270611432679082, 0.279705391489276667901467771423780,
-    0.381830050505118944950369775488975, 0.417959183673469387755102040816327};
+ * [Piessens et al. 1983, QK15]: the tables of mf_quad.c (mf_quad_internal.h). */
 
 /* A segment of an adaptive rule: its K15 values (two components) and |K15 - G7| (plus, for the
  * outer rule, the propagated inner bounds). */
@@ -161,11 +149,11 @@ typedef struct {
     double a, b, v[2], e[2];
 } seg;
 
-/* The 15 nodes of [a, b] in the order xgk[0] left, right, ..., centre (index 14). */
+/* The 15 nodes of [a, b] in the order mf_quad_qk15_xgk[0] left, right, ..., centre (index 14). */
 static double node(double a, double b, int j)
 {
     double c = 0.5 * (a + b), h = 0.5 * (b - a);
-    return j == 14 ? c : (j & 1 ? c + h * xgk[j >> 1] : c - h * xgk[j >> 1]);
+    return j == 14 ? c : (j & 1 ? c + h * mf_quad_qk15_xgk[j >> 1] : c - h * mf_quad_qk15_xgk[j >> 1]);
 }
 
 /* Combines the 15 node values f[j][0..1] of [a, b] into the segment's K15 value and |K15 - G7|. */
@@ -173,12 +161,12 @@ static void combine(seg *s, double f[15][2])
 {
     double h = 0.5 * (s->b - s->a);
     for (int q = 0; q < 2; ++q) {
-        double k = f[14][q] * wgk[7], g = f[14][q] * wg[3];
+        double k = f[14][q] * mf_quad_qk15_wgk[7], g = f[14][q] * mf_quad_qk15_wg[3];
         for (int j = 0; j < 7; ++j) {
             double p = f[2 * j][q] + f[2 * j + 1][q];
-            k += wgk[j] * p;
+            k += mf_quad_qk15_wgk[j] * p;
             if (j & 1)
-                g += wg[j >> 1] * p;
+                g += mf_quad_qk15_wg[j >> 1] * p;
         }
         s->v[q] = h * k;
         s->e[q] = fabs(h * (k - g));
@@ -303,9 +291,9 @@ static void outer_eval(const actx *c, const void *ctx, seg *s)
     combine(s, f);
     double h = 0.5 * (s->b - s->a);
     for (int q = 0; q < 2; ++q) {
-        double ie = fe[14][q] * wgk[7];
+        double ie = fe[14][q] * mf_quad_qk15_wgk[7];
         for (int j = 0; j < 7; ++j)
-            ie += wgk[j] * (fe[2 * j][q] + fe[2 * j + 1][q]);
+            ie += mf_quad_qk15_wgk[j] * (fe[2 * j][q] + fe[2 * j + 1][q]);
         s->e[q] += h * ie;
     }
 }
@@ -690,9 +678,9 @@ static void charlie_outer_eval(const actx *unused, const void *vctx, seg *s)
     for (int j = 0; j < 15; ++j)
         charlie_ray(vctx, node(s->a, s->b, j), f[j], fe[j]);
     combine(s, f);
-    double h = 0.5 * (s->b - s->a), ie = fe[14][0] * wgk[7];
+    double h = 0.5 * (s->b - s->a), ie = fe[14][0] * mf_quad_qk15_wgk[7];
     for (int j = 0; j < 7; ++j)
-        ie += wgk[j] * (fe[2 * j][0] + fe[2 * j + 1][0]);
+        ie += mf_quad_qk15_wgk[j] * (fe[2 * j][0] + fe[2 * j + 1][0]);
     s->e[0] += h * ie;
 }
 
@@ -966,9 +954,9 @@ static void dielectric_outer_eval(const actx *unused, const void *vctx, seg *s)
     combine(s, f);
     double h = 0.5 * (s->b - s->a);
     for (int q = 0; q < 2; ++q) {
-        double ie = fe[14][q] * wgk[7];
+        double ie = fe[14][q] * mf_quad_qk15_wgk[7];
         for (int j = 0; j < 7; ++j)
-            ie += wgk[j] * (fe[2 * j][q] + fe[2 * j + 1][q]);
+            ie += mf_quad_qk15_wgk[j] * (fe[2 * j][q] + fe[2 * j + 1][q]);
         s->e[q] += h * ie;
     }
 }

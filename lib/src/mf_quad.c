@@ -1,5 +1,6 @@
 /* mf_quad.c -- Gauss-Legendre rules and adaptive Gauss-Kronrod (see mf_quad.h). */
 #include "mfkit/mf_quad.h"
+#include "mf_quad_internal.h"
 
 #include <float.h>
 
@@ -45,18 +46,18 @@ mf_status mf_quad_gauss_legendre(int n, double *nodes, double *weights)
     return MF_OK;
 }
 
-/* QUADPACK qk15 abscissae (Kronrod, positive half, descending) and weights. */
-static const double xgk[8] = {
+/* QUADPACK qk15 abscissae (Kronrod, positive half, descending) and weights (mf_quad_internal.h). */
+const double mf_quad_qk15_xgk[8] = {
     0.991455371120812639206854697526329, 0.949107912342758524526189684047851,
     0.864864423359769072789712788640926, 0.741531185599394439863864773280788,
     0.586087235467691130294144845693013, 0.405845151377397166906606412076961,
     0.207784955007898467600689403773245, 0.000000000000000000000000000000000};
-static const double wgk[8] = {
+const double mf_quad_qk15_wgk[8] = {
     0.022935322010529224963732008058970, 0.063092092629978553290700663189204,
     0.104790010322250183839876322541518, 0.140653259715525918745189590510238,
     0.169004726639267902826583426598550, 0.190350578064785409913256402421014,
     0.204432940075298892414161999234649, 0.209482141084727828012999174891714};
-static const double wg[4] = {
+const double mf_quad_qk15_wg[4] = {
     0.129484966168869693270611432679082, 0.279705391489276667901467771423780,
     0.381830050505118944950369775488975, 0.417959183673469387755102040816327};
 
@@ -80,13 +81,13 @@ static int qk15(const qctx *c, double a, double b, double *val, double *err)
 {
     double center = 0.5 * (a + b), hl = 0.5 * (b - a);
     double fc = qeval(c, center);
-    double rk = fc * wgk[7], rg = fc * wg[3];
+    double rk = fc * mf_quad_qk15_wgk[7], rg = fc * mf_quad_qk15_wg[3];
     for (int j = 0; j < 7; ++j) {
-        double dx = hl * xgk[j];
+        double dx = hl * mf_quad_qk15_xgk[j];
         double f1 = qeval(c, center - dx), f2 = qeval(c, center + dx);
-        rk += wgk[j] * (f1 + f2);
+        rk += mf_quad_qk15_wgk[j] * (f1 + f2);
         if (j % 2 == 1)
-            rg += wg[j / 2] * (f1 + f2);
+            rg += mf_quad_qk15_wg[j / 2] * (f1 + f2);
     }
     *val = rk * hl;
     *err = fabs((rk - rg) * hl);
