@@ -191,29 +191,9 @@ static int load_table(const char *path)
     return 0;
 }
 
-/* Shading of one texel of normal n (tangent frame) seen from wo, the quad q[4] relative to the point:
- * magnitude x LTC integral with the table's LTC at (alpha, the texel-frame view elevation). */
 static double shade_texel_ltc(mf_vec3 n, double alpha, mf_vec3 wo, const mf_vec3 *q)
 {
-    mf_frame f = mf_frame_from_normal(n);
-    mf_vec3 wl = mf_frame_to_local(f, wo);
-    if (wl.z < MF_PREFILTER_COS_MIN) { /* below the texel's horizon: the prefilter's rule */
-        double h = sqrt(wl.x * wl.x + wl.y * wl.y), c = MF_PREFILTER_COS_MIN, s = sqrt(1.0 - c * c);
-        wl = h > 0.0 ? v3(wl.x / h * s, wl.y / h * s, c) : v3(s, 0.0, c);
-    }
-    mf_frame vf = mf_ltc_view_frame(wl);
-    mf_vec3 p[4];
-    for (int k = 0; k < 4; ++k)
-        p[k] = mf_frame_to_local(vf, mf_frame_to_local(f, q[k]));
-    double par[2] = {sqrt(alpha), sqrt(fmax(0.0, 1.0 - fmin(1.0, wl.z)))}, rec[16];
-    if (mf_table_lookup(&g_tab, par, rec) != MF_OK)
-        return NAN;
-    double in4[4] = {rec[g_field[0]], rec[g_field[1]], rec[g_field[2]], rec[g_field[3]]};
-    mf_ltc ltc;
-    if (mf_ltc_table_unpack(in4, &ltc) != MF_OK)
-        return NAN;
-    mf_polygon poly = mf_polygon_make(4, p);
-    return rec[g_field[4]] * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
+    return mf_prefilter_texel_ltc(&g_tab, g_field, n, alpha, wo, q, 4);
 }
 
 /* ---- the map and its MIP pyramids ------------------------------------------------------------------- */

@@ -12,6 +12,9 @@
  * linearly.  Level 0 of the map is not in the arrays: at lod < 1 this returns level 1's filter
  * (the snippet's max(lod - 1, 0)); a renderer blends with its own level-0 shading there.
  * The result: the forward M (row-major, view-azimuth-aligned frame) and the magnitude.
+ *
+ * Also here: mf_prefilter_texel_ltc, the per-texel LTC shading of one texel, the thesis' ground
+ * truth and naive baseline [Nahmias 2022, Sec. 4.1] and mfkit's level 0.
  */
 #ifndef MF_PREFILTER_LOOKUP_H
 #define MF_PREFILTER_LOOKUP_H
@@ -20,6 +23,10 @@
 #include <stddef.h>
 
 #include "mfkit/fit/mf_prefilter.h"
+#include "mfkit/mf_ltc.h"
+#include "mfkit/mf_ltc_table.h"
+#include "mfkit/mf_polygon.h"
+#include "mfkit/mf_table.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -88,6 +95,42 @@ static inline void mf_prefilter_lookup(const mf_prefilter_lookup_levels *s, doub
     for (int q = 0; q < 9; ++q)
         M[q] = acc[q];
     *magnitude = acc[9];
+}
+
+/* Per-texel LTC shading [Nahmias 2022, Sec. 4.1: "for each normal, we evaluate the view elevation
+ * and use the standard technique from [HDHN16] to integrate over the light"]: the isotropic LTC of
+ * table t (mf_ltc_table.h layout; field[0..4] the indices of minv_00, minv_20, minv_02, minv_22,
+ * magnitude) at (alpha, the view's elevation in the texel frame), in the texel's frame (normal n,
+ * a unit vector of the tangent frame; any rotation about n: the lobe is isotropic), integrated over
+ * the polygon q[0..nq-1] (vertices relative to the shading point, tangent frame; two-sided), times
+ * the table's magnitude.  A view below the texel's horizon is handled as by the prefilter
+ * (mf_prefilter.h): its texel-frame cosine clamped to MF_PREFILTER_COS_MIN, azimuth kept.  The
+ * polygon is clipped at the texel's horizon (by the LTC integral), not at the geometric one.
+ * NaN if the lookup or the table's matrix fails. */
+static inline double mf_prefilter_texel_ltc(const mf_table *t, const int field[5], mf_vec3 n, double alpha,
+                                            mf_vec3 wo, const mf_vec3 *q, int nq)
+{
+    mf_frame f = mf_frame_from_normal(n);
+    mf_vec3 wl = mf_frame_to_local(f, wo);
+    if (wl.z < MF_PREFILTER_COS_MIN) {
+        double h = sqrt(wl.x * wl.x + wl.y * wl.y), c = MF_PREFILTER_COS_MIN, s = sqrt(1.0 - c * c);
+        wl = h > 0.0 ? mf_vec3_make(wl.x / h * s, wl.y / h * s, c) : mf_vec3_make(s, 0.0, c);
+    }
+    mf_frame vf = mf_ltc_view_frame(wl);
+    mf_vec3 p[MF_POLYGON_MAX_VERTICES];
+    if (nq < 3 || nq > MF_POLYGON_MAX_VERTICES)
+        return NAN;
+    for (int k = 0; k < nq; ++k)
+        p[k] = mf_frame_to_local(vf, mf_frame_to_local(f, q[k]));
+    double par[2] = {sqrt(alpha), sqrt(fmax(0.0, 1.0 - fmin(1.0, wl.z)))}, rec[64];
+    if (t->nfields > 64 || mf_table_lookup(t, par, rec) != MF_OK)
+        return NAN;
+    double in4[4] = {rec[field[0]], rec[field[1]], rec[field[2]], rec[field[3]]};
+    mf_ltc ltc;
+    if (mf_ltc_table_unpack(in4, &ltc) != MF_OK)
+        return NAN;
+    mf_polygon poly = mf_polygon_make(nq, p);
+    return rec[field[4]] * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
 }
 
 #ifdef __cplusplus
