@@ -845,5 +845,42 @@ KINDS = KINDS + ((("level", "light_half_side", "i_theta", "mse_mfkit", "mse_naiv
                   plot_prefilter_eval),)
 
 
+def plot_prefilter_scenes(d, out_dir, made):
+    """analysis/render_prefilter_scenes: mean squared error of each method's image against the
+    supersampled ground truth as a function of camera distance, for the near-normal and the grazing
+    scene (the thesis' error-against-distance graphs, Nahmias 2022, Fig. 4.6 and 4.10).  Solid: against
+    the per-texel LTC truth (the thesis'); dashed: against the exact GGX by Monte Carlo."""
+    methods = [("mfkit", "mfkit lobes", "C3"), ("naive", "naive (MIP normal)", "C0"),
+               ("toksvig", "Toksvig", "C1"), ("leadr", "LEADR", "C2")]
+    scenes = [s for s in ("normal", "grazing") if np.any(d["scene"] == s)]
+    fig, axes = new_figure(len(scenes), 1, width=5.2)
+    for i, sc in enumerate(scenes):
+        ax = axes[0][i]
+        for key, label, colour in methods:
+            sel = (d["scene"] == sc) & (d["method"] == key)
+            order = np.argsort(d["distance"][sel])
+            x = d["distance"][sel][order]
+            ax.plot(x, np.maximum(d["mse"][sel][order], 1e-12), "o-", color=colour, label=label)
+            if np.all(np.isfinite(d["mse_mc"][sel])):
+                ax.plot(x, np.maximum(d["mse_mc"][sel][order], 1e-12), "--", color=colour, alpha=0.6)
+        sel = (d["scene"] == sc) & (d["method"] == "mfkit")
+        order = np.argsort(d["distance"][sel])
+        for x, lod in zip(d["distance"][sel][order], d["mean_lod"][sel][order]):
+            ax.annotate("lod %.1f" % lod, (x, 1.0), xycoords=("data", "axes fraction"), fontsize=6,
+                        ha="center", va="top", color="0.4")
+        ax.set_xscale("log", base=2)
+        ax.set_yscale("log")
+        ax.set_xlabel("camera distance (plane units; lod = mean level of detail)")
+        ax.set_ylabel("image MSE vs ground truth")
+        ax.set_title("%s view" % ("near-normal (scene 1)" if sc == "normal" else "grazing (scene 2)"))
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8, loc="lower right")
+    finish(fig, d, out_dir, "prefilter_scenes", made,
+           note="solid: vs per-texel LTC truth; dashed: vs Monte Carlo GGX truth")
+
+
+KINDS = KINDS + ((("scene", "distance", "mean_lod", "method", "mse", "mse_mc"), plot_prefilter_scenes),)
+
+
 if __name__ == "__main__":
     sys.exit(main(sys.argv))
