@@ -11,7 +11,8 @@
 #   polygon rotated by +phi instead of -phi it is 0.08, 0.50 and 2.7, so the bound checks the view frame
 #   at the two farther distances.
 # - Files: per scene, distance and method an EXR and a PNG, per method but the truth an error map (EXR
-#   and PNG); the CSV rows; a rerun gives the same CSV (fixed seed) apart from the date.
+#   and PNG); the CSV rows; a rerun gives the same CSV (fixed seed) apart from the date; analysis/plot.py
+#   draws the prefilter_scenes figure from it.
 # - Refusals: one line, non-zero exit, no CSV.
 mfkit="$1"; src="$2"; render="$3"
 source "$(dirname "$0")/cli_test_lib.sh"
@@ -67,6 +68,10 @@ print("; ".join(out[:8]) if out else "ok")
 PY
 )
 ok '[ "$res" = ok ]' "constant map: baselines and lobes match the truth, every file written ($res)"
+mkdir -p "$tmp/data" "$tmp/fig" && cp "$tmp/sc/prefilter_scenes.csv" "$tmp/data/"
+$py "$src/analysis/plot.py" "$tmp/data" "$tmp/fig" >"$tmp/plot.log" 2>&1; rc=$?
+ok '[ $rc -eq 0 ] && [ -s "$tmp/fig/prefilter_scenes.png" ] && [ -s "$tmp/fig/prefilter_scenes.pdf" ]' \
+   "analysis/plot.py draws prefilter_scenes (rc=$rc): $(tail -2 "$tmp/plot.log")"
 "$render" "${args[@]}" --images 0 --out "$tmp/sc2" >/dev/null 2>&1
 ok 'cmp -s <(tail -n +2 "$tmp/sc/prefilter_scenes.csv") <(tail -n +2 "$tmp/sc2/prefilter_scenes.csv")' \
    "a rerun gives the same CSV"
