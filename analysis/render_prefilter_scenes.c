@@ -5,26 +5,31 @@
  * camera distances; each method's image, error map and mean squared error against the ground truth
  * (issue 13, "Ground truth and evaluation").
  *
- *   render_prefilter_scenes --prefilter DIR [--map NORMALMAP] [--ltc-table FILE] [--size N] [--distances D,D,...]
- *       [--light-half H] [--mc-samples K] [--images 0|1] [--seed S] [--out DIR] [--csv FILE]
+ *   render_prefilter_scenes --prefilter DIR [--map NORMALMAP] [--ltc-table FILE] [--size N] [--tiles T]
+ *       [--distances D,D,...] [--light-half H] [--mc-samples K] [--images 0|1] [--seed S] [--out DIR] [--csv FILE]
+ * Run from the source directory: the default --ltc-table is tests/data/reference/ltc_code_ggx_64.csv
+ * (Heitz et al. 2016's GGX table, the one the thesis shades with); the map is the manifest's (a path
+ * relative to where mfkit prefilter ran) unless --map; it is decoded as mfkit prefilter's defaults do.
  *
- * Scene (world: the plane z = 0, one map tile per unit square, 5 x 5 tiles over [-2.5, 2.5]^2;
- * texture u = x, v = -y, so the tangent frame is the world's: x = +column, y = up the image, z = n;
+ * Scene (world: the plane z = 0 over [-2.5, 2.5]^2 carrying the map repeated T x T times, default
+ * T = max(5, 640 / W): the thesis tiled its 128 x 128 maps 5 x 5, 640 texels across; texture
+ * u = x T / 5, v = -y T / 5, so the tangent frame is the world's: x = +column, y = up the image, z = n;
  * the thesis gives the setup only in outline, so the numbers are ours):
- *   SCENE 1 "normal"   camera at (0, 0, d) looking at the origin; light: a square of half side H
+ *   SCENE 1 "normal"   camera at (0.0123, 0.0371, d) looking straight down (off the texel grid's
+ *                      symmetry); light: a square of half side H
  *                      (default 1) at height 3, facing down, centred above the origin;
  *   SCENE 2 "grazing"  camera at d (0, -cos 20 deg, sin 20 deg) looking at the origin; light: the
  *                      same square centred at 4 (0, cos 20 deg, sin 20 deg), facing the origin (the
  *                      mirror direction of the view at the origin).
  * Pinhole camera, square image of N x N pixels (default 128), half field of view atan(1/2) (the
- * thesis' frustum x = 1, n = 2), so the plane fills the image at d = 5 in SCENE 1 and covers fewer
- * pixels as d grows: its pixels cover 2^lod texels with lod growing by 1 per doubling of d (the
- * thesis magnifies those images by nearest neighbour; ours are written at render size).  The light
+ * thesis' frustum x = 1, n = 2): SCENE 1's pixels cover 2^lod texels, lod growing by 1 per doubling
+ * of d; default distances d = 5 N / (T W) 2^k, k = -1 .. 4, i.e. SCENE 1 at lod -1 .. 4 (the thesis
+ * magnifies its far images by nearest neighbour; ours are written at render size).  The light
  * is not rendered and occludes nothing; radiance 1, specular only, Fresnel 1.
  *
  * Per pixel: the level of detail lod = log2 of the longer of the pixel's two projected edges in
  * level-0 texels (the GL rule, from the plane hits of the neighbouring pixel centres), and
- *   truth     supersampled: S x S stratified sub-pixel points (S = max(4, ceil(2 * 2^lod)) <= 32, fixed
+ *   truth     supersampled: S x S stratified sub-pixel points (S = max(4, ceil(2^lod)) <= 32, fixed
  *             seed), each point-sampling its level-0 texel and shading it with the per-texel LTC
  *             [Nahmias 2022, Sec. 4.1: "for each normal, we evaluate the view elevation and use the
  *             standard technique from [HDHN16]"]: the isotropic GGX LTC of the table (alpha of the
@@ -34,8 +39,9 @@
  *             MF_PREFILTER_COS_MIN, azimuth kept).  This is the thesis' ground truth;
  *   truth_mc  (--mc-samples K > 0) the same sub-samples with the exact GGX integral instead
  *             (the prefilter's effective-BRDF definition, mf_prefilter_mix of the texel's normal),
- *             by Monte Carlo over the light's area, K jittered points per sub-sample: the converged
- *             reference the lobes were fitted to, with a standard error;
+ *             by Monte Carlo over the light's area, m x m jittered points per sub-sample with
+ *             m = ceil(sqrt(16 K / S^2)) (about 16 K points a pixel; default K = 16): the
+ *             reference the lobes were fitted to;
  *   mfkit     the prefiltered lobes (mf_prefilter_lookup: trilinear over MIP, bilinear over the view
  *             axes), polygon rotated by -phi, magnitude x LTC integral; at lod < 1 blended linearly
  *             (weight lod) with level 0, the bilinear filter of the four nearest texels' per-texel LTC
