@@ -12,7 +12,8 @@
 #   at the two farther distances.
 # - Files: per scene, distance and method an EXR and a PNG, per method but the truth an error map (EXR
 #   and PNG); the CSV rows; a rerun gives the same CSV (fixed seed) apart from the date; analysis/plot.py
-#   draws the prefilter_scenes figure from it.
+#   draws the prefilter_scenes figure from it; prefilter_scenes_ssim.py (SSIM, python3-skimage) gives
+#   naive an SSIM >= 0.9 (the same argument as above) and plot.py its figure.
 # - Refusals: one line, non-zero exit, no CSV.
 mfkit="$1"; src="$2"; render="$3"
 source "$(dirname "$0")/cli_test_lib.sh"
@@ -68,9 +69,34 @@ print("; ".join(out[:8]) if out else "ok")
 PY
 )
 ok '[ "$res" = ok ]' "constant map: baselines and lobes match the truth, every file written ($res)"
-mkdir -p "$tmp/data" "$tmp/fig" && cp "$tmp/sc/prefilter_scenes.csv" "$tmp/data/"
+# SSIM (python3-skimage): on the constant map naive's display image is the truth's up to the lighting's
+# variation over a pixel: SSIM over the plane >= 0.9 in every row (measured at least 0.9988); each value in
+# [-1, 1]; the rows are 2 scenes x 3 distances x 5 methods.
+$py "$src/analysis/prefilter_scenes_ssim.py" "$tmp/sc" >"$tmp/ssim.log" 2>&1; rc=$?
+res=$($py - "$tmp/sc/prefilter_scenes_ssim.csv" <<'PY'
+import csv, sys
+lines = open(sys.argv[1]).read().splitlines()
+rows = list(csv.DictReader(lines[1:]))
+out = []
+if not lines[0].startswith("# command=prefilter_scenes_ssim.py "):
+    out.append("no provenance header")
+if len(rows) != 2 * 3 * 5:
+    out.append("rows %d, expected 30" % len(rows))
+for r in rows:
+    v = float(r["ssim"])
+    if not -1.0 <= v <= 1.0:
+        out.append("%s d=%s %s: ssim %g" % (r["scene"], r["distance"], r["method"], v))
+    if r["method"] == "naive":
+        print("naive ssim %s d=%s: %.4f" % (r["scene"], r["distance"], v), file=sys.stderr)
+        if not v >= 0.9:
+            out.append("%s d=%s naive ssim %.4f < 0.9" % (r["scene"], r["distance"], v))
+print("; ".join(out[:6]) if out else "ok")
+PY
+)
+ok '[ $rc -eq 0 ] && [ "$res" = ok ]' "prefilter_scenes_ssim.py (rc=$rc): $res $(tail -1 "$tmp/ssim.log")"
+mkdir -p "$tmp/data" "$tmp/fig" && cp "$tmp/sc/prefilter_scenes.csv" "$tmp/sc/prefilter_scenes_ssim.csv" "$tmp/data/"
 $py "$src/analysis/plot.py" "$tmp/data" "$tmp/fig" >"$tmp/plot.log" 2>&1; rc=$?
-ok '[ $rc -eq 0 ] && [ -s "$tmp/fig/prefilter_scenes.png" ] && [ -s "$tmp/fig/prefilter_scenes.pdf" ]' \
+ok '[ $rc -eq 0 ] && [ -s "$tmp/fig/prefilter_scenes.png" ] && [ -s "$tmp/fig/prefilter_scenes.pdf" ] && [ -s "$tmp/fig/prefilter_scenes_ssim.png" ]' \
    "analysis/plot.py draws prefilter_scenes (rc=$rc): $(tail -2 "$tmp/plot.log")"
 "$render" "${args[@]}" --images 0 --out "$tmp/sc2" >/dev/null 2>&1
 ok 'cmp -s <(tail -n +2 "$tmp/sc/prefilter_scenes.csv") <(tail -n +2 "$tmp/sc2/prefilter_scenes.csv")' \
