@@ -845,5 +845,73 @@ KINDS = KINDS + ((("level", "light_half_side", "i_theta", "mse_mfkit", "mse_naiv
                   plot_prefilter_eval),)
 
 
+def plot_prefilter_scenes(d, out_dir, made):
+    """analysis/render_prefilter_scenes: mean squared error of each method's image against the
+    supersampled ground truth as a function of camera distance, for the near-normal and the grazing
+    scene (the thesis' error-against-distance graphs, Nahmias 2022, Fig. 4.6 and 4.10).  Solid: against
+    the per-texel LTC truth (the thesis'); dashed: against the exact GGX by Monte Carlo."""
+    methods = [("mfkit", "mfkit lobes", "C3"), ("naive", "naive (MIP normal)", "C0"),
+               ("toksvig", "Toksvig", "C1"), ("leadr", "LEADR", "C2")]
+    scenes = [s for s in ("normal", "grazing") if np.any(d["scene"] == s)]
+    fig, axes = new_figure(len(scenes), 1, width=5.2)
+    for i, sc in enumerate(scenes):
+        ax = axes[0][i]
+        for key, label, colour in methods:
+            sel = (d["scene"] == sc) & (d["method"] == key)
+            order = np.argsort(d["distance"][sel])
+            x = d["distance"][sel][order]
+            ax.plot(x, np.maximum(d["mse"][sel][order], 1e-12), "o-", color=colour, label=label)
+            if np.all(np.isfinite(d["mse_mc"][sel])):
+                ax.plot(x, np.maximum(d["mse_mc"][sel][order], 1e-12), "--", color=colour, alpha=0.6)
+        sel = (d["scene"] == sc) & (d["method"] == "mfkit")
+        order = np.argsort(d["distance"][sel])
+        for x, lod in zip(d["distance"][sel][order], d["mean_lod"][sel][order]):
+            ax.annotate("lod %.1f" % lod, (x, 1.0), xycoords=("data", "axes fraction"), fontsize=6,
+                        ha="center", va="top", color="0.4")
+        ax.set_xscale("log", base=2)
+        ax.set_yscale("log")
+        ax.set_xlabel("camera distance (plane units; lod = mean level of detail)")
+        ax.set_ylabel("image MSE vs ground truth")
+        ax.set_title("%s view" % ("near-normal (scene 1)" if sc == "normal" else "grazing (scene 2)"))
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8, loc="lower right")
+    finish(fig, d, out_dir, "prefilter_scenes", made,
+           note="solid: vs per-texel LTC truth; dashed: vs Monte Carlo GGX truth")
+
+
+KINDS = KINDS + ((("scene", "distance", "mean_lod", "method", "mse", "mse_mc"), plot_prefilter_scenes),)
+
+
+def plot_prefilter_scenes_ssim(d, out_dir, made):
+    """analysis/prefilter_scenes_ssim.py: SSIM (Wang et al. 2004) of each method's display image against
+    the ground truth's over the plane, per camera distance, for both scenes (the thesis' pooled perceptual
+    metric, there FLIP, Nahmias 2022, Fig. 4.6 and 4.10)."""
+    methods = [("mfkit", "mfkit lobes", "C3"), ("naive", "naive (MIP normal)", "C0"),
+               ("toksvig", "Toksvig", "C1"), ("leadr", "LEADR", "C2"), ("truth_mc", "Monte Carlo truth", "0.5")]
+    scenes = [s for s in ("normal", "grazing") if np.any(d["scene"] == s)]
+    fig, axes = new_figure(len(scenes), 1, width=5.2)
+    for i, sc in enumerate(scenes):
+        ax = axes[0][i]
+        for key, label, colour in methods:
+            sel = (d["scene"] == sc) & (d["method"] == key)
+            if not np.any(sel):
+                continue
+            order = np.argsort(d["distance"][sel])
+            ax.plot(d["distance"][sel][order], d["ssim"][sel][order], marker="o", color=colour, label=label,
+                    ls="--" if key == "truth_mc" else "-")
+        ax.set_xscale("log", base=2)
+        ax.set_ylim(min(0.0, float(np.nanmin(d["ssim"]))), 1.02)
+        ax.set_xlabel("camera distance (plane units)")
+        ax.set_ylabel("SSIM vs ground truth over the plane (1 = identical)")
+        ax.set_title("%s view" % ("near-normal (scene 1)" if sc == "normal" else "grazing (scene 2)"))
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8, loc="lower left")
+    finish(fig, d, out_dir, "prefilter_scenes_ssim", made,
+           note="display images (radiance / the truth's peak, gamma 1/2.2); Gaussian window 11, sigma 1.5")
+
+
+KINDS = KINDS + ((("scene", "distance", "method", "ssim", "ssim_image"), plot_prefilter_scenes_ssim),)
+
+
 if __name__ == "__main__":
     sys.exit(main(sys.argv))

@@ -12,6 +12,11 @@
  *            [Nahmias 2022, Eq. 2.36], wi.z > 0, with the prefilter's below-horizon rule
  *            (mf_prefilter.h); Monte Carlo over the light's area (uniform points, fixed seed)
  *            with its standard error;
+ *   truth_ltc the thesis' reference [Nahmias 2022, Sec. 4.1]: (1/N) sum_q of the per-texel LTC
+ *            shading, the base GGX's isotropic LTC at the texel-frame view elevation rotated to
+ *            n(q), integrated over the light in closed form (mf_prefilter_texel_ltc); the table is
+ *            --ltc-table, or by default one fitted here by mfkit's isotropic fitter (mf_ltcfit.h)
+ *            at the manifest's alpha over 64 view elevations;
  *   mfkit    magnitude * integral_light D_M (the stored forward M; mf_ltc_integrate_polygon);
  *   naive    the base GGX rotated to the footprint's normalised mean normal;
  *   toksvig  the same with alpha' = sqrt(alpha^2 + 2 (1 - |n_a|) / |n_a|), |n_a| the length of the
@@ -22,6 +27,7 @@
  *            footprint's mean and covariance of the texel slopes (-n.x/n.z, -n.y/n.z) plus the base
  *            roughness as a Beckmann slope variance alpha^2/2 per axis.
  *
+ * Every method's error is reported against both truths.
  * The baselines are integrated with the same light samples as the truth (so their differences
  * from it carry little Monte Carlo noise); mfkit's lobe is integrated in closed form.
  * The light: a square of half side h at distance 1, facing the origin, centred on the mirror
@@ -41,7 +47,7 @@ static const char *const k_cmd = "prefilter-eval";
 static const char *const k_green_names[] = {"up", "down", NULL};
 static const char *const k_encoding_names[] = {"auto", "unorm", "raw", NULL};
 
-enum { E_OUT, E_LIGHTS, E_SAMPLES, E_TEXELS, E_SEED, E_MAP, E_GREEN, E_ENCODING, E_NOPTS };
+enum { E_OUT, E_LIGHTS, E_SAMPLES, E_TEXELS, E_SEED, E_MAP, E_GREEN, E_ENCODING, E_LTC_TABLE, E_NOPTS };
 static const cli_opt k_opts[E_NOPTS] = {
     {.name = "--out", .metavar = "DIR", .kind = CLI_OPT_STRING, .required = 1,
      .help = "output directory (created if missing): prefilter_eval.csv (every record) and "
@@ -60,6 +66,10 @@ static const cli_opt k_opts[E_NOPTS] = {
      .help = "as given to mfkit prefilter"},
     {.name = "--encoding", .kind = CLI_OPT_ENUM, .choices = k_encoding_names, .def = "auto",
      .help = "as given to mfkit prefilter"},
+    {.name = "--ltc-table", .metavar = "FILE", .kind = CLI_OPT_STRING,
+     .def = "a 64-elevation column fitted here at the base's alpha",
+     .help = "isotropic GGX LTC table (an mfkit table file or the reference CSV layout) for the per-texel LTC "
+             "truth"},
 };
 static const cli_command k_eval_cmd = {
     .name = "prefilter-eval",
@@ -69,7 +79,8 @@ static const cli_command k_eval_cmd = {
     .description =
         "Shading error of the prefiltered lobes (magnitude x LTC integral over square lights) against the\n"
         "ground truth (the footprint average of the exact base-GGX integral, Monte Carlo with its standard\n"
-        "error), beside the baselines naive (mean normal), Toksvig (mean normal, widened roughness) and LEADR.\n"
+        "error) and against the thesis' per-texel LTC shading, beside the baselines naive (mean normal),\n"
+        "Toksvig (mean normal, widened roughness) and LEADR.\n"
         "Reads PREFILTER_DIR/prefilter.json, ltc_mip<k>.npy, magnitude_mip<k>.npy and the normal map.\n",
     .opts = k_opts,
     .nopts = E_NOPTS,
@@ -86,8 +97,12 @@ int cli_prefilter_eval(int argc, char **argv)
 
 #else
 
+#include "mfkit/fit/mf_ltcfit.h"
 #include "mfkit/fit/mf_prefilter.h"
+#include "mfkit/fit/mf_prefilter_lookup.h"
 #include "mfkit/io/mf_image.h"
+#include "mfkit/io/mf_ltc_reference.h"
+#include "mfkit/io/mf_table_io.h"
 #include "mfkit/mf_brdf.h"
 #include "mfkit/mf_ltc.h"
 #include "mfkit/mf_moments.h"
@@ -249,18 +264,25 @@ static int parse_lights(const char *s, double *h, int *n)
 }
 
 typedef struct pe_acc {
-    double se2[5], sr[5], st, sse, cnt;
+    double se2[5], sr[5], st, sse, cnt, se2l[4], stl, sll;
 } pe_acc;
 
 enum { M_MFKIT, M_NAIVE, M_TOKSVIG, M_LEADR, M_TRUTH_SE, M_N };
 static const char *const k_method[4] = {"mfkit", "naive", "toksvig", "leadr"};
 
-/* One record: truth (MC) and the four estimates. */
+/* One record: truth (MC), truth_ltc (per-texel LTC) and the four estimates. */
 typedef struct pe_rec {
-    double truth, se, est[4];
+    double truth, se, truth_ltc, est[4];
 } pe_rec;
 
-static int eval_record(const mf_brdf_model *ggx, double alpha, const double *nrm, int count, double theta,
+/* The per-texel LTC table and its field indices. */
+typedef struct pe_itab {
+    mf_table t;
+    int field[5];
+} pe_itab;
+
+static int eval_record(const mf_brdf_model *ggx, const pe_itab *itab, double alpha, const double *nrm, int count,
+                       double theta,
                        double hside, const float *m9, float magnitude, int samples, uint64_t seed, pe_rec *r,
                        char *msg, size_t msz)
 {
@@ -286,6 +308,13 @@ static int eval_record(const mf_brdf_model *ggx, double alpha, const double *nrm
         return CLI_EXIT_USAGE;
     }
     r->est[M_MFKIT] = (double)magnitude * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
+
+    /* the thesis' reference: the footprint average of the per-texel LTC shading */
+    double sl = 0.0;
+    for (int q = 0; q < count; ++q)
+        sl += mf_prefilter_texel_ltc(&itab->t, itab->field, mf_vec3_make(nrm[3 * q], nrm[3 * q + 1], nrm[3 * q + 2]),
+                                     alpha, wo, v, 4);
+    r->truth_ltc = sl / count;
 
     /* the footprint's statistics */
     double mean[3] = {0, 0, 0}, sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
@@ -349,10 +378,54 @@ static int eval_record(const mf_brdf_model *ggx, double alpha, const double *nrm
     r->est[M_TOKSVIG] = s[2] / samples;
     r->est[M_LEADR] = s[3] / samples;
     for (int k = 0; k < 4; ++k)
-        if (!isfinite(r->est[k]) || !isfinite(r->truth)) {
+        if (!isfinite(r->est[k]) || !isfinite(r->truth) || !isfinite(r->truth_ltc)) {
             snprintf(msg, msz, "a non-finite shading value (%s)", k_method[k]);
             return CLI_EXIT_IO;
         }
+    return 0;
+}
+
+/* The isotropic LTC table of the per-texel truth: FILE, or (path NULL) a 2 x 64 table fitted by
+ * mf_ltcfit_table whose first roughness texel is the base's alpha (the lookup lands on it exactly). */
+static int pe_itab_make(pe_itab *it, const char *path, const mf_brdf_model *ggx, double alpha, char *msg, size_t msz)
+{
+    memset(it, 0, sizeof *it);
+    mf_status st;
+    msg[0] = 0;
+    if (path) {
+        st = mf_table_format_from_path(path) == MF_TABLE_FORMAT_CSV ? mf_ltc_reference_read_csv(path, &it->t, msg, msz)
+                                                                     : mf_table_read(path, &it->t, NULL, msg, msz);
+    } else {
+        mf_ltcfit_options o;
+        mf_ltcfit_options_default(&o);
+        double r = sqrt(alpha);
+        o.n_r = 2, o.n_u = 64, o.threads = 2;
+        o.r_lo = r, o.r_hi = r + 1e-3;
+        if (o.r_hi > 1.0)
+            o.r_lo = 1.0 - 1e-3, o.r_hi = 1.0;
+        mf_ltcfit_result res;
+        memset(&res, 0, sizeof res);
+        st = mf_ltcfit_table(ggx, &o, &it->t, &res, msg, msz);
+        int interrupted = res.interrupted;
+        mf_ltcfit_result_free(&res);
+        if (st == MF_OK && interrupted)
+            st = MF_ERR_INTERNAL;
+    }
+    if (st != MF_OK) {
+        char m2[1200];
+        snprintf(m2, sizeof m2, "%s", msg[0] ? msg : mf_status_str(st));
+        snprintf(msg, msz, "--ltc-table %s: %s", path ? path : "(fitted)", m2);
+        return CLI_EXIT_IO;
+    }
+    int ok = it->t.naxes == 2 && it->t.axes[0].mapping == MF_AXIS_SQUARE &&
+             it->t.axes[1].mapping == MF_AXIS_ONE_MINUS_SQUARE && it->t.nfields <= 64;
+    for (int k = 0; k < 5 && ok; ++k)
+        ok = (it->field[k] = mf_table_field(&it->t, mf_ltc_table_fields[k])) >= 0;
+    if (!ok) {
+        snprintf(msg, msz, "--ltc-table %s: not an isotropic LTC table layout (mf_ltc_table.h)", path ? path : "");
+        mf_table_free(&it->t);
+        return CLI_EXIT_USAGE;
+    }
     return 0;
 }
 
@@ -415,6 +488,8 @@ static int pe_main(int argc, char **argv)
     float *lm = NULL, *mg = NULL;
     FILE *fr = NULL, *fs = NULL;
     pe_acc *acc = NULL;
+    pe_itab itab;
+    int have_itab = 0;
     char rpath[4200], spath[4200], rtmp[4300], stmp[4300];
     int created = 0; /* --out made here: removed again on failure (no partial output) */
     const int W = img.width, H = img.height;
@@ -454,6 +529,12 @@ static int pe_main(int argc, char **argv)
         goto done;
     }
 
+    if ((rc = pe_itab_make(&itab, v[E_LTC_TABLE].set ? v[E_LTC_TABLE].s : NULL, ggx, alpha, msg, sizeof msg)) != 0) {
+        cli_error(k_cmd, "%s", msg);
+        goto done;
+    }
+    have_itab = 1;
+
     /* the levels present */
     int nlev = 0;
     for (int k = 1; (W >> k) >= 1 || (H >> k) >= 1; ++k)
@@ -479,10 +560,14 @@ static int pe_main(int argc, char **argv)
         rc = CLI_EXIT_IO, cli_error(k_cmd, "%s: cannot write: %s", fr ? stmp : rtmp, strerror(errno));
         goto done;
     }
-    fprintf(fr, "level,row,col,i_theta,theta,i_phi,phi,light_half_side,truth,truth_se,mfkit,naive,toksvig,leadr\n");
+    fprintf(fr, "level,row,col,i_theta,theta,i_phi,phi,light_half_side,truth,truth_se,mfkit,naive,toksvig,leadr,"
+                "truth_ltc\n");
     fprintf(fs, "level,light_half_side,i_theta,theta,records,mean_truth,mean_truth_se");
     for (int k = 0; k < 4; ++k)
         fprintf(fs, ",mse_%s,relrms_%s", k_method[k], k_method[k]);
+    fprintf(fs, ",mean_truth_ltc,mse_truth_ltc");
+    for (int k = 0; k < 4; ++k)
+        fprintf(fs, ",mse_ltc_%s,relrms_ltc_%s", k_method[k], k_method[k]);
     fprintf(fs, "\n");
 
     for (int lev = 1; lev <= nlev && rc == 0; ++lev) {
@@ -539,18 +624,21 @@ static int pe_main(int argc, char **argv)
                     for (int l = 0; l < nlights; ++l) {
                         pe_rec r;
                         uint64_t rs = seed * 0x9e3779b97f4a7c15ull + ((((uint64_t)lev * 4096 + t) * 256 + a) * 256 + b) * 8 + l;
-                        rc = eval_record(ggx, alpha, foot, count, theta, hs[l], lm + 9 * idx, mg[idx], samples, rs, &r,
+                        rc = eval_record(ggx, &itab, alpha, foot, count, theta, hs[l], lm + 9 * idx, mg[idx], samples, rs, &r,
                                          msg, sizeof msg);
                         if (rc) {
                             cli_error(k_cmd, "%s: level %d texel (%d, %d): %s", dir, lev, col, row, msg);
                             break;
                         }
-                        fprintf(fr, "%d,%d,%d,%d,%.17g,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", lev, row,
-                                col, a, theta, b, phi, hs[l], r.truth, r.se, r.est[0], r.est[1], r.est[2], r.est[3]);
+                        fprintf(fr, "%d,%d,%d,%d,%.17g,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", lev,
+                                row, col, a, theta, b, phi, hs[l], r.truth, r.se, r.est[0], r.est[1], r.est[2], r.est[3],
+                                r.truth_ltc);
                         pe_acc *A = &acc[l * o.n_theta + a];
                         for (int k = 0; k < 4; ++k)
-                            A->se2[k] += (r.est[k] - r.truth) * (r.est[k] - r.truth);
+                            A->se2[k] += (r.est[k] - r.truth) * (r.est[k] - r.truth),
+                                A->se2l[k] += (r.est[k] - r.truth_ltc) * (r.est[k] - r.truth_ltc);
                         A->st += r.truth, A->sse += r.se, A->cnt += 1;
+                        A->stl += r.truth_ltc, A->sll += (r.truth_ltc - r.truth) * (r.truth_ltc - r.truth);
                     }
                 }
             }
@@ -564,6 +652,12 @@ static int pe_main(int argc, char **argv)
                 for (int k = 0; k < 4; ++k) {
                     double mse = A->se2[k] / A->cnt;
                     fprintf(fs, ",%.17g,%.17g", mse, mt > 0.0 ? sqrt(mse) / mt : 0.0);
+                }
+                double mtl = A->stl / A->cnt;
+                fprintf(fs, ",%.17g,%.17g", mtl, A->sll / A->cnt);
+                for (int k = 0; k < 4; ++k) {
+                    double mse = A->se2l[k] / A->cnt;
+                    fprintf(fs, ",%.17g,%.17g", mse, mtl > 0.0 ? sqrt(mse) / mtl : 0.0);
                 }
                 fprintf(fs, "\n");
             }
@@ -584,6 +678,8 @@ done:
     if (rc != 0 && created)
         rmdir(out);
     free(acc), free(lm), free(mg), free(normals), free(foot);
+    if (have_itab)
+        mf_table_free(&itab.t);
     mf_image_free(&img);
     mf_image_info_free(&info);
     if (rc == 0)

@@ -1,0 +1,139 @@
+/*
+ * mf_prefilter_lookup.h -- the lookup of `mfkit prefilter`'s lobes, on the arrays of its .npy
+ * files (header only, C11 + libm): the filter the GLSL/HLSL snippet (prefilter_lookup.glsl)
+ * computes on the EXR view atlases, written once for C programs (analysis/render_prefilter_scenes.c)
+ * and tests.
+ *
+ * Filter (docs/prefilter.md, "Textures and the lookup"): bilinear over the view axes (theta
+ * clamped to [0, MF_PREFILTER_THETA_MAX], theta_i = i / (n_theta - 1) MF_PREFILTER_THETA_MAX;
+ * phi periodic, phi_j = 2 pi j / n_phi) of the trilinear texture filter of each view layer:
+ * bilinear with REPEAT wrap (texel centres at (i + 0.5) / size) at the two MIP levels around
+ * lod - 1 (prefilter level k is MIP level k - 1), clamped to the levels present, blended
+ * linearly.  Level 0 of the map is not in the arrays: at lod < 1 this returns level 1's filter
+ * (the snippet's max(lod - 1, 0)); a renderer blends with its own level-0 shading there.
+ * The result: the forward M (row-major, view-azimuth-aligned frame) and the magnitude.
+ *
+ * Also here: mf_prefilter_texel_ltc, the per-texel LTC shading of one texel, the thesis' ground
+ * truth and naive baseline [Nahmias 2022, Sec. 4.1] and mfkit's level 0.
+ */
+#ifndef MF_PREFILTER_LOOKUP_H
+#define MF_PREFILTER_LOOKUP_H
+
+#include <math.h>
+#include <stddef.h>
+
+#include "mfkit/fit/mf_prefilter.h"
+#include "mfkit/mf_ltc.h"
+#include "mfkit/mf_ltc_table.h"
+#include "mfkit/mf_polygon.h"
+#include "mfkit/mf_table.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* One level k >= 1 as stored: m = ltc_mip<k>.npy (h, w, n_theta, n_phi, 3, 3), mag =
+ * magnitude_mip<k>.npy (h, w, n_theta, n_phi), float32. */
+typedef struct mf_prefilter_lookup_level {
+    int w, h;
+    const float *m, *mag;
+} mf_prefilter_lookup_level;
+
+typedef struct mf_prefilter_lookup_levels {
+    int nlev;          /* levels 1 .. nlev in lev[0 .. nlev - 1] */
+    int n_theta, n_phi;
+    const mf_prefilter_lookup_level *lev;
+} mf_prefilter_lookup_levels;
+
+static inline int mf_prefilter_lookup_wrap_(int i, int n) { return ((i % n) + n) % n; }
+
+/* Entry q (0..8: M row-major, 9: magnitude) of level index lv (0 = level 1), texel (x, y), view (a, p). */
+static inline double mf_prefilter_lookup_value_(const mf_prefilter_lookup_levels *s, int lv, int x, int y, int a, int p,
+                                                int q)
+{
+    const mf_prefilter_lookup_level *l = &s->lev[lv];
+    size_t idx = (((size_t)y * (size_t)l->w + (size_t)x) * (size_t)s->n_theta + (size_t)a) * (size_t)s->n_phi + (size_t)p;
+    return q < 9 ? (double)l->m[9 * idx + (size_t)q] : (double)l->mag[idx];
+}
+
+/* The lookup at texture coordinates (u, v) (u along the columns, v down the rows; any real: REPEAT),
+ * level of detail lod (log2 of the footprint in level-0 texels), view (theta, phi) in the tangent
+ * frame.  M[9] and *magnitude receive the filtered entries. */
+static inline void mf_prefilter_lookup(const mf_prefilter_lookup_levels *s, double u, double v, double lod, double theta,
+                                       double phi, double M[9], double *magnitude)
+{
+    const int nt = s->n_theta, np = s->n_phi;
+    double ft = fmin(fmax(theta / MF_PREFILTER_THETA_MAX, 0.0), 1.0) * (nt - 1);
+    int a0 = (int)ft < nt - 2 ? (int)ft : nt - 2;
+    double fp = fmod(phi / (2.0 * MF_PI) * np, (double)np);
+    if (fp < 0)
+        fp += np;
+    int p0 = (int)fp < np - 1 ? (int)fp : np - 1;
+    double wa[2] = {1.0 - (ft - a0), ft - a0}, wp[2] = {1.0 - (fp - p0), fp - p0};
+    double l = fmin(fmax(lod - 1.0, 0.0), s->nlev - 1.0);
+    int l0 = (int)floor(l);
+    double wl[2] = {1.0 - (l - l0), l - l0};
+    double acc[10] = {0};
+    for (int il = 0; il < 2; ++il) {
+        int lv = l0 + il < s->nlev ? l0 + il : s->nlev - 1;
+        const mf_prefilter_lookup_level *L1 = &s->lev[lv];
+        double xf = u * L1->w - 0.5, yf = v * L1->h - 0.5;
+        double x0f = floor(xf), y0f = floor(yf);
+        int x0 = mf_prefilter_lookup_wrap_((int)fmod(x0f, (double)L1->w), L1->w);
+        int y0 = mf_prefilter_lookup_wrap_((int)fmod(y0f, (double)L1->h), L1->h);
+        double wx[2] = {1.0 - (xf - x0f), xf - x0f}, wy[2] = {1.0 - (yf - y0f), yf - y0f};
+        for (int ia = 0; ia < 2; ++ia)
+            for (int ip = 0; ip < 2; ++ip)
+                for (int iy = 0; iy < 2; ++iy)
+                    for (int ix = 0; ix < 2; ++ix) {
+                        double w = wl[il] * wa[ia] * wp[ip] * wy[iy] * wx[ix];
+                        int x = (x0 + ix) % L1->w, y = (y0 + iy) % L1->h, p = (p0 + ip) % np;
+                        for (int q = 0; q < 10; ++q)
+                            acc[q] += w * mf_prefilter_lookup_value_(s, lv, x, y, a0 + ia, p, q);
+                    }
+    }
+    for (int q = 0; q < 9; ++q)
+        M[q] = acc[q];
+    *magnitude = acc[9];
+}
+
+/* Per-texel LTC shading [Nahmias 2022, Sec. 4.1: "for each normal, we evaluate the view elevation
+ * and use the standard technique from [HDHN16] to integrate over the light"]: the isotropic LTC of
+ * table t (mf_ltc_table.h layout; field[0..4] the indices of minv_00, minv_20, minv_02, minv_22,
+ * magnitude) at (alpha, the view's elevation in the texel frame), in the texel's frame (normal n,
+ * a unit vector of the tangent frame; any rotation about n: the lobe is isotropic), integrated over
+ * the polygon q[0..nq-1] (vertices relative to the shading point, tangent frame; two-sided), times
+ * the table's magnitude.  A view below the texel's horizon is handled as by the prefilter
+ * (mf_prefilter.h): its texel-frame cosine clamped to MF_PREFILTER_COS_MIN, azimuth kept.  The
+ * polygon is clipped at the texel's horizon (by the LTC integral), not at the geometric one.
+ * NaN if the lookup or the table's matrix fails. */
+static inline double mf_prefilter_texel_ltc(const mf_table *t, const int field[5], mf_vec3 n, double alpha,
+                                            mf_vec3 wo, const mf_vec3 *q, int nq)
+{
+    mf_frame f = mf_frame_from_normal(n);
+    mf_vec3 wl = mf_frame_to_local(f, wo);
+    if (wl.z < MF_PREFILTER_COS_MIN) {
+        double h = sqrt(wl.x * wl.x + wl.y * wl.y), c = MF_PREFILTER_COS_MIN, s = sqrt(1.0 - c * c);
+        wl = h > 0.0 ? mf_vec3_make(wl.x / h * s, wl.y / h * s, c) : mf_vec3_make(s, 0.0, c);
+    }
+    mf_frame vf = mf_ltc_view_frame(wl);
+    mf_vec3 p[MF_POLYGON_MAX_VERTICES];
+    if (nq < 3 || nq > MF_POLYGON_MAX_VERTICES)
+        return NAN;
+    for (int k = 0; k < nq; ++k)
+        p[k] = mf_frame_to_local(vf, mf_frame_to_local(f, q[k]));
+    double par[2] = {sqrt(alpha), sqrt(fmax(0.0, 1.0 - fmin(1.0, wl.z)))}, rec[64];
+    if (t->nfields > 64 || mf_table_lookup(t, par, rec) != MF_OK)
+        return NAN;
+    double in4[4] = {rec[field[0]], rec[field[1]], rec[field[2]], rec[field[3]]};
+    mf_ltc ltc;
+    if (mf_ltc_table_unpack(in4, &ltc) != MF_OK)
+        return NAN;
+    mf_polygon poly = mf_polygon_make(nq, p);
+    return rec[field[4]] * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
+}
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* MF_PREFILTER_LOOKUP_H */
