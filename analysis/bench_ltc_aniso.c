@@ -2,10 +2,12 @@
  * bench_ltc_aniso.c -- speed and renderer-level accuracy of the anisotropic GGX LTC table
  * (issue 12); a benchmark, not a test.
  *
- *   build-dir/analysis/bench_ltc_aniso [--points N] [--samples M] [--threads T] PUBLISHED.npy
+ *   build-dir/analysis/bench_ltc_aniso [--points N] [--samples M] [--threads T]
+ *                                      [--objective default|relative] PUBLISHED.npy
  *
  * 1. Fits the default 8^4 table (mf_ltcfit_aniso_table) with T threads (default 2) and reports
- *    the wall time.
+ *    the wall time; --objective relative: with mf_ltcfit_aniso_options.objective =
+ *    MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE (mf_ltcfit_aniso.h).
  * 2. At N random off-grid (alpha_x, alpha_y, theta, phi) (alpha in [0.02, 1], theta in
  *    [0, 0.9999 pi/2], phi in [0, pi/2]; fixed seed), for 12 random quads per point
  *    (mf_ltc_gate_random_polygons_params, even indices), compares magnitude * E_LTC against a
@@ -76,7 +78,7 @@ static void report(const char *name, errs *e)
 
 int main(int argc, char **argv)
 {
-    int points = 100, samples = 1 << 18, threads = 2;
+    int points = 100, samples = 1 << 18, threads = 2, objective = MF_LTCFIT_ANISO_OBJECTIVE_DEFAULT;
     const char *kt = NULL;
     for (int i = 1; i < argc; ++i) {
         if (!strcmp(argv[i], "--points") && i + 1 < argc)
@@ -85,6 +87,15 @@ int main(int argc, char **argv)
             samples = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--threads") && i + 1 < argc)
             threads = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--objective") && i + 1 < argc) {
+            ++i;
+            if (!strcmp(argv[i], "relative"))
+                objective = MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE;
+            else if (strcmp(argv[i], "default")) {
+                fprintf(stderr, "bench_ltc_aniso: --objective %s: expected default or relative\n", argv[i]);
+                return 2;
+            }
+        }
         else
             kt = argv[i];
     }
@@ -97,6 +108,7 @@ int main(int argc, char **argv)
     mf_ltcfit_aniso_options o;
     mf_ltcfit_aniso_options_default(&o);
     o.threads = threads;
+    o.objective = objective;
     mf_table t;
     mf_ltcfit_aniso_result r;
     char msg[256];
