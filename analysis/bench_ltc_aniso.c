@@ -2,10 +2,12 @@
  * bench_ltc_aniso.c -- speed and renderer-level accuracy of the anisotropic GGX LTC table
  * (issue 12); a benchmark, not a test.
  *
- *   build-dir/analysis/bench_ltc_aniso [--points N] [--samples M] [--threads T] PUBLISHED.npy
+ *   build-dir/analysis/bench_ltc_aniso [--points N] [--samples M] [--threads T]
+ *                                      [--objective default|relative] PUBLISHED.npy
  *
  * 1. Fits the default 8^4 table (mf_ltcfit_aniso_table) with T threads (default 2) and reports
- *    the wall time.
+ *    the wall time; --objective relative: with mf_ltcfit_aniso_options.objective =
+ *    MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE (mf_ltcfit_aniso.h).
  * 2. At N random off-grid (alpha_x, alpha_y, theta, phi) (alpha in [0.02, 1], theta in
  *    [0, 0.9999 pi/2], phi in [0, pi/2]; fixed seed), for 12 random quads per point
  *    (mf_ltc_gate_random_polygons_params, even indices), compares magnitude * E_LTC against a
@@ -19,12 +21,16 @@
  *    max(MC, 0.01 albedo).  Mean and 95th percentile.
  *    A published matrix interpolated to det < 0 (its entries mix flipped gauges) is evaluated as
  *    M diag(-1, 1, 1) (the same lobe density with positive orientation); the count is printed.
+ *    The points, quads, truth, published lookup and error measures are bench_ltc_aniso_common.h,
+ *    shared with analysis/study_aniso_oracle.c.
  */
 #define _POSIX_C_SOURCE 200809L
 #include "mfkit/mfkit.h"
 #include "mfkit/mf_ltc_aniso_table.h"
 #include "mfkit/mf_ltc_gate.h"
 #include "mfkit/fit/mf_ltcfit_aniso.h"
+
+#include "bench_ltc_aniso_common.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -36,64 +42,6 @@ static double now(void)
     struct timespec t;
     clock_gettime(CLOCK_MONOTONIC, &t);
     return t.tv_sec + 1e-9 * t.tv_nsec;
-}
-
-static float *read_kt(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return NULL;
-    unsigned char h[10];
-    if (fread(h, 1, 10, f) != 10 || memcmp(h, "\x93NUMPY", 6)) {
-        fclose(f);
-        return NULL;
-    }
-    int hl = h[8] | h[9] << 8;
-    char hdr[512] = {0};
-    if (hl >= 512 || fread(hdr, 1, (size_t)hl, f) != (size_t)hl || !strstr(hdr, "(8, 8, 8, 8, 3, 3)") ||
-        !strstr(hdr, "<f4")) {
-        fclose(f);
-        return NULL;
-    }
-    size_t n = 8 * 8 * 8 * 8 * 9;
-    float *d = malloc(n * sizeof *d);
-    if (d && fread(d, sizeof *d, n, f) != n) {
-        free(d);
-        d = NULL;
-    }
-    fclose(f);
-    return d;
-}
-
-/* Quadrilinear interpolation of the published table at (alpha_x, alpha_y, theta, phi). */
-static void kt_lookup(const float *d, const double p[4], double m[9])
-{
-    const double hi[4] = {1.0, 1.0, 0.9999 * 0.5 * MF_PI, 0.5 * MF_PI};
-    int i[4];
-    double w[4];
-    for (int k = 0; k < 4; ++k) {
-        double x = fmin(fmax(p[k] / hi[k], 0.0), 1.0) * 7.0;
-        i[k] = (int)fmin(floor(x), 6.0);
-        w[k] = x - i[k];
-    }
-    memset(m, 0, 9 * sizeof *m);
-    for (int c = 0; c < 16; ++c) {
-        double wt = 1.0;
-        int j[4];
-        for (int k = 0; k < 4; ++k) {
-            int b = (c >> k) & 1;
-            j[k] = i[k] + b;
-            wt *= b ? w[k] : 1.0 - w[k];
-        }
-        const float *e = d + ((((size_t)j[0] * 8 + j[1]) * 8 + j[2]) * 8 + j[3]) * 9;
-        for (int a = 0; a < 9; ++a)
-            m[a] += wt * e[a];
-    }
-}
-
-static double det9(const double *m)
-{
-    return m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) + m[2] * (m[3] * m[7] - m[4] * m[6]);
 }
 
 static int cmpd(const void *a, const void *b)
@@ -109,8 +57,8 @@ typedef struct {
 
 static void add(errs *e, double v, double mc, double albedo)
 {
-    e->abs[e->n] = fabs(v - mc);
-    e->rel[e->n] = fabs(v - mc) / fmax(mc, 0.01 * albedo);
+    e->abs[e->n] = abench_abs_err(v, mc);
+    e->rel[e->n] = abench_rel_err(v, mc, albedo);
     ++e->n;
 }
 
@@ -128,17 +76,9 @@ static void report(const char *name, errs *e)
            sr / e->n, e->rel[p], e->n);
 }
 
-static mf_ltc ltc_of(const double *m9)
-{
-    mf_ltc l;
-    if (mf_ltc_init(&l, mf_ltc_matrix_general(m9)) != MF_OK)
-        memset(&l, 0, sizeof l);
-    return l;
-}
-
 int main(int argc, char **argv)
 {
-    int points = 100, samples = 1 << 18, threads = 2;
+    int points = 100, samples = 1 << 18, threads = 2, objective = MF_LTCFIT_ANISO_OBJECTIVE_DEFAULT;
     const char *kt = NULL;
     for (int i = 1; i < argc; ++i) {
         if (!strcmp(argv[i], "--points") && i + 1 < argc)
@@ -147,10 +87,19 @@ int main(int argc, char **argv)
             samples = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--threads") && i + 1 < argc)
             threads = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--objective") && i + 1 < argc) {
+            ++i;
+            if (!strcmp(argv[i], "relative"))
+                objective = MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE;
+            else if (strcmp(argv[i], "default")) {
+                fprintf(stderr, "bench_ltc_aniso: --objective %s: expected default or relative\n", argv[i]);
+                return 2;
+            }
+        }
         else
             kt = argv[i];
     }
-    float *pub = kt ? read_kt(kt) : NULL;
+    float *pub = kt ? abench_read_kt(kt) : NULL;
     if (!pub) {
         fprintf(stderr, "bench_ltc_aniso: %s: not an (8, 8, 8, 8, 3, 3) float32 .npy\n", kt ? kt : "(none)");
         return 2;
@@ -159,6 +108,7 @@ int main(int argc, char **argv)
     mf_ltcfit_aniso_options o;
     mf_ltcfit_aniso_options_default(&o);
     o.threads = threads;
+    o.objective = objective;
     mf_table t;
     mf_ltcfit_aniso_result r;
     char msg[256];
@@ -180,7 +130,7 @@ int main(int argc, char **argv)
     for (int i = 0; i < nch; ++i)
         printf("  %-20s %s worst %.4g bound %.4g at %s\n", ch[i].name, ch[i].passed ? "ok  " : "FAIL", ch[i].worst,
                ch[i].bound, ch[i].worst_at);
-    enum { Q = 12 };
+    enum { Q = ABENCH_Q };
     errs em = {malloc(sizeof(double) * points * Q), malloc(sizeof(double) * points * Q), 0};
     errs et = {malloc(sizeof(double) * points * Q), malloc(sizeof(double) * points * Q), 0};
     errs ep = {malloc(sizeof(double) * points * Q), malloc(sizeof(double) * points * Q), 0};
@@ -192,35 +142,26 @@ int main(int argc, char **argv)
         gm[g] = (errs){malloc(sizeof(double) * points * Q), malloc(sizeof(double) * points * Q), 0};
         gp[g] = (errs){malloc(sizeof(double) * points * Q), malloc(sizeof(double) * points * Q), 0};
     }
-    mf_pcg32 rng;
-    mf_pcg32_seed(&rng, 12, 0x62656e6368ull);
+    abench_points pts;
+    abench_points_init(&pts);
     int flipped = 0;
     double se_sum = 0.0;
     for (int i = 0; i < points; ++i) {
-        double p[4] = {0.02 + 0.98 * mf_pcg32_next_double(&rng), 0.02 + 0.98 * mf_pcg32_next_double(&rng),
-                       0.9999 * 0.5 * MF_PI * mf_pcg32_next_double(&rng), 0.5 * MF_PI * mf_pcg32_next_double(&rng)};
-        mf_brdf_params prm = {p[0], p[1]};
-        mf_vec3 wo = mf_vec3_make(sin(p[2]) * cos(p[3]), sin(p[2]) * sin(p[3]), cos(p[2]));
-        mf_polygon polys[2 * Q], quads[Q];
-        mf_ltc_gate_random_polygons_params(ggx, &prm, wo, 5, (uint64_t)i, 2 * Q, polys);
-        for (int k = 0; k < Q; ++k)
-            quads[k] = polys[2 * k];
-        double mc[Q], se[Q];
-        mf_result alb;
-        if (mf_ltc_gate_polygon_mc_params(ggx, &prm, wo, quads, Q, samples, 9, (uint64_t)i, mc, se, NULL) != MF_OK ||
-            mf_model_albedo(ggx, &prm, wo, MF_MODEL_ALBEDO_N, &alb) != MF_OK)
+        double p[4];
+        abench_next_point(&pts, p);
+        abench_case cs;
+        if (!abench_case_make(ggx, p, i, samples, &cs))
             continue;
+        const mf_polygon *quads = cs.quads;
+        const double *mc = cs.mc, *se = cs.se;
+        const mf_result alb = {cs.albedo, 0.0};
         double mm[9], mag, mp[9];
         if (mf_ltc_aniso_lookup(&t, p[0], p[1], p[2], p[3], mm, &mag, NULL) != MF_OK)
             continue;
-        kt_lookup(pub, p, mp);
-        if (det9(mp) < 0.0) {
-            ++flipped;
-            mp[0] = -mp[0], mp[3] = -mp[3], mp[6] = -mp[6];
-        }
+        flipped += abench_published(pub, p, mp);
         mf_ltcfit_aniso_entry fe;
         int have_fit = mf_ltcfit_aniso_entry_fit(ggx, p[0], p[1], p[2], p[3], NULL, &o, &fe) == MF_OK;
-        mf_ltc lm = ltc_of(mm), lp = ltc_of(mp), lf = ltc_of(have_fit ? fe.m : mm);
+        mf_ltc lm = abench_ltc_of(mm), lp = abench_ltc_of(mp), lf = abench_ltc_of(have_fit ? fe.m : mm);
         for (int k = 0; k < Q; ++k) {
             double em_ = mf_ltc_integrate_polygon(&lm, &quads[k], MF_POLYGON_ONE_SIDED);
             add(&em, alb.val * em_, mc[k], alb.val);

@@ -33,6 +33,10 @@
  * 12 / 5 / 1; the gate passes with each.  With the random lights (below): floor 0.5 gave
  * 0.002402 / 0.0809 and 8 unconverged entries against 1.0's 0.002332 / 0.0803 and none. */
 #define AWEIGHT_FLOOR 1.0
+/* The floor of MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE (opt-in): 0.01 albedo, the floor of the relative
+ * error of analysis/bench_ltc_aniso.c (|s - r| / max(r, 0.01 A)), so that the residuals are
+ * close to that relative error.  Measured in docs/validation.md (analysis/study_aniso_oracle.c). */
+#define RELATIVE_FLOOR 0.01
 /* The test lights of the table's fits (and mf_ltcfit_aniso_entry_fit): RAND_LIGHTS convex
  * polygons drawn by mf_ltc_gate_random_polygons_params from a fixed stream (RAND_SEED,
  * RAND_STREAM): quads and triangles, a third centred on directions the model samples, a third
@@ -93,6 +97,7 @@ typedef struct {
     double r[9];     /* R_m, row-major: the minimal rotation taking z to m (lobe -> view frame) */
     int sym;         /* SYM_* flags */
     int fixed[NP];   /* parameters held at 0 */
+    double wfloor;   /* the residual weight's floor in albedos (AWEIGHT_FLOOR, or RELATIVE_FLOOR) */
 } atexel;
 
 /* The minimal rotation taking z to the unit m (about the axis z x m; m != -z):
@@ -480,7 +485,7 @@ static void targets_raw(atexel *t, const workspace *ws)
 {
     for (int k = 0; k < t->k; ++k) {
         t->target[k] = light_sum(&t->lights[k], ws, t->live) * t->invn;
-        t->inv_weight[k] = t->lights[k].factor / (t->target[k] + AWEIGHT_FLOOR * t->magnitude + 1e-300);
+        t->inv_weight[k] = t->lights[k].factor / (t->target[k] + t->wfloor * t->magnitude + 1e-300);
     }
 }
 
@@ -510,7 +515,7 @@ static void control_variate(atexel *t, workspace *ws, const double *p0)
         double beta = sxx > 0.0 ? fmin(fmax(sxy / sxx, 0.0), 1.0) : 0.0;
         double c = l->n_upper >= 3 ? integral_value(l->lobe_upper, l->n_upper, adj) : 0.0;
         t->target[k] = my - beta * (mx - t->magnitude * c);
-        t->inv_weight[k] = l->factor / (fmax(t->target[k], 0.0) + AWEIGHT_FLOOR * t->magnitude + 1e-300);
+        t->inv_weight[k] = l->factor / (fmax(t->target[k], 0.0) + t->wfloor * t->magnitude + 1e-300);
     }
 }
 
@@ -688,6 +693,7 @@ static mf_status fit_entry(const mf_brdf_model *model, mf_brdf_params prm, doubl
         free(t);
         return st;
     }
+    t->wfloor = o->objective == MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE ? RELATIVE_FLOOR : AWEIGHT_FLOOR;
     out->magnitude = t->magnitude;
     out->magnitude_err = t->magnitude_err;
     out->fresnel = t->fresnel;
@@ -763,7 +769,8 @@ static int check_options(const mf_ltcfit_aniso_options *o)
 {
     if (!o || o->threads < 1 || o->threads > 256 || o->samples < 64 || o->samples > (1 << 20) ||
         (o->samples & (o->samples - 1)) || o->max_iterations < 1 ||
-        (o->param != MF_LTC_ANISO_PARAM_ALPHA_XY && o->param != MF_LTC_ANISO_PARAM_ALPHA_LAMBDA))
+        (o->param != MF_LTC_ANISO_PARAM_ALPHA_XY && o->param != MF_LTC_ANISO_PARAM_ALPHA_LAMBDA) ||
+        (o->objective != MF_LTCFIT_ANISO_OBJECTIVE_DEFAULT && o->objective != MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE))
         return 0;
     for (int k = 0; k < 4; ++k)
         if (o->n[k] < 2 || o->n[k] > 256)
@@ -996,7 +1003,7 @@ static mf_status fit_pair(ajob *j, workspace *ws, int i0, int i1, const int nb[2
 typedef struct {
     char magic[8];
     char model[32];
-    int32_t n[4], param, samples, max_iterations, pad;
+    int32_t n[4], param, samples, max_iterations, objective; /* objective: 0 (the default) was padding */
     uint64_t seed;
 } ckpt_header;
 
@@ -1010,6 +1017,7 @@ static void ckpt_header_make(const ajob *j, ckpt_header *h)
     h->param = j->o->param;
     h->samples = j->o->samples;
     h->max_iterations = j->o->max_iterations;
+    h->objective = j->o->objective;
     h->seed = j->o->seed;
 }
 
@@ -1406,6 +1414,8 @@ mf_status mf_ltcfit_aniso_table(const mf_brdf_model *model, const mf_ltcfit_anis
         st = mf_table_set_meta(table, "samples", buf);
     if (st == MF_OK)
         st = mf_table_set_meta(table, "view", "wo = (sin theta cos phi, sin theta sin phi, cos theta), x = alpha_x axis");
+    if (st == MF_OK && o->objective == MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE) /* the default adds no key */
+        st = mf_table_set_meta(table, "objective", "relative");
     if (st != MF_OK) {
         mf_table_free(table);
         return st;

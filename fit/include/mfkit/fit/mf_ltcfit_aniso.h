@@ -124,7 +124,13 @@ typedef struct mf_ltcfit_aniso_options {
     int resume;                 /* load `checkpoint` if it exists and fit only the missing pairs */
     int stop_after_pairs;       /* > 0: fit at most this many pairs in this run, then return
                                  * interrupted (a test hook for resume); 0: no limit */
+    int objective;              /* MF_LTCFIT_ANISO_OBJECTIVE_DEFAULT (0): residual weights 1 / (I_k + 1 albedo),
+                                 * close to absolute errors; MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE (opt-in):
+                                 * 1 / (I_k + 0.01 albedo), close to relative errors (docs/validation.md) */
 } mf_ltcfit_aniso_options;
+
+#define MF_LTCFIT_ANISO_OBJECTIVE_DEFAULT 0
+#define MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE 1
 
 void mf_ltcfit_aniso_options_default(mf_ltcfit_aniso_options *o);
 
