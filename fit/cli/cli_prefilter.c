@@ -21,8 +21,8 @@
  *           them all together (mf_io_atomic_commit_all); then removes the work directory.
  * Memory: the map's normals, the fits of the tiles in flight (--threads N fits N tiles at once
  * when there are enough: each its footprints' albedo cache and lobes) and one row of a level.
- * Gate: rank 0 keeps the assembled levels (44 bytes per lobe) and runs mf_prefilter_gate_run_ref over
- * them before committing; its result goes into prefilter.json.
+ * Gate: rank 0 keeps the assembled levels (44 bytes per lobe, 96 more during the gate) and runs
+ * mf_prefilter_gate_run_ref over them before committing; its result goes into prefilter.json.
  * Tables: --base both (the default) runs the pipeline twice, the specular GGX table into DIR, then the
  * diffuse Lambert table into DIR/diffuse; the specular checkpoint is kept until the diffuse table is
  * written, so a rerun after a stop in either table resumes it.
