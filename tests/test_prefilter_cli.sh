@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # test_prefilter_cli.sh MFKIT SRC -- `mfkit prefilter` end to end on the shipped 16 x 16 V-groove map
-# (tests/data/normalmaps/vgroove_16.png) with 2 x 2 views (about 5 s of CPU): every level >= 1 written
-# with the documented shapes; the albedos in [0, 1] and the magnitudes keeping them (magnitude times
-# the lobe's mass above the horizon = albedo); the gate's result in the manifest; the Lambert table
-# (--base lambert, 2 x 4 views, about 9 s of CPU); --no-keep-albedo fails the gate (exit 1, one line
+# (tests/data/normalmaps/vgroove_16.png) with 2 x 2 views (about 5 s of CPU): both tables by default
+# (the diffuse one in DIR/diffuse, 2 x 4 views, about 9 s of CPU), every level >= 1 written with the
+# documented shapes; the albedos in [0, 1] and the magnitudes keeping them (magnitude times the
+# lobe's mass above the horizon = albedo); the gate's result in the manifest (the continuity measures
+# against the reference reported); --base lambert alone; --no-keep-albedo fails the gate (exit 1, one line
 # after the report, nothing written) unless --force; refusals give one line, exit 2 or 3, and no
 # output directory.
 mfkit="$1"; src="$2"
@@ -11,7 +12,7 @@ source "$(dirname "$0")/cli_test_lib.sh"
 map="$src/tests/data/normalmaps/vgroove_16.png"
 
 "$mfkit" prefilter "$map" --views 2x2 --threads 2 --out "$tmp/pf" >"$tmp/pf.log" 2>&1; rc=$?
-ok '[ $rc -eq 0 ]' "prefilter 2x2 views exits 0 (rc=$rc): $(tail -3 "$tmp/pf.log")"
+ok '[ $rc -eq 0 ]' "prefilter 2x2 views (both tables, the default) exits 0 (rc=$rc): $(tail -3 "$tmp/pf.log")"
 for k in 1 2 3 4; do
   ok '[ -s "$tmp/pf/ltc_mip$k.npy" ] && [ -s "$tmp/pf/magnitude_mip$k.npy" ] && [ -s "$tmp/pf/albedo_mip$k.npy" ]' \
      "level $k written"
@@ -51,27 +52,35 @@ chk=$(check_tables "$tmp/pf" 2 2)
 ok '[ "$chk" = ok ]' "GGX: documented shapes, albedos in [0, 1], magnitudes keep the albedo, gate passed ($chk)"
 ok 'grep -q "gate passed: energy" "$tmp/pf.log"' "the gate report is printed: $(grep gate "$tmp/pf.log")"
 
-# the diffuse table: Lambert, default 2 x 4 views
-"$mfkit" prefilter "$map" --base lambert --threads 2 --out "$tmp/lam" >"$tmp/lam.log" 2>&1; rc=$?
-ok '[ $rc -eq 0 ]' "--base lambert exits 0 (rc=$rc): $(tail -3 "$tmp/lam.log")"
-chk=$(check_tables "$tmp/lam" 2 4)
-ok '[ "$chk" = ok ] && grep -q "\"model\": \"lambert\"" "$tmp/lam/prefilter.json"' \
-   "Lambert: 2 x 4 views, albedos kept, gate passed ($chk)"
+ok 'grep -q "\"continuity\": {\"reported_only\": true" "$tmp/pf/prefilter.json" && grep -q "error against the reference" "$tmp/pf.log"' \
+   "the continuity measures against the reference are reported: $(grep reference "$tmp/pf.log")"
+# the diffuse table of the same run: Lambert, default 2 x 4 views, in DIR/diffuse
+chk=$(check_tables "$tmp/pf/diffuse" 2 4)
+ok '[ "$chk" = ok ] && grep -q "\"model\": \"lambert\"" "$tmp/pf/diffuse/prefilter.json" && grep -q "\"model\": \"ggx\"" "$tmp/pf/prefilter.json"' \
+   "both: the diffuse table in DIR/diffuse, 2 x 4 views, albedos kept, gate passed ($chk)"
+ok '[ ! -e "$tmp/pf/.prefilter-work" ] && [ ! -e "$tmp/pf/diffuse/.prefilter-work" ]' "both checkpoints removed: $(ls -A "$tmp/pf" | tr '\n' ' ')"
+# one table: --base lambert (with its --views) writes only that table in DIR
+"$mfkit" prefilter "$map" --base lambert --views 2x1 --threads 2 --out "$tmp/lam" >"$tmp/lam.log" 2>&1; rc=$?
+chk=$(check_tables "$tmp/lam" 2 1)
+ok '[ $rc -eq 0 ] && [ "$chk" = ok ] && grep -q "\"model\": \"lambert\"" "$tmp/lam/prefilter.json" && [ ! -e "$tmp/lam/diffuse" ]' \
+   "--base lambert --views 2x1: one Lambert table in DIR (rc=$rc, $chk): $(tail -2 "$tmp/lam.log")"
+expect_error "--diffuse-views without --base both refused" 2 "\-\-diffuse-views" prefilter "$map" --base ggx --diffuse-views 2x1 --out "$tmp/bad4"
+expect_error "bad --diffuse-views refused" 2 "\-\-diffuse-views" prefilter "$map" --diffuse-views 2 --out "$tmp/bad5"
 expect_error "--roughness with the Lambert base refused" 2 "\-\-roughness" prefilter "$map" --base lambert --roughness 0.2 --out "$tmp/bad3"
 
 # without keep_albedo the lobe loses its mass below the horizon at grazing views: the gate fails
-"$mfkit" prefilter "$map" --views 2x2 --samples 256 --no-keep-albedo --out "$tmp/nk" >"$tmp/nk.log" 2>&1; rc=$?
+"$mfkit" prefilter "$map" --base ggx --views 2x2 --samples 256 --no-keep-albedo --out "$tmp/nk" >"$tmp/nk.log" 2>&1; rc=$?
 ok '[ $rc -eq 1 ] && [ "$(grep -c "nothing written" "$tmp/nk.log")" -eq 1 ] && grep -q "gate FAILED: energy" "$tmp/nk.log"' \
    "--no-keep-albedo: the gate fails, exit 1 (rc=$rc): $(cat "$tmp/nk.log")"
 ok '[ ! -e "$tmp/nk/prefilter.json" ] && [ -z "$(ls "$tmp/nk" | grep -v prefilter-work)" ]' \
    "a failed gate writes no table: $(ls -A "$tmp/nk")"
-"$mfkit" prefilter "$map" --views 2x2 --samples 256 --no-keep-albedo --force --out "$tmp/nk" >"$tmp/nk2.log" 2>&1; rc=$?
+"$mfkit" prefilter "$map" --base ggx --views 2x2 --samples 256 --no-keep-albedo --force --out "$tmp/nk" >"$tmp/nk2.log" 2>&1; rc=$?
 forced=$(/usr/bin/python3 -c 'import json, sys; g = json.load(open(sys.argv[1]))["gate"]; print(g["passed"], g["forced"], g["energy"]["passed"], g["energy"]["worst"] > 0.01)' "$tmp/nk/prefilter.json" 2>&1)
 ok '[ $rc -eq 0 ] && [ "$forced" = "False True False True" ]' \
    "--force writes it, the manifest says failed and forced (rc=$rc, $forced): $(tail -2 "$tmp/nk2.log")"
 
 expect_error "views 0x2 refused" 2 "\-\-views" prefilter "$map" --views 0x2 --out "$tmp/bad1"
 expect_error "missing map" 3 "nonexistent" prefilter "$tmp/nonexistent.png" --out "$tmp/bad2"
-ok '[ ! -e "$tmp/bad1" ] && [ ! -e "$tmp/bad2" ] && [ ! -e "$tmp/bad3" ]' "refusals create no output directory: $(ls "$tmp")"
+ok '[ ! -e "$tmp/bad1" ] && [ ! -e "$tmp/bad2" ] && [ ! -e "$tmp/bad3" ] && [ ! -e "$tmp/bad4" ] && [ ! -e "$tmp/bad5" ]' "refusals create no output directory: $(ls "$tmp")"
 
 finish test_prefilter_cli

@@ -8,11 +8,14 @@
 #     with one line and nothing written; SIGINT stops between tiles (exit 130) and resumes the same way;
 #   - with MPIEXEC (an MFKIT_WITH_MPI build; only the MPI checks then, test_prefilter_mpi): `MPIEXEC -n 2 mfkit prefilter`, through the front end
 #     bin/mfkit, writes the same bits as one process, and one process resumes a 2-rank run stopped
-#     by --max-tiles.
+#     by --max-tiles;
+#   - --base both (the default: specular table in DIR, diffuse in DIR/diffuse): stopped by --max-tiles
+#     in either table and rerun, it writes the same bits as an uninterrupted run, and the specular
+#     checkpoint stays until the diffuse table is written.
 mfkit="$1"; src="$2"; mpiexec="${3:-}"
 source "$(dirname "$0")/cli_test_lib.sh"
 map="$src/tests/data/normalmaps/vgroove_16.png"
-args=(prefilter "$map" --views 2x1 --samples 256)
+args=(prefilter "$map" --base ggx --views 2x1 --samples 256)
 
 same() { # same DIR1 DIR2 [with-manifest]: every output file of DIR1 equal to DIR2's
   local a="$1" b="$2" f n=0
@@ -56,6 +59,19 @@ ok '[ $rc -eq 130 ] && grep -q "interrupted after" "$tmp/s1.log" && [ ! -e "$tmp
    "SIGINT stops with exit 130, the checkpoint kept (rc=$rc): $(cat "$tmp/s1.log")"
 "$mfkit" "${args[@]}" --tile 4 --out "$tmp/s" 2>"$tmp/s2.log"; rc=$?
 ok '[ $rc -eq 0 ] && same "$tmp/t4" "$tmp/s" manifest' "resumed after SIGINT: the same bits (rc=$rc): $(cat "$tmp/s2.log")"
+
+# both tables (the default): stopped in the specular table, then in the diffuse one, then finished
+both=(prefilter "$map" --views 2x1 --diffuse-views 2x1 --samples 256 --tile 4)
+"$mfkit" "${both[@]}" --out "$tmp/b" 2>"$tmp/b.log"; rc=$?
+ok '[ $rc -eq 0 ] && same "$tmp/t4" "$tmp/b" && [ -s "$tmp/b/diffuse/prefilter.json" ] && [ ! -e "$tmp/b/.prefilter-work" ] && [ ! -e "$tmp/b/diffuse/.prefilter-work" ]' \
+   "--base both: the specular table as --base ggx's, the diffuse one in DIR/diffuse, no checkpoint left (rc=$rc): $(tail -2 "$tmp/b.log")"
+"$mfkit" "${both[@]}" --max-tiles 15 --out "$tmp/br" 2>"$tmp/br1.log"; rc1=$?
+"$mfkit" "${both[@]}" --max-tiles 15 --out "$tmp/br" 2>"$tmp/br2.log"; rc2=$?
+ok '[ $rc1 -eq 75 ] && [ $rc2 -eq 75 ] && [ -s "$tmp/br/prefilter.json" ] && [ -d "$tmp/br/.prefilter-work" ] && [ ! -e "$tmp/br/diffuse/prefilter.json" ]' \
+   "both: the first slice stops in the specular table, the second writes it and stops in the diffuse one, the specular checkpoint kept (rc $rc1 $rc2): $(tail -2 "$tmp/br2.log")"
+"$mfkit" "${both[@]}" --out "$tmp/br" 2>"$tmp/br3.log"; rc=$?
+ok '[ $rc -eq 0 ] && same "$tmp/b" "$tmp/br" manifest && same "$tmp/b/diffuse" "$tmp/br/diffuse" manifest && [ ! -e "$tmp/br/.prefilter-work" ]' \
+   "both, resumed: the same bits in both tables, manifests included (rc=$rc): $(tail -2 "$tmp/br3.log")"
 
 else
   mpi=("$mpiexec" -n 2); [ "$(id -u)" -eq 0 ] && mpi+=(--allow-run-as-root)

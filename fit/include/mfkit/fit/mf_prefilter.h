@@ -60,7 +60,7 @@
  * of the upper-left block), so neighbouring texels, views and levels whose lobes are close have
  * close matrices, which is what trilinear MIP filtering and bilinear view interpolation of M
  * need.  Not verified: that the lobes themselves vary continuously across texels and views (the
- * gate's view and texel measures have no reference; see mf_prefilter_gate).
+ * gate measures it against a reference, but reports it only; see mf_prefilter_gate_run_ref).
  *
  * Magnitude: the effective BRDF's albedo, exactly the mixture of the texels' albedos
  * (1/N) sum_q rho_q(wo), rho_q the integral over the geometric hemisphere of the texel's
@@ -210,7 +210,7 @@ mf_status mf_prefilter_run_from(const double *normals, int width, int height, co
  * The view and texel measures have no reference: a coarse view grid or a sharp map gives genuine
  * spikes (measured on the V-groove: view 1.8 with 4 azimuths, texel 5.3: its level-1 texels
  * alternate between two tilts), so they cannot tell a local-minimum jump from the effective
- * BRDF's own variation; a reference (the effective BRDF's shading of the same lights) is open. */
+ * BRDF's own variation; mf_prefilter_gate_run_ref measures them against a reference. */
 #define MF_PREFILTER_GATE_ENERGY 0.01
 #define MF_PREFILTER_GATE_LEVEL 0.5
 #define MF_PREFILTER_GATE_VIEW_SPIKE 0.1
@@ -221,6 +221,20 @@ typedef struct mf_prefilter_gate {
     long nan_entries;
     int pass, pass_energy, pass_nan, pass_level, pass_view, pass_texel;
     char where_energy[128], where_level[128], where_view[128], where_texel[128];
+    /* continuity against a reference (mf_prefilter_gate_run_ref; zero and unused after
+     * mf_prefilter_gate_run alone, has_ref = 0) */
+    int has_ref;
+    double max_cont_texel, max_cont_view;       /* bounds (inputs) */
+    double worst_cont_texel, worst_cont_view;   /* reported: lone error spikes (see below) */
+    double worst_jump_texel, worst_jump_view;   /* reported: the largest error jump between neighbours */
+    double worst_ref_error;                     /* reported: max |lobe shading - reference| / albedo */
+    int pass_cont_texel, pass_cont_view;
+    char where_cont_texel[128], where_cont_view[128];
+    double max_cont_grazing, worst_cont_grazing; /* both spikes at views with cos theta < MF_PREFILTER_MULTISTART_COS */
+    int pass_cont_grazing;
+    char where_cont_grazing[128];
+    double max_cont_lambert; /* the Lambert table's bound for all three spikes (input) */
+    int cont_gated;          /* 1: the continuity spikes are part of pass (the Lambert table) */
 } mf_prefilter_gate;
 
 /* Sets the default bounds and clears the results. */
@@ -228,6 +242,48 @@ void mf_prefilter_gate_bounds_default(mf_prefilter_gate *g);
 /* Runs every check on levels[0 .. nlevels - 1] (mf_prefilter_run's output, all with the same
  * views) with g's bounds; MF_OK whether or not it passes (g->pass), MF_ERR_DOMAIN, MF_ERR_ALLOC. */
 mf_status mf_prefilter_gate_run(const mf_prefilter_level *levels, int nlevels, mf_prefilter_gate *g) MF_WARN_UNUSED;
+
+/* The gate with a reference (mf_prefilter_gate_run plus continuity measures).  normals: the
+ * width x height map the levels were fitted to (as mf_prefilter_run takes it), o: the options
+ * they were fitted with (base, alpha, views).
+ *
+ * Reference: the shading of the gate's lights by the effective BRDF, computed independently of
+ * the fits: per level-0 texel q, the polygon clipped at the geometric horizon (wi.z >= 0),
+ * rotated into the texel frame (R_q^T, the view's azimuth about n(q) turned to 0) and
+ * integrated with the base BRDF's isotropic LTC at the texel-frame view (wo_q with the
+ * below-horizon rule of this file) [Heitz et al. 2016]: GGX's from mf_ltcfit_entry_fit at
+ * MF_PREFILTER_GATE_REF_N elevations (u = sqrt(1 - cos theta) uniform, a, b, d and the
+ * magnitude interpolated linearly in u, as a table lookup does), Lambert's exactly (the cosine
+ * over the clipped polygon / pi).  A footprint's reference is the mean of its texels'
+ * [Nahmias 2022, Eq. 2.36], computed as the mean of its children's (exact: equal areas).
+ * With e = lobe shading - reference (per entry and light), divided by the entry's albedo (GGX:
+ * REPORTED, not part of pass, pass_cont_* compare them with the max_cont_* bounds; Lambert: GATED,
+ * cont_gated = 1, all three against max_cont_lambert, since there the reference is exact and good
+ * runs stay below 0.012 of the albedo):
+ *   cont_texel: a lone texel: e above (or below) both neighbours along x or y (periodic: maps
+ *     tile) by more than max_cont_texel (the smaller of the two jumps);
+ *   cont_view: the same along theta (interior rows) and phi (periodic), max_cont_view;
+ *   cont_grazing: both of them at the views with cos theta < MF_PREFILTER_MULTISTART_COS;
+ *   jump_texel, jump_view: the largest |e_A - e_B| between neighbours;
+ *   ref_error: the largest |e|.
+ * Why reported only: on good runs (V-groove, bump map; 8 x 8, 4 x 8 views) the single lobes' own
+ * error against the reference varies between neighbours by up to 0.25 of the albedo, as much as a
+ * lobe with one matrix entry scaled by 1.5 or swapped with its phi neighbour changes it
+ * (docs/prefilter.md, "Gate": power and false alarms).  The default bounds (0.3) lie above every
+ * good run measured.  Lambert: the fits follow the (smooth) diffuse mixture closely, so e stays
+ * below 0.012 of the albedo on good runs (constant, V-groove, bump map, 2 x 4 views) and the
+ * bound MF_PREFILTER_GATE_CONT_LAMBERT = 0.03 is gated.
+ * The level check needs no reference: the reference is linear, so the parent's is exactly the
+ * mean of its children's and the reference-corrected check equals max_level's.
+ * MF_OK whether or not it passes; MF_ERR_DOMAIN (levels not those of the map and views),
+ * MF_ERR_ALLOC, or the reference fit's error. */
+#define MF_PREFILTER_GATE_REF_N 32
+#define MF_PREFILTER_GATE_CONT_TEXEL 0.3
+#define MF_PREFILTER_GATE_CONT_VIEW 0.3
+#define MF_PREFILTER_GATE_CONT_GRAZING 0.3
+#define MF_PREFILTER_GATE_CONT_LAMBERT 0.03
+mf_status mf_prefilter_gate_run_ref(const mf_prefilter_level *levels, int nlevels, const double *normals, int width,
+                                    int height, const mf_prefilter_options *o, mf_prefilter_gate *g) MF_WARN_UNUSED;
 
 /* The view of table index (i_theta, i_phi). */
 double mf_prefilter_theta(const mf_prefilter_options *o, int i);
