@@ -15,9 +15,9 @@ mfkit=$1 out=$2
 work=$(mktemp -d "${TMPDIR:-/tmp}/mfkit_pfeval.XXXXXX")
 trap 'rm -rf "$work"' EXIT
 map=tests/data/normalmaps/vgroove_16.png
-pf="mfkit prefilter $map --views 4x4 --threads 2 --out PF"
+pf="mfkit prefilter $map --base ggx --views 4x4 --threads 2 --out PF"
 ev="mfkit prefilter-eval PF --texels 16 --samples 4096 --seed 1 --lights 0.05,0.2,0.5 --out EV"
-"$mfkit" prefilter "$map" --views 4x4 --threads 2 --out "$work/pf" >/dev/null
+"$mfkit" prefilter "$map" --base ggx --views 4x4 --threads 2 --out "$work/pf" >/dev/null
 "$mfkit" prefilter-eval "$work/pf" --texels 16 --samples 4096 --seed 1 --lights 0.05,0.2,0.5 --out "$work/ev" >/dev/null
 ver=$("$mfkit" --version | awk '{print $2}')
 {

@@ -29,7 +29,7 @@ def chunk(t, d): return struct.pack('>I', len(d)) + t + d + struct.pack('>I', zl
 open(sys.argv[1], 'wb').write(b'\x89PNG\r\n\x1a\n' + chunk(b'IHDR', struct.pack('>IIBBBBB', 4, 4, 8, 2, 0, 0, 0))
                               + chunk(b'IDAT', zlib.compress(raw)) + chunk(b'IEND', b''))
 PY
-"$mfkit" prefilter "$tmp/const_4.png" --views 3x4 --out "$tmp/pf" >"$tmp/pf.log" 2>&1; rc=$?
+"$mfkit" prefilter "$tmp/const_4.png" --base ggx --views 3x4 --out "$tmp/pf" >"$tmp/pf.log" 2>&1; rc=$?
 ok '[ $rc -eq 0 ]' "prefilter of the constant map exits 0 (rc=$rc): $(tail -2 "$tmp/pf.log")"
 "$mfkit" prefilter-eval "$tmp/pf" --samples 4096 --lights 0.1,0.4 --out "$tmp/ev" >"$tmp/ev.log" 2>&1; rc=$?
 ok '[ $rc -eq 0 ]' "prefilter-eval exits 0 (rc=$rc): $(tail -2 "$tmp/ev.log")"

@@ -7,7 +7,7 @@
 mfkit="$1"; src="$2"; lookup="$3"
 source "$(dirname "$0")/cli_test_lib.sh"
 oiiotool "$src/tests/data/normalmaps/vgroove_16.png" --cut 16x8+0+4 -o "$tmp/map.png"
-"$mfkit" prefilter "$tmp/map.png" --views 2x2 --samples 256 --tile 4 --out "$tmp/pf" 2>"$tmp/pf.log"; rc=$?
+"$mfkit" prefilter "$tmp/map.png" --base ggx --views 2x2 --samples 256 --tile 4 --out "$tmp/pf" 2>"$tmp/pf.log"; rc=$?
 ok '[ $rc -eq 0 ]' "prefilter of the 16 x 8 map exits 0 (rc=$rc): $(tail -2 "$tmp/pf.log")"
 
 { printf '#version 450\n'
