@@ -121,6 +121,8 @@ typedef struct {
     double scale;                  /* the weights' factor to the quadrature magnitude */
     double invn;                   /* scale / N */
     double magnitude, magnitude_err, fresnel;
+    double *sc_dot; /* scratch of texel_light_sums: the cap dot products of a centre's candidates */
+    int *sc_in;     /* and the indices inside one light (both sized for the texel's directions) */
     mf_vec3 lobe;   /* mean direction m of f cos (unit, xz plane); the lobe frame is R = [[mz, 0, mx],
                      * [0, 1, 0], [-mx, 0, mz]] (R z = m), and the solver's parameters are those of
                      * M' = R^T M = [[a', 0, b'], [0, c', 0], [d', 0, 1]]: the same 4-parameter family
@@ -164,12 +166,34 @@ static mf_vec3 to_lobe(mf_vec3 m, mf_vec3 v)
     return mf_vec3_make(m.z * v.x - m.x * v.z, v.y, m.x * v.x + m.z * v.z);
 }
 
+/* A texel without its scratch (texel_prepare allocates it); texel_free frees both. */
+static texel *texel_new(void)
+{
+    texel *t = malloc(sizeof *t);
+    if (t)
+        t->sc_dot = NULL, t->sc_in = NULL;
+    return t;
+}
+
+static void texel_free(texel *t)
+{
+    if (t) {
+        free(t->sc_dot);
+        free(t->sc_in);
+        free(t);
+    }
+}
+
 /* Samples, magnitude, lobe statistics, lights and their BRDF integrals of one texel. */
 static mf_status texel_prepare(const mf_brdf_model *m, double alpha, double cos_theta, const uint32_t scr[2],
                                workspace *ws, texel *t)
 {
     mf_vec3 wo = view_dir(cos_theta);
     ws->n = cos_theta < GRAZING_COS ? GRAZING_FACTOR * ws->base : ws->base;
+    t->sc_dot = malloc(sizeof *t->sc_dot * (size_t)ws->n);
+    t->sc_in = malloc(sizeof *t->sc_in * (size_t)ws->n);
+    if (!t->sc_dot || !t->sc_in)
+        return MF_ERR_ALLOC;
     mf_status st = texel_magnitude(m, alpha, wo, ws, t);
     if (st != MF_OK)
         return st;
@@ -238,11 +262,98 @@ static mf_status texel_prepare(const mf_brdf_model *m, double alpha, double cos_
     return MF_OK;
 }
 
+/* The sums over the live directions inside each light k (light_inside's test: the bounding cap,
+ * then the edge planes), in index order: out[4 k + 0..3] = sum of w, and with cv also of cw, cw^2
+ * and cw w (light_sum, light_sums_cv).  The same sums, bit for bit, with less work: lights whose
+ * centres are the same bits (the 16 lights about the lobe's mean, the pairs of side lights) share
+ * one pass over the directions, whose cap dot products (the same expression as light_inside's)
+ * are kept for the candidates of the widest cap and narrowed in place for each smaller one (a
+ * direction within a cap is within every wider cap of the same centre).  48 passes over the
+ * directions become 16. */
+static void texel_light_sums(const texel *t, const workspace *ws, int cv, double *out)
+{
+    const int live = t->live;
+    const double *x = ws->x, *y = ws->y, *z = ws->z;
+    int *cand = ws->cand, *in = t->sc_in;
+    double *dot = t->sc_dot;
+    unsigned char done[LIGHTS_MAX] = {0};
+    for (int k0 = 0; k0 < t->k; ++k0) {
+        if (done[k0])
+            continue;
+        /* the lights of this centre, widest cap (smallest cos_radius) first (stable) */
+        int grp[LIGHTS_MAX] = {0}, ng = 0;
+        const mf_vec3 c = t->lights[k0].centre;
+        for (int k = k0; k < t->k; ++k)
+            if (!done[k] && memcmp(&t->lights[k].centre, &c, sizeof c) == 0) {
+                int i = ng++;
+                while (i > 0 && t->lights[grp[i - 1]].cos_radius > t->lights[k].cos_radius) {
+                    grp[i] = grp[i - 1];
+                    --i;
+                }
+                grp[i] = k;
+                done[k] = 1;
+            }
+        const double cx = c.x, cy = c.y, cz = c.z, cr0 = t->lights[grp[0]].cos_radius;
+        int m = 0;
+        for (int j = 0; j < live; ++j) {
+            double d = x[j] * cx + y[j] * cy + z[j] * cz;
+            cand[m] = j;
+            dot[m] = d;
+            m += d >= cr0;
+        }
+        for (int g = 0; g < ng; ++g) {
+            const light *l = &t->lights[grp[g]];
+            const double cr = l->cos_radius;
+            int m2 = 0;
+            for (int i = 0; i < m; ++i) {
+                cand[m2] = cand[i];
+                dot[m2] = dot[i];
+                m2 += dot[i] >= cr;
+            }
+            m = m2;
+            /* every edge plane tested, without light_inside's early exit (the same answer:
+             * the tests have no side effects), so no branch the CPU cannot predict */
+            const int ne = l->poly.n;
+            int n = 0;
+            for (int i = 0; i < m; ++i) {
+                int j = cand[i], inside = 1;
+                for (int e = 0; e < ne; ++e)
+                    inside &= mf_vec3_dot(ws->dir[j], l->edge_n[e]) > 0.0;
+                in[n] = j;
+                n += inside;
+            }
+            double *o = out + 4 * grp[g];
+            if (!cv) {
+                double sy = 0.0;
+                for (int i = 0; i < n; ++i)
+                    sy += ws->w[in[i]];
+                o[0] = sy;
+                o[1] = o[2] = o[3] = 0.0;
+            } else {
+                double sy = 0.0, sx = 0.0, sxx = 0.0, sxy = 0.0;
+                for (int i = 0; i < n; ++i) {
+                    int j = in[i];
+                    sy += ws->w[j];
+                    sx += ws->cw[j];
+                    sxx += ws->cw[j] * ws->cw[j];
+                    sxy += ws->cw[j] * ws->w[j];
+                }
+                o[0] = sy;
+                o[1] = sx;
+                o[2] = sxx;
+                o[3] = sxy;
+            }
+        }
+    }
+}
+
 /* The targets from the samples alone: I_k = Y^_k. */
 static void texel_targets_raw(texel *t, const workspace *ws)
 {
+    double sums[4 * LIGHTS_MAX];
+    texel_light_sums(t, ws, 0, sums);
     for (int k = 0; k < t->k; ++k) {
-        t->target[k] = t->raw_target[k] = light_sum(&t->lights[k], ws, t->live) * t->invn;
+        t->target[k] = t->raw_target[k] = sums[4 * k] * t->invn;
         t->inv_weight[k] = t->lights[k].factor / (t->target[k] + WEIGHT_FLOOR * t->magnitude + 1e-300);
     }
 }
@@ -276,10 +387,11 @@ static void texel_control_variate(texel *t, workspace *ws, const double p0[4])
         return;
     }
     const double n = ws->n;
+    double sums[4 * LIGHTS_MAX];
+    texel_light_sums(t, ws, 1, sums);
     for (int k = 0; k < t->k; ++k) {
         const light *l = &t->lights[k];
-        double sm[4];
-        light_sums_cv(l, ws, t->live, sm);
+        const double *sm = sums + 4 * k;
         /* y_j = scale w_j */
         double my = sm[0] * t->invn, mx = sm[1] / n;
         double sxx = sm[2] - n * mx * mx, sxy = t->scale * sm[3] - n * mx * my;
@@ -339,7 +451,10 @@ static int residual_fn(void *user, const double *p, double *res, double *jac)
     return 0;
 }
 
-static double cost_at(const texel *t, const double p[4])
+/* The cost at p, or INFINITY as soon as its partial sum reaches `bound` (the terms are squares
+ * added in a fixed order, so the partial sums never decrease: a cost that stops early is >= bound,
+ * and one below bound is the same bits as the full sum).  cost_at: no bound. */
+static double cost_below(const texel *t, const double p[4], double bound)
 {
     if (!(p[0] > 0.0) || !(p[2] > 0.0) || !(p[0] - p[1] * p[3] > 0.0))
         return INFINITY;
@@ -347,6 +462,8 @@ static double cost_at(const texel *t, const double p[4])
     for (int k = 0; k < t->k; ++k) {
         double r = (t->magnitude * ltc_integral_value(&t->lights[k].lobe_poly, p) - t->target[k]) * t->inv_weight[k];
         c += r * r;
+        if (c >= bound)
+            return INFINITY;
     }
     double pr[PROX_RESIDUALS];
     prox_residuals(t, p, pr);
@@ -355,10 +472,18 @@ static double cost_at(const texel *t, const double p[4])
     return c;
 }
 
+static double cost_at(const texel *t, const double p[4])
+{
+    return cost_below(t, p, INFINITY);
+}
+
 /* The closed-form start: the cosine lobe scaled by s about the lobe's mean direction,
  * M' = diag(s, s, 1) in the lobe frame, with s the best of the log grid s = 10^(-4.5 + 0.25 i),
- * i = 0..20 (cost evaluated at each).  Returns the cost at the chosen start. */
-static double closed_form_start(const texel *t, double p[4])
+ * i = 0..20 (the first of equal costs).  `bound`: only a cost below it matters (the cost of the
+ * warm start, INFINITY without one); a grid point's cost stops being summed once it reaches the
+ * bound or the best so far (cost_below), which changes no choice.  Returns the cost at the chosen
+ * start, or INFINITY (p then unchanged from the identity) if no grid point costs less than bound. */
+static double closed_form_start(const texel *t, double p[4], double bound)
 {
     double best = INFINITY;
     p[0] = p[2] = 1.0;
@@ -366,7 +491,7 @@ static double closed_form_start(const texel *t, double p[4])
     for (int i = 0; i <= 20; ++i) {
         double s = pow(10.0, -4.5 + 0.25 * i);
         double q[4] = {s, 0.0, s, 0.0};
-        double c = cost_at(t, q);
+        double c = cost_below(t, q, fmin(best, bound));
         if (c < best) {
             best = c;
             memcpy(p, q, sizeof q);
@@ -409,13 +534,13 @@ static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_thet
                            const double *lobe_start, const mf_ltcfit_options *o, const uint32_t scr[2],
                            workspace *ws, mf_ltcfit_entry *out, double *lobe_out)
 {
-    texel *t = malloc(sizeof *t);
+    texel *t = texel_new();
     if (!t)
         return MF_ERR_ALLOC;
     memset(out, 0, sizeof *out);
     mf_status st = texel_prepare(m, alpha, cos_theta, scr, ws, t);
     if (st != MF_OK) {
-        free(t);
+        texel_free(t);
         return st;
     }
     out->magnitude = t->magnitude;
@@ -431,7 +556,7 @@ static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_thet
             lobe_out[0] = lobe_out[2] = 1.0;
             lobe_out[1] = lobe_out[3] = 0.0;
         }
-        free(t);
+        texel_free(t);
         return MF_OK;
     }
     /* the control variate from the warm start (previous texel of the column), or at the column's
@@ -442,7 +567,7 @@ static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_thet
                           : start && lobe_params(t->lobe, mf_ltc_matrix_general(start), q);
     if (!warm) {
         texel_targets_raw(t, ws);
-        closed_form_start(t, q);
+        closed_form_start(t, q, INFINITY);
     }
     texel_control_variate(t, ws, q);
     t->prox = 0.0;
@@ -450,8 +575,10 @@ static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_thet
         t->prox = PROX_WEIGHT;
         memcpy(t->prox_at, q, sizeof q);
     }
-    double c0 = closed_form_start(t, p);
-    if (warm && cost_at(t, q) <= c0)
+    /* the warm start unless some grid point costs less (a NaN warm cost never wins) */
+    double cq = warm ? cost_at(t, q) : NAN;
+    double c0 = closed_form_start(t, p, isnan(cq) ? INFINITY : cq);
+    if (warm && cq <= c0)
         memcpy(p, q, sizeof p);
     double lower[4] = {A_MIN, -INFINITY, A_MIN, -INFINITY}, upper[4] = {INFINITY, INFINITY, INFINITY, INFINITY};
     mf_solver_options so;
@@ -463,7 +590,7 @@ static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_thet
     mf_solver_summary sum;
     st = mf_solver_least_squares(4, t->k + PROX_RESIDUALS, residual_fn, t, p, lower, upper, &so, &sum);
     if (st != MF_OK && st != MF_ERR_NO_CONVERGENCE) {
-        free(t);
+        texel_free(t);
         return st;
     }
     /* The mirror convention.  A lobe whose mean is (near) the normal is (nearly) symmetric under
@@ -501,7 +628,7 @@ static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_thet
     out->residual = sqrt(cost_at(t, p) / t->k);
     if (lobe_out)
         memcpy(lobe_out, p, sizeof p);
-    free(t);
+    texel_free(t);
     return MF_OK;
 }
 
@@ -537,9 +664,9 @@ mf_status mf_ltcfit_objective(const mf_brdf_model *model, double alpha, double c
     if (!model || !check_options(o) || !(alpha > 0.0) || !(cos_theta > 0.0 && cos_theta <= 1.0) || !res)
         return MF_ERR_DOMAIN;
     workspace ws;
-    texel *t = malloc(sizeof *t);
+    texel *t = texel_new();
     if (!t || !ws_init(&ws, o->samples)) {
-        free(t);
+        texel_free(t);
         return MF_ERR_ALLOC;
     }
     uint32_t scr[2];
@@ -556,7 +683,7 @@ mf_status mf_ltcfit_objective(const mf_brdf_model *model, double alpha, double c
             memcpy(jac, jb, sizeof *jac * 4 * (size_t)t->k);
     }
     ws_free(&ws);
-    free(t);
+    texel_free(t);
     return st;
 }
 
