@@ -186,7 +186,7 @@ static void texel_free(texel *t)
 
 /* Samples, magnitude, lobe statistics, lights and their BRDF integrals of one texel. */
 static mf_status texel_prepare(const mf_brdf_model *m, double alpha, double cos_theta, const uint32_t scr[2],
-                               workspace *ws, texel *t)
+                               const mf_result *albedo, workspace *ws, texel *t)
 {
     mf_vec3 wo = view_dir(cos_theta);
     ws->n = cos_theta < GRAZING_COS ? GRAZING_FACTOR * ws->base : ws->base;
@@ -194,8 +194,14 @@ static mf_status texel_prepare(const mf_brdf_model *m, double alpha, double cos_
     t->sc_in = malloc(sizeof *t->sc_in * (size_t)ws->n);
     if (!t->sc_dot || !t->sc_in)
         return MF_ERR_ALLOC;
-    mf_status st = texel_magnitude(m, alpha, wo, ws, t);
-    if (st != MF_OK)
+    mf_status st = MF_OK;
+    if (albedo) { /* given (mf_ltcfit_entry_fit_albedo): the same rule's value; no Fresnel moment */
+        t->magnitude = albedo->val;
+        t->magnitude_err = albedo->err;
+        t->fresnel = NAN;
+        if (!isfinite(albedo->val))
+            return MF_ERR_DOMAIN;
+    } else if ((st = texel_magnitude(m, alpha, wo, ws, t)) != MF_OK)
         return st;
     for (int j = 0; j < ws->n; ++j)
         mf_sobol2((uint32_t)j, scr[0], scr[1], ws->u + 2 * j);
@@ -530,7 +536,8 @@ static int lobe_params(mf_vec3 m, mf_mat3 mv, double q[4])
  * view-frame matrix of the previous texel points many lobe widths away from this texel's lobe:
  * at GGX alpha 0.001, 1.3 deg it was a poor start and a useless control variate).  lobe_out: the
  * fitted lobe-frame parameters (may be NULL). */
-static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_theta, const double *start,
+static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_theta, const mf_result *albedo,
+                           const double *start,
                            const double *lobe_start, const mf_ltcfit_options *o, const uint32_t scr[2],
                            workspace *ws, mf_ltcfit_entry *out, double *lobe_out)
 {
@@ -538,7 +545,7 @@ static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_thet
     if (!t)
         return MF_ERR_ALLOC;
     memset(out, 0, sizeof *out);
-    mf_status st = texel_prepare(m, alpha, cos_theta, scr, ws, t);
+    mf_status st = texel_prepare(m, alpha, cos_theta, scr, albedo, ws, t);
     if (st != MF_OK) {
         texel_free(t);
         return st;
@@ -640,8 +647,8 @@ static int check_options(const mf_ltcfit_options *o)
            o->r_lo < o->r_hi && o->u_lo >= 0.0 && o->u_hi <= 1.0 && o->u_lo < o->u_hi;
 }
 
-mf_status mf_ltcfit_entry_fit(const mf_brdf_model *model, double alpha, double cos_theta, const double *start,
-                              const mf_ltcfit_options *o, mf_ltcfit_entry *out)
+mf_status mf_ltcfit_entry_fit_albedo(const mf_brdf_model *model, double alpha, double cos_theta, const double *start,
+                                     const mf_ltcfit_options *o, const mf_result *albedo, mf_ltcfit_entry *out)
 {
     if (!model || !model->eval_cos || !check_options(o) || !(alpha > 0.0) || !(cos_theta > 0.0 && cos_theta <= 1.0) ||
         !out)
@@ -653,9 +660,15 @@ mf_status mf_ltcfit_entry_fit(const mf_brdf_model *model, double alpha, double c
     }
     uint32_t scr[2];
     sobol_scramble(o->seed, scr);
-    mf_status st = fit_texel(model, alpha, cos_theta, start, NULL, o, scr, &ws, out, NULL);
+    mf_status st = fit_texel(model, alpha, cos_theta, albedo, start, NULL, o, scr, &ws, out, NULL);
     ws_free(&ws);
     return st;
+}
+
+mf_status mf_ltcfit_entry_fit(const mf_brdf_model *model, double alpha, double cos_theta, const double *start,
+                              const mf_ltcfit_options *o, mf_ltcfit_entry *out)
+{
+    return mf_ltcfit_entry_fit_albedo(model, alpha, cos_theta, start, o, NULL, out);
 }
 
 mf_status mf_ltcfit_objective(const mf_brdf_model *model, double alpha, double cos_theta, const mf_ltcfit_options *o,
@@ -671,7 +684,7 @@ mf_status mf_ltcfit_objective(const mf_brdf_model *model, double alpha, double c
     }
     uint32_t scr[2];
     sobol_scramble(o->seed, scr);
-    mf_status st = texel_prepare(model, alpha, cos_theta, scr, &ws, t);
+    mf_status st = texel_prepare(model, alpha, cos_theta, scr, NULL, &ws, t);
     if (st == MF_OK)
         texel_targets_raw(t, &ws);
     double r[LIGHTS_MAX + PROX_RESIDUALS], jb[4 * (LIGHTS_MAX + PROX_RESIDUALS)];
@@ -897,7 +910,7 @@ static void *worker(void *arg)
         for (int u = 0; u < n_u && st == MF_OK; ++u) {
             if (stop_requested(j))
                 break;
-            st = fit_texel(j->model, alpha, mf_ltc_table_cos_theta(j->table, u), NULL, have_prev ? lobe_prev : NULL,
+            st = fit_texel(j->model, alpha, mf_ltc_table_cos_theta(j->table, u), NULL, NULL, have_prev ? lobe_prev : NULL,
                            j->o, j->scr, &ws, &col[u], lobe_prev);
             if (st == MF_OK) {
                 have_prev = 1;
