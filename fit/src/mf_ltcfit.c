@@ -122,7 +122,9 @@ typedef struct {
     double invn;                   /* scale / N */
     double magnitude, magnitude_err, fresnel;
     double *sc_dot; /* scratch of texel_light_sums: the cap dot products of a centre's candidates */
-    int *sc_in;     /* and the indices inside one light (both sized for the texel's directions) */
+    int *sc_in;     /* and the indices inside one light (all sized for the texel's directions) */
+    double *sc_x, *sc_y, *sc_z; /* the candidates' components */
+    int64_t *sc_mask;           /* the candidates' edge-test results */
     mf_vec3 lobe;   /* mean direction m of f cos (unit, xz plane); the lobe frame is R = [[mz, 0, mx],
                      * [0, 1, 0], [-mx, 0, mz]] (R z = m), and the solver's parameters are those of
                      * M' = R^T M = [[a', 0, b'], [0, c', 0], [d', 0, 1]]: the same 4-parameter family
@@ -171,7 +173,7 @@ static texel *texel_new(void)
 {
     texel *t = malloc(sizeof *t);
     if (t)
-        t->sc_dot = NULL, t->sc_in = NULL;
+        t->sc_dot = t->sc_x = NULL, t->sc_in = NULL, t->sc_mask = NULL;
     return t;
 }
 
@@ -180,6 +182,8 @@ static void texel_free(texel *t)
     if (t) {
         free(t->sc_dot);
         free(t->sc_in);
+        free(t->sc_x);
+        free(t->sc_mask);
         free(t);
     }
 }
@@ -192,8 +196,12 @@ static mf_status texel_prepare(const mf_brdf_model *m, double alpha, double cos_
     ws->n = cos_theta < GRAZING_COS ? GRAZING_FACTOR * ws->base : ws->base;
     t->sc_dot = malloc(sizeof *t->sc_dot * (size_t)ws->n);
     t->sc_in = malloc(sizeof *t->sc_in * (size_t)ws->n);
-    if (!t->sc_dot || !t->sc_in)
+    t->sc_x = malloc(sizeof *t->sc_x * 3 * (size_t)ws->n);
+    t->sc_mask = malloc(sizeof *t->sc_mask * (size_t)ws->n);
+    if (!t->sc_dot || !t->sc_in || !t->sc_x || !t->sc_mask)
         return MF_ERR_ALLOC;
+    t->sc_y = t->sc_x + ws->n;
+    t->sc_z = t->sc_y + ws->n;
     mf_status st = MF_OK;
     if (albedo) { /* given (mf_ltcfit_entry_fit_albedo): the same rule's value; no Fresnel moment */
         t->magnitude = albedo->val;
@@ -300,33 +308,50 @@ static void texel_light_sums(const texel *t, const workspace *ws, int cv, double
                 done[k] = 1;
             }
         const double cx = c.x, cy = c.y, cz = c.z, cr0 = t->lights[grp[0]].cos_radius;
+        double *X = t->sc_x, *Y = t->sc_y, *Z = t->sc_z;
+        int64_t *mask = t->sc_mask;
         int m = 0;
         for (int j = 0; j < live; ++j) {
             double d = x[j] * cx + y[j] * cy + z[j] * cz;
             cand[m] = j;
             dot[m] = d;
+            X[m] = x[j];
+            Y[m] = y[j];
+            Z[m] = z[j];
             m += d >= cr0;
         }
+        double cr_done = cr0;
         for (int g = 0; g < ng; ++g) {
             const light *l = &t->lights[grp[g]];
             const double cr = l->cos_radius;
-            int m2 = 0;
-            for (int i = 0; i < m; ++i) {
-                cand[m2] = cand[i];
-                dot[m2] = dot[i];
-                m2 += dot[i] >= cr;
+            if (cr != cr_done) { /* a smaller cap: narrow the candidates in place */
+                int m2 = 0;
+                for (int i = 0; i < m; ++i) {
+                    cand[m2] = cand[i];
+                    dot[m2] = dot[i];
+                    X[m2] = X[i];
+                    Y[m2] = Y[i];
+                    Z[m2] = Z[i];
+                    m2 += dot[i] >= cr;
+                }
+                m = m2;
+                cr_done = cr;
             }
-            m = m2;
-            /* every edge plane tested, without light_inside's early exit (the same answer:
-             * the tests have no side effects), so no branch the CPU cannot predict */
+            /* every edge plane tested (light_inside's test without its early exit: the same
+             * answer, the tests have no side effects), edge by edge over the candidates'
+             * component arrays, which the compiler vectorises (the same operations per element) */
             const int ne = l->poly.n;
+            for (int i = 0; i < m; ++i)
+                mask[i] = 1;
+            for (int e = 0; e < ne; ++e) {
+                const double ex = l->edge_n[e].x, ey = l->edge_n[e].y, ez = l->edge_n[e].z;
+                for (int i = 0; i < m; ++i)
+                    mask[i] &= X[i] * ex + Y[i] * ey + Z[i] * ez > 0.0;
+            }
             int n = 0;
             for (int i = 0; i < m; ++i) {
-                int j = cand[i], inside = 1;
-                for (int e = 0; e < ne; ++e)
-                    inside &= mf_vec3_dot(ws->dir[j], l->edge_n[e]) > 0.0;
-                in[n] = j;
-                n += inside;
+                in[n] = cand[i];
+                n += (int)mask[i];
             }
             double *o = out + 4 * grp[g];
             if (!cv) {
