@@ -424,6 +424,22 @@ static double *texel_albedos(const mf_table *t, const mf_brdf_model *model, int 
     return out;
 }
 
+typedef struct gate_thread_arg {
+    const mf_table *t;
+    const mf_brdf_model *model;
+    const mf_ltc_gate_options *go;
+    mf_check *checks;
+    int cap, n;
+    mf_status st;
+} gate_thread_arg;
+
+static void *gate_thread(void *arg)
+{
+    gate_thread_arg *a = arg;
+    a->st = mf_ltc_gate_run(a->t, a->model, a->go, a->checks, a->cap, &a->n);
+    return NULL;
+}
+
 /* ---- the gate report (JSON) ------------------------------------------------------------------
  * The format of the command line's check reports (mf_json_checks), after the fit's summary;
  * non-finite numbers as the strings of mf_json.h. */
@@ -650,17 +666,30 @@ mf_status mf_ltc_bake(const mf_ltc_bake_options *o, mf_ltc_bake_report *r)
     double c0 = cpu_seconds();
     double *albedo = mf_ltc_gate_layout_ok(&t, NULL, 0) ? texel_albedos(&t, o->model, fo.threads) : NULL;
     go.albedo = albedo;
-    mf_status gs = mf_ltc_gate_run(&t, o->model, &go, r->checks, (int)(sizeof r->checks / sizeof r->checks[0]),
-                                   &r->nchecks);
+    /* The library gate (single-threaded) runs in a thread of its own beside the texel check's
+     * workers when more than one thread is allowed: the two read the table and the albedo array
+     * only, and neither result depends on the other or on the timing. */
+    gate_thread_arg ga = {&t, o->model, &go, r->checks, (int)(sizeof r->checks / sizeof r->checks[0]), 0,
+                          MF_ERR_INTERNAL};
+    pthread_t gate_tid;
+    int gate_threaded = fo.threads > 1 && pthread_create(&gate_tid, NULL, gate_thread, &ga) == 0;
+    if (!gate_threaded)
+        gate_thread(&ga);
+    /* the texel check: every texel against a fresh fit of it (mf_ltc_bake_texel_check) */
+    mf_check tc;
+    mf_status ts = MF_OK;
+    if (gate_threaded || ga.st == MF_OK || ga.st == MF_ERR_CHECK_FAILED)
+        ts = texel_check(&t, o->model, &fo, go.seed, fo.threads, albedo, &tc);
+    if (gate_threaded)
+        pthread_join(gate_tid, NULL);
+    mf_status gs = ga.st;
+    r->nchecks = ga.n;
     if (gs == MF_OK || gs == MF_ERR_CHECK_FAILED) {
-        /* the texel check: every texel against a fresh fit of it (mf_ltc_bake_texel_check) */
-        mf_check *tc = &r->checks[r->nchecks];
-        mf_status ts = texel_check(&t, o->model, &fo, go.seed, fo.threads, albedo, tc);
         if (ts != MF_OK)
             gs = ts;
         else {
-            ++r->nchecks;
-            if (!tc->passed)
+            r->checks[r->nchecks++] = tc;
+            if (!tc.passed)
                 gs = MF_ERR_CHECK_FAILED;
         }
     }
