@@ -20,7 +20,8 @@
  *   - with --fit: wall time, CPU time, time per entry, peak memory (getrusage), solver iterations
  *     per entry (each one objective + Jacobian evaluation), worst residual, unconverged entries;
  *   - with --bake DIR: `mfkit fit ltc` as a whole (mf_ltc_bake into DIR: fit, gate, export), wall
- *     and CPU time of each stage and the gate's checks;
+ *     and CPU time of each stage and the gate's checks; with --hdrp also the opt-in fit of Unity
+ *     HDRP's grid in the export (`mfkit fit ltc --hdrp`);
  *   - with --power N: the texel check's power on the first TABLE (a table fitted by mfkit with
  *     --seed S: the check refits its texels): N single-texel corruptions, the fraction flagged per
  *     band of the true difference (power_study below);
@@ -406,14 +407,14 @@ static void power_study(const mf_table *t0, const mf_brdf_model *model, uint64_t
 
 static void usage(FILE *f)
 {
-    fprintf(f, "usage: bench_ltc [--fit] [--bake DIR] [--reference-fit] [--power N] [--brdf NAME] [--threads N]\n"
+    fprintf(f, "usage: bench_ltc [--fit] [--bake DIR] [--hdrp] [--reference-fit] [--power N] [--brdf NAME] [--threads N]\n"
                "                 [--size N] [--seed S] [--views V] [--polygons P] [--samples N] [--csv PATH] [TABLE ...]\n");
 }
 
 int main(int argc, char **argv)
 {
     mf_image_set_backend(mf_image_oiio_backend()); /* EXR files */
-    int do_fit = 0, do_ref = 0, power_n = 0, threads = 2, size = 64, nviews = 512, npoly = 16, nsamples = 32768;
+    int do_fit = 0, do_ref = 0, do_hdrp = 0, power_n = 0, threads = 2, size = 64, nviews = 512, npoly = 16, nsamples = 32768;
     uint64_t seed = 1;
     const char *brdf = "ggx", *csv_path = NULL, *bake_dir = NULL;
     const char *paths[MAX_TABLES];
@@ -425,6 +426,8 @@ int main(int argc, char **argv)
             do_fit = 1;
         else if (!strcmp(a, "--reference-fit"))
             do_ref = 1;
+        else if (!strcmp(a, "--hdrp"))
+            do_hdrp = 1;
         else if (!strcmp(a, "--power") && v)
             power_n = atoi(v), ++i;
         else if (!strcmp(a, "--bake") && v)
@@ -494,12 +497,13 @@ int main(int argc, char **argv)
         bo.fit.seed = seed;
         bo.out_dir = bake_dir;
         bo.tool = "bench_ltc";
+        bo.hdrp = do_hdrp;
         mf_ltc_bake_report br;
         double w0 = now_wall(), c0 = now_cpu();
         mf_status st = mf_ltc_bake(&bo, &br);
         bake_wall = now_wall() - w0;
         bake_cpu = now_cpu() - c0;
-        printf("\nmfkit fit ltc (mf_ltc_bake) %s %dx%d, %d threads: %s%s\n", model->name, size, size, threads,
+        printf("\nmfkit fit ltc%s (mf_ltc_bake) %s %dx%d, %d threads: %s%s\n", do_hdrp ? " --hdrp" : "", model->name, size, size, threads,
                st == MF_OK ? "exported" : mf_status_str(st), br.gate_passed ? ", gate passed" : ", GATE FAILED");
         printf("  fit    wall %7.3f s  CPU %7.3f s\n  gate   wall %7.3f s  CPU %7.3f s\n  export wall %7.3f s  CPU %7.3f s\n"
                "  total  wall %7.3f s  CPU %7.3f s\n",

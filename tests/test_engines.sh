@@ -29,7 +29,7 @@ if ! cmp -s "$src/tests/node/package-lock.json" "$nm/package-lock.json" || [ ! -
 fi
 
 out="$tmp/ltc"
-"$mfkit" fit ltc --out "$out" --quiet >"$tmp/fit.txt" 2>&1 || { cat "$tmp/fit.txt"; echo "FAIL: mfkit fit ltc" >&2; exit 1; }
+"$mfkit" fit ltc --hdrp --out "$out" --quiet >"$tmp/fit.txt" 2>&1 || { cat "$tmp/fit.txt"; echo "FAIL: mfkit fit ltc" >&2; exit 1; }
 p="$out/ltc_ggx"
 for f in _three.js _eevee.h .ktx2 _f16.ktx2 _legacy_1.dds _legacy_2.dds _1.exr _2.exr; do
   ok "[ -s '$p$f' ]" "mfkit fit ltc wrote ltc_ggx$f"

@@ -305,8 +305,76 @@ static void test_polygon_shading(void)
     }
 }
 
+/* The albedo handed in (mf_ltcfit_entry_fit_albedo, as the bake's texel check does with the
+ * gate's mf_ltc_gate_texel_albedo): the same fit, bit for bit, as the fitter computing it (same
+ * rule and points); and the gate given that albedo (mf_ltc_gate_options.albedo) reports the same
+ * check values as the gate computing it.  Exact equality: both sides run the same operations. */
+static void test_albedo_given(void)
+{
+    const mf_brdf_model *m = mf_brdf_model_find("ggx");
+    mf_ltcfit_options o = small_options(1);
+    mf_table t;
+    mf_ltcfit_result r;
+    char msg[256];
+    CHECK(mf_ltcfit_table(m, &o, &t, &r, msg, sizeof msg) == MF_OK && !r.interrupted);
+    const int cells[4][2] = {{0, 0}, {3, 2}, {7, 5}, {5, 7}}; /* (ir, iu); iu 7 is a grazing view */
+    for (int c = 0; c < 4; ++c) {
+        int ir = cells[c][0], iu = cells[c][1];
+        mf_result alb;
+        CHECK(mf_ltc_gate_texel_albedo(&t, m, ir, iu, &alb) == MF_OK);
+        const mf_ltcfit_entry *st = &r.entries[ir + o.n_r * iu];
+        for (int s = 0; s < 2; ++s) { /* closed-form start, and the stored texel as the start */
+            mf_ltcfit_entry e1, e2;
+            double alpha = mf_ltc_table_alpha(&t, ir), ct = mf_ltc_table_cos_theta(&t, iu);
+            CHECK(mf_ltcfit_entry_fit(m, alpha, ct, s ? st->m : NULL, &o, &e1) == MF_OK);
+            CHECK(mf_ltcfit_entry_fit_albedo(m, alpha, ct, s ? st->m : NULL, &o, &alb, &e2) == MF_OK);
+            int same = e1.a == e2.a && e1.b == e2.b && e1.c == e2.c && e1.d == e2.d && e1.residual == e2.residual &&
+                       e1.iterations == e2.iterations && e1.magnitude == e2.magnitude &&
+                       e1.magnitude_err == e2.magnitude_err && isnan(e2.fresnel);
+            for (int i = 0; i < 9; ++i)
+                same = same && e1.m[i] == e2.m[i];
+            if (!same)
+                printf("texel (%d, %d), start %d: a %.17g / %.17g, magnitude %.17g / %.17g\n", ir, iu, s, e1.a, e2.a,
+                       e1.magnitude, e2.magnitude);
+            CHECK(same);
+        }
+    }
+    /* the gate with and without the albedo array */
+    size_t n = (size_t)o.n_r * (size_t)o.n_u;
+    double *alb = malloc(sizeof *alb * 2 * n);
+    CHECK(alb != NULL);
+    for (size_t k = 0; alb && k < n; ++k) {
+        mf_result q;
+        CHECK(mf_ltc_gate_texel_albedo(&t, m, (int)(k % (size_t)o.n_r), (int)(k / (size_t)o.n_r), &q) == MF_OK);
+        alb[2 * k] = q.val;
+        alb[2 * k + 1] = q.err;
+    }
+    mf_ltc_gate_options go;
+    mf_ltc_gate_options_default(&go);
+    go.mc_samples = 2048; /* the check values, not their power, are compared */
+    mf_check c1[MF_LTC_GATE_MAX_CHECKS], c2[MF_LTC_GATE_MAX_CHECKS];
+    int n1 = 0, n2 = 0;
+    mf_status s1 = mf_ltc_gate_run(&t, m, &go, c1, MF_LTC_GATE_MAX_CHECKS, &n1);
+    go.albedo = alb;
+    mf_status s2 = mf_ltc_gate_run(&t, m, &go, c2, MF_LTC_GATE_MAX_CHECKS, &n2);
+    CHECK(s1 == s2 && n1 == n2 && n1 > 0);
+    for (int i = 0; i < n1 && i < n2; ++i) {
+        int same = strcmp(c1[i].name, c2[i].name) == 0 && (c1[i].worst == c2[i].worst ||
+                   (isnan(c1[i].worst) && isnan(c2[i].worst))) && c1[i].cases == c2[i].cases &&
+                   c1[i].passed == c2[i].passed && strcmp(c1[i].worst_at, c2[i].worst_at) == 0;
+        if (!same)
+            printf("gate check %s: worst %.17g without the albedo array, %.17g with it\n", c1[i].name, c1[i].worst,
+                   c2[i].worst);
+        CHECK(same);
+    }
+    free(alb);
+    mf_table_free(&t);
+    mf_ltcfit_result_free(&r);
+}
+
 int main(void)
 {
+    test_albedo_given();
     test_lambert_identity();
     test_golden();
     test_symmetry();

@@ -51,7 +51,7 @@ static int parse_size(const char *s, cli_val *v)
 static char k_brdf_help[512];
 
 enum { F_BRDF, F_LIST, F_SIZE, F_THREADS, F_SEED, F_SAMPLES, F_R_RANGE, F_U_RANGE, F_OUT, F_RESUME, F_FORCE, F_STOP_AFTER,
-       F_QUIET, F_NOPTS };
+       F_QUIET, F_HDRP, F_NOPTS };
 static const cli_opt k_fit_opts[F_NOPTS] = {
     {.name = "--brdf", .metavar = "NAME", .kind = CLI_OPT_STRING, .def = "ggx", .help = k_brdf_help},
     {.name = "--list", .kind = CLI_OPT_FLAG,
@@ -79,6 +79,9 @@ static const cli_opt k_fit_opts[F_NOPTS] = {
     {.name = "--stop-after", .metavar = "K", .kind = CLI_OPT_INT, .lo = 1, .hi = 4096,
      .help = "(testing) stop as if interrupted after fitting K columns"},
     {.name = "--quiet", .kind = CLI_OPT_FLAG, .help = "no progress on stderr (shown only on a terminal anyway)"},
+    {.name = "--hdrp", .kind = CLI_OPT_FLAG,
+     .help = "also write <p>_hdrp.cs, Unity HDRP's LTC data fitted on HDRP's grid (a second fit as long as the "
+             "table's; default 64 x 64 layout only)"},
 };
 static const cli_command k_fit_cmd = {
     .name = "fit ltc",
@@ -97,7 +100,8 @@ static const cli_command k_fit_cmd = {
               "<p>.npy, <p>_fit.json (the float64 fit: a b c d, residual, iterations), <p>_gate.json; for\n"
               "engines (docs/tables.md \"Engines\"): <p>_legacy_1.dds, <p>_legacy_2.dds (legacy header),\n"
               "<p>.ktx2, <p>_f16.ktx2 (2-layer arrays, the latter Zstandard), <p>_1.exr, <p>_2.exr (R, G, B,\n"
-              "A), and for 64 x 64 tables <p>_three.js (three.js) and <p>_eevee.h (Blender EEVEE).\n\n"
+              "A), and for 64 x 64 tables <p>_three.js (three.js) and <p>_eevee.h (Blender EEVEE); with\n"
+              "--hdrp also <p>_hdrp.cs (Unity HDRP).\n\n"
               "exit status: 0 exported, 1 a gate check failed, 2 usage error, 3 I/O error, 4 fit failed,\n"
               "130 interrupted\n",
 };
@@ -336,6 +340,11 @@ int cli_fit(int argc, char **argv)
     bo.out_dir = v[F_OUT].set ? v[F_OUT].s : "out";
     bo.resume = v[F_RESUME].set;
     bo.force = v[F_FORCE].set;
+    bo.hdrp = v[F_HDRP].set;
+    if (bo.hdrp && !(fo->n_r == 64 && fo->n_u == 64 && fo->r_lo == 0.0 && fo->r_hi == 1.0 && fo->u_lo == 0.0 &&
+                     fo->u_hi == 1.0))
+        return cli_error(cmd, "--hdrp: Unity HDRP's file needs the default layout (--size 64, default --r-range "
+                              "and --u-range)");
     bo.tool = "mfkit fit ltc";
     bo.version = MFKIT_VERSION;
     bo.cancel = &g_cancel_int;

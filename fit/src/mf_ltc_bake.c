@@ -86,6 +86,7 @@ typedef struct texel_job {
     int pass;       /* 1: the first refit of every texel; 2: the further refits where needed */
     double *d1, *r1; /* per texel: d and residual of the first refit (NaN: not computed) */
     double *val;    /* per texel: the check's value, +inf if unusable */
+    const double *albedo; /* NULL, or 2 per texel: mf_ltc_gate_texel_albedo (the refits' magnitude) */
     signed char *stage; /* per texel: the refit that gave val (1..4), 0 if unusable */
     mf_status status;
 } texel_job;
@@ -101,7 +102,17 @@ static double texel_refit_d(texel_job *j, int ir, int iu, const mf_ltc *ltc, dou
         m9[i] = start->m[i / 3][i % 3];
     mf_ltcfit_entry e;
     *residual = INFINITY;
-    mf_status st = mf_ltcfit_entry_fit(j->model, mf_ltc_table_alpha(j->t, ir), mf_ltc_table_cos_theta(j->t, iu), m9, o, &e);
+    /* the model's albedo at the texel, when the caller computed it (the rule the fitter uses: the
+     * same refit, bit for bit, without its quadrature) */
+    size_t k = (size_t)ir + (size_t)j->nr * (size_t)iu;
+    mf_result alb, *albp = NULL;
+    if (j->albedo && isfinite(j->albedo[2 * k])) {
+        alb.val = j->albedo[2 * k];
+        alb.err = j->albedo[2 * k + 1];
+        albp = &alb;
+    }
+    mf_status st = mf_ltcfit_entry_fit_albedo(j->model, mf_ltc_table_alpha(j->t, ir), mf_ltc_table_cos_theta(j->t, iu),
+                                              m9, o, albp, &e);
     if (st == MF_ERR_ALLOC)
         j->status = MF_ERR_ALLOC;
     if (st != MF_OK)
@@ -310,8 +321,9 @@ static void texel_run_pass(texel_job *j, int pass)
     }
 }
 
-mf_status mf_ltc_bake_texel_check(const mf_table *t, const mf_brdf_model *model, const mf_ltcfit_options *fit,
-                                  uint64_t gate_seed, int threads, mf_check *c)
+/* mf_ltc_bake_texel_check with the model's albedo per texel given (NULL: each refit computes it). */
+static mf_status texel_check(const mf_table *t, const mf_brdf_model *model, const mf_ltcfit_options *fit,
+                             uint64_t gate_seed, int threads, const double *albedo, mf_check *c)
 {
     if (!c || !model || !fit || threads < 1 || !mf_ltc_gate_layout_ok(t, NULL, 0))
         return MF_ERR_DOMAIN;
@@ -320,6 +332,7 @@ mf_status mf_ltc_bake_texel_check(const mf_table *t, const mf_brdf_model *model,
                    MF_LTC_GATE_TEXEL_REL);
     texel_job j;
     texel_job_init(&j, t, model, fit, gate_seed, threads);
+    j.albedo = albedo;
     if (!texel_job_alloc(&j)) {
         texel_job_free(&j);
         mf_check_fail(c, "out of memory");
@@ -347,6 +360,84 @@ mf_status mf_ltc_bake_texel_check(const mf_table *t, const mf_brdf_model *model,
         return st;
     }
     return MF_OK;
+}
+
+mf_status mf_ltc_bake_texel_check(const mf_table *t, const mf_brdf_model *model, const mf_ltcfit_options *fit,
+                                  uint64_t gate_seed, int threads, mf_check *c)
+{
+    return texel_check(t, model, fit, gate_seed, threads, NULL, c);
+}
+
+/* The model's albedo at every texel (mf_ltc_gate_texel_albedo; NaN where it fails), over threads:
+ * the gate's albedo checks and the texel check's refits share it (one quadrature per texel instead
+ * of two, and none on one thread).  Texel k goes to worker k mod threads; each value is computed
+ * alone, so the array does not depend on the thread count. */
+typedef struct albedo_job {
+    const mf_table *t;
+    const mf_brdf_model *model;
+    double *out;
+    int threads, id;
+} albedo_job;
+
+static void *albedo_worker(void *arg)
+{
+    albedo_job *a = arg;
+    const int nr = (int)a->t->axes[0].size;
+    const size_t n = (size_t)nr * a->t->axes[1].size;
+    for (size_t k = (size_t)a->id; k < n; k += (size_t)a->threads) {
+        mf_result r;
+        if (mf_ltc_gate_texel_albedo(a->t, a->model, (int)(k % (size_t)nr), (int)(k / (size_t)nr), &r) == MF_OK) {
+            a->out[2 * k] = r.val;
+            a->out[2 * k + 1] = r.err;
+        } else {
+            a->out[2 * k] = a->out[2 * k + 1] = NAN;
+        }
+    }
+    return NULL;
+}
+
+/* NULL if out of memory (the gate then computes the albedo itself). */
+static double *texel_albedos(const mf_table *t, const mf_brdf_model *model, int threads)
+{
+    const size_t n = (size_t)t->axes[0].size * t->axes[1].size;
+    double *out = malloc(sizeof *out * 2 * n);
+    if (!out)
+        return NULL;
+    if (threads > 256)
+        threads = 256;
+    pthread_t tid[256];
+    albedo_job args[256];
+    int started[256] = {0};
+    for (int i = 0; i < threads; ++i) {
+        albedo_job a = {t, model, out, threads, i};
+        args[i] = a;
+        if (i > 0)
+            started[i] = pthread_create(&tid[i], NULL, albedo_worker, &args[i]) == 0;
+    }
+    albedo_worker(&args[0]);
+    for (int i = 1; i < threads; ++i) {
+        if (started[i])
+            pthread_join(tid[i], NULL);
+        else
+            albedo_worker(&args[i]);
+    }
+    return out;
+}
+
+typedef struct gate_thread_arg {
+    const mf_table *t;
+    const mf_brdf_model *model;
+    const mf_ltc_gate_options *go;
+    mf_check *checks;
+    int cap, n;
+    mf_status st;
+} gate_thread_arg;
+
+static void *gate_thread(void *arg)
+{
+    gate_thread_arg *a = arg;
+    a->st = mf_ltc_gate_run(a->t, a->model, a->go, a->checks, a->cap, &a->n);
+    return NULL;
 }
 
 /* ---- the gate report (JSON) ------------------------------------------------------------------
@@ -450,7 +541,7 @@ static mf_status export_all(const mf_ltc_bake_options *o, const mf_table *t, mf_
         }
         ++r->nfiles;
     }
-    if (dropin) { /* <stem>_hdrp.cs: Unity HDRP's LTC data, fitted on its grid (mf_ltcfit_hdrp.h) */
+    if (dropin && o->hdrp) { /* <stem>_hdrp.cs: Unity HDRP's LTC data, fitted on its grid (mf_ltcfit_hdrp.h) */
         const int n = MF_LTC_HDRP_SIZE;
         double *rows = malloc((size_t)n * n * 9 * sizeof *rows);
         mf_ltcfit_hdrp_report hr;
@@ -525,6 +616,11 @@ mf_status mf_ltc_bake(const mf_ltc_bake_options *o, mf_ltc_bake_report *r)
         set_msg(r, "%s: path too long", o->out_dir);
         return MF_ERR_DOMAIN;
     }
+    if (o->hdrp && !(o->fit.n_r == MF_LTC_HDRP_SIZE && o->fit.n_u == MF_LTC_HDRP_SIZE && o->fit.r_lo == 0.0 &&
+                     o->fit.r_hi == 1.0 && o->fit.u_lo == 0.0 && o->fit.u_hi == 1.0)) {
+        set_msg(r, "the HDRP file needs the default layout (64 x 64, default ranges)");
+        return MF_ERR_DOMAIN;
+    }
     char msg[1024] = "";
     mf_status st = mf_io_make_dirs(o->out_dir, msg, sizeof msg);
     if (st != MF_OK) {
@@ -568,20 +664,36 @@ mf_status mf_ltc_bake(const mf_ltc_bake_options *o, mf_ltc_bake_report *r)
     go.mc_samples = MF_LTC_BAKE_GATE_MC_SAMPLES;
     t0 = now_seconds();
     double c0 = cpu_seconds();
-    mf_status gs = mf_ltc_gate_run(&t, o->model, &go, r->checks, (int)(sizeof r->checks / sizeof r->checks[0]),
-                                   &r->nchecks);
+    double *albedo = mf_ltc_gate_layout_ok(&t, NULL, 0) ? texel_albedos(&t, o->model, fo.threads) : NULL;
+    go.albedo = albedo;
+    /* The library gate (single-threaded) runs in a thread of its own beside the texel check's
+     * workers when more than one thread is allowed: the two read the table and the albedo array
+     * only, and neither result depends on the other or on the timing. */
+    gate_thread_arg ga = {&t, o->model, &go, r->checks, (int)(sizeof r->checks / sizeof r->checks[0]), 0,
+                          MF_ERR_INTERNAL};
+    pthread_t gate_tid;
+    int gate_threaded = fo.threads > 1 && pthread_create(&gate_tid, NULL, gate_thread, &ga) == 0;
+    if (!gate_threaded)
+        gate_thread(&ga);
+    /* the texel check: every texel against a fresh fit of it (mf_ltc_bake_texel_check) */
+    mf_check tc;
+    mf_status ts = MF_OK;
+    if (gate_threaded || ga.st == MF_OK || ga.st == MF_ERR_CHECK_FAILED)
+        ts = texel_check(&t, o->model, &fo, go.seed, fo.threads, albedo, &tc);
+    if (gate_threaded)
+        pthread_join(gate_tid, NULL);
+    mf_status gs = ga.st;
+    r->nchecks = ga.n;
     if (gs == MF_OK || gs == MF_ERR_CHECK_FAILED) {
-        /* the texel check: every texel against a fresh fit of it (mf_ltc_bake_texel_check) */
-        mf_check *tc = &r->checks[r->nchecks];
-        mf_status ts = mf_ltc_bake_texel_check(&t, o->model, &fo, go.seed, fo.threads, tc);
         if (ts != MF_OK)
             gs = ts;
         else {
-            ++r->nchecks;
-            if (!tc->passed)
+            r->checks[r->nchecks++] = tc;
+            if (!tc.passed)
                 gs = MF_ERR_CHECK_FAILED;
         }
     }
+    free(albedo);
     r->gate_seconds = now_seconds() - t0;
     r->gate_cpu_seconds = cpu_seconds() - c0;
     if (gs != MF_OK && gs != MF_ERR_CHECK_FAILED) {

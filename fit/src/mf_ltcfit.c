@@ -121,6 +121,10 @@ typedef struct {
     double scale;                  /* the weights' factor to the quadrature magnitude */
     double invn;                   /* scale / N */
     double magnitude, magnitude_err, fresnel;
+    double *sc_dot; /* scratch of texel_light_sums: the cap dot products of a centre's candidates */
+    int *sc_in;     /* and the indices inside one light (all sized for the texel's directions) */
+    double *sc_x, *sc_y, *sc_z; /* the candidates' components */
+    int64_t *sc_mask;           /* the candidates' edge-test results */
     mf_vec3 lobe;   /* mean direction m of f cos (unit, xz plane); the lobe frame is R = [[mz, 0, mx],
                      * [0, 1, 0], [-mx, 0, mz]] (R z = m), and the solver's parameters are those of
                      * M' = R^T M = [[a', 0, b'], [0, c', 0], [d', 0, 1]]: the same 4-parameter family
@@ -164,14 +168,48 @@ static mf_vec3 to_lobe(mf_vec3 m, mf_vec3 v)
     return mf_vec3_make(m.z * v.x - m.x * v.z, v.y, m.x * v.x + m.z * v.z);
 }
 
+/* A texel without its scratch (texel_prepare allocates it); texel_free frees both. */
+static texel *texel_new(void)
+{
+    texel *t = malloc(sizeof *t);
+    if (t)
+        t->sc_dot = t->sc_x = NULL, t->sc_in = NULL, t->sc_mask = NULL;
+    return t;
+}
+
+static void texel_free(texel *t)
+{
+    if (t) {
+        free(t->sc_dot);
+        free(t->sc_in);
+        free(t->sc_x);
+        free(t->sc_mask);
+        free(t);
+    }
+}
+
 /* Samples, magnitude, lobe statistics, lights and their BRDF integrals of one texel. */
 static mf_status texel_prepare(const mf_brdf_model *m, double alpha, double cos_theta, const uint32_t scr[2],
-                               workspace *ws, texel *t)
+                               const mf_result *albedo, workspace *ws, texel *t)
 {
     mf_vec3 wo = view_dir(cos_theta);
     ws->n = cos_theta < GRAZING_COS ? GRAZING_FACTOR * ws->base : ws->base;
-    mf_status st = texel_magnitude(m, alpha, wo, ws, t);
-    if (st != MF_OK)
+    t->sc_dot = malloc(sizeof *t->sc_dot * (size_t)ws->n);
+    t->sc_in = malloc(sizeof *t->sc_in * (size_t)ws->n);
+    t->sc_x = malloc(sizeof *t->sc_x * 3 * (size_t)ws->n);
+    t->sc_mask = malloc(sizeof *t->sc_mask * (size_t)ws->n);
+    if (!t->sc_dot || !t->sc_in || !t->sc_x || !t->sc_mask)
+        return MF_ERR_ALLOC;
+    t->sc_y = t->sc_x + ws->n;
+    t->sc_z = t->sc_y + ws->n;
+    mf_status st = MF_OK;
+    if (albedo) { /* given (mf_ltcfit_entry_fit_albedo): the same rule's value; no Fresnel moment */
+        t->magnitude = albedo->val;
+        t->magnitude_err = albedo->err;
+        t->fresnel = NAN;
+        if (!isfinite(albedo->val))
+            return MF_ERR_DOMAIN;
+    } else if ((st = texel_magnitude(m, alpha, wo, ws, t)) != MF_OK)
         return st;
     for (int j = 0; j < ws->n; ++j)
         mf_sobol2((uint32_t)j, scr[0], scr[1], ws->u + 2 * j);
@@ -238,11 +276,115 @@ static mf_status texel_prepare(const mf_brdf_model *m, double alpha, double cos_
     return MF_OK;
 }
 
+/* The sums over the live directions inside each light k (light_inside's test: the bounding cap,
+ * then the edge planes), in index order: out[4 k + 0..3] = sum of w, and with cv also of cw, cw^2
+ * and cw w (light_sum, light_sums_cv).  The same sums, bit for bit, with less work: lights whose
+ * centres are the same bits (the 16 lights about the lobe's mean, the pairs of side lights) share
+ * one pass over the directions, whose cap dot products (the same expression as light_inside's)
+ * are kept for the candidates of the widest cap and narrowed in place for each smaller one (a
+ * direction within a cap is within every wider cap of the same centre).  48 passes over the
+ * directions become 16. */
+static void texel_light_sums(const texel *t, const workspace *ws, int cv, double *out)
+{
+    const int live = t->live;
+    const double *x = ws->x, *y = ws->y, *z = ws->z;
+    int *cand = ws->cand, *in = t->sc_in;
+    double *dot = t->sc_dot;
+    unsigned char done[LIGHTS_MAX] = {0};
+    for (int k0 = 0; k0 < t->k; ++k0) {
+        if (done[k0])
+            continue;
+        /* the lights of this centre, widest cap (smallest cos_radius) first (stable) */
+        int grp[LIGHTS_MAX] = {0}, ng = 0;
+        const mf_vec3 c = t->lights[k0].centre;
+        for (int k = k0; k < t->k; ++k)
+            if (!done[k] && memcmp(&t->lights[k].centre, &c, sizeof c) == 0) {
+                int i = ng++;
+                while (i > 0 && t->lights[grp[i - 1]].cos_radius > t->lights[k].cos_radius) {
+                    grp[i] = grp[i - 1];
+                    --i;
+                }
+                grp[i] = k;
+                done[k] = 1;
+            }
+        const double cx = c.x, cy = c.y, cz = c.z, cr0 = t->lights[grp[0]].cos_radius;
+        double *X = t->sc_x, *Y = t->sc_y, *Z = t->sc_z;
+        int64_t *mask = t->sc_mask;
+        int m = 0;
+        for (int j = 0; j < live; ++j) {
+            double d = x[j] * cx + y[j] * cy + z[j] * cz;
+            cand[m] = j;
+            dot[m] = d;
+            X[m] = x[j];
+            Y[m] = y[j];
+            Z[m] = z[j];
+            m += d >= cr0;
+        }
+        double cr_done = cr0;
+        for (int g = 0; g < ng; ++g) {
+            const light *l = &t->lights[grp[g]];
+            const double cr = l->cos_radius;
+            if (cr != cr_done) { /* a smaller cap: narrow the candidates in place */
+                int m2 = 0;
+                for (int i = 0; i < m; ++i) {
+                    cand[m2] = cand[i];
+                    dot[m2] = dot[i];
+                    X[m2] = X[i];
+                    Y[m2] = Y[i];
+                    Z[m2] = Z[i];
+                    m2 += dot[i] >= cr;
+                }
+                m = m2;
+                cr_done = cr;
+            }
+            /* every edge plane tested (light_inside's test without its early exit: the same
+             * answer, the tests have no side effects), edge by edge over the candidates'
+             * component arrays, which the compiler vectorises (the same operations per element) */
+            const int ne = l->poly.n;
+            for (int i = 0; i < m; ++i)
+                mask[i] = 1;
+            for (int e = 0; e < ne; ++e) {
+                const double ex = l->edge_n[e].x, ey = l->edge_n[e].y, ez = l->edge_n[e].z;
+                for (int i = 0; i < m; ++i)
+                    mask[i] &= X[i] * ex + Y[i] * ey + Z[i] * ez > 0.0;
+            }
+            int n = 0;
+            for (int i = 0; i < m; ++i) {
+                in[n] = cand[i];
+                n += (int)mask[i];
+            }
+            double *o = out + 4 * grp[g];
+            if (!cv) {
+                double sy = 0.0;
+                for (int i = 0; i < n; ++i)
+                    sy += ws->w[in[i]];
+                o[0] = sy;
+                o[1] = o[2] = o[3] = 0.0;
+            } else {
+                double sy = 0.0, sx = 0.0, sxx = 0.0, sxy = 0.0;
+                for (int i = 0; i < n; ++i) {
+                    int j = in[i];
+                    sy += ws->w[j];
+                    sx += ws->cw[j];
+                    sxx += ws->cw[j] * ws->cw[j];
+                    sxy += ws->cw[j] * ws->w[j];
+                }
+                o[0] = sy;
+                o[1] = sx;
+                o[2] = sxx;
+                o[3] = sxy;
+            }
+        }
+    }
+}
+
 /* The targets from the samples alone: I_k = Y^_k. */
 static void texel_targets_raw(texel *t, const workspace *ws)
 {
+    double sums[4 * LIGHTS_MAX];
+    texel_light_sums(t, ws, 0, sums);
     for (int k = 0; k < t->k; ++k) {
-        t->target[k] = t->raw_target[k] = light_sum(&t->lights[k], ws, t->live) * t->invn;
+        t->target[k] = t->raw_target[k] = sums[4 * k] * t->invn;
         t->inv_weight[k] = t->lights[k].factor / (t->target[k] + WEIGHT_FLOOR * t->magnitude + 1e-300);
     }
 }
@@ -276,10 +418,11 @@ static void texel_control_variate(texel *t, workspace *ws, const double p0[4])
         return;
     }
     const double n = ws->n;
+    double sums[4 * LIGHTS_MAX];
+    texel_light_sums(t, ws, 1, sums);
     for (int k = 0; k < t->k; ++k) {
         const light *l = &t->lights[k];
-        double sm[4];
-        light_sums_cv(l, ws, t->live, sm);
+        const double *sm = sums + 4 * k;
         /* y_j = scale w_j */
         double my = sm[0] * t->invn, mx = sm[1] / n;
         double sxx = sm[2] - n * mx * mx, sxy = t->scale * sm[3] - n * mx * my;
@@ -339,7 +482,10 @@ static int residual_fn(void *user, const double *p, double *res, double *jac)
     return 0;
 }
 
-static double cost_at(const texel *t, const double p[4])
+/* The cost at p, or INFINITY as soon as its partial sum reaches `bound` (the terms are squares
+ * added in a fixed order, so the partial sums never decrease: a cost that stops early is >= bound,
+ * and one below bound is the same bits as the full sum).  cost_at: no bound. */
+static double cost_below(const texel *t, const double p[4], double bound)
 {
     if (!(p[0] > 0.0) || !(p[2] > 0.0) || !(p[0] - p[1] * p[3] > 0.0))
         return INFINITY;
@@ -347,6 +493,8 @@ static double cost_at(const texel *t, const double p[4])
     for (int k = 0; k < t->k; ++k) {
         double r = (t->magnitude * ltc_integral_value(&t->lights[k].lobe_poly, p) - t->target[k]) * t->inv_weight[k];
         c += r * r;
+        if (c >= bound)
+            return INFINITY;
     }
     double pr[PROX_RESIDUALS];
     prox_residuals(t, p, pr);
@@ -355,10 +503,18 @@ static double cost_at(const texel *t, const double p[4])
     return c;
 }
 
+static double cost_at(const texel *t, const double p[4])
+{
+    return cost_below(t, p, INFINITY);
+}
+
 /* The closed-form start: the cosine lobe scaled by s about the lobe's mean direction,
  * M' = diag(s, s, 1) in the lobe frame, with s the best of the log grid s = 10^(-4.5 + 0.25 i),
- * i = 0..20 (cost evaluated at each).  Returns the cost at the chosen start. */
-static double closed_form_start(const texel *t, double p[4])
+ * i = 0..20 (the first of equal costs).  `bound`: only a cost below it matters (the cost of the
+ * warm start, INFINITY without one); a grid point's cost stops being summed once it reaches the
+ * bound or the best so far (cost_below), which changes no choice.  Returns the cost at the chosen
+ * start, or INFINITY (p then unchanged from the identity) if no grid point costs less than bound. */
+static double closed_form_start(const texel *t, double p[4], double bound)
 {
     double best = INFINITY;
     p[0] = p[2] = 1.0;
@@ -366,7 +522,7 @@ static double closed_form_start(const texel *t, double p[4])
     for (int i = 0; i <= 20; ++i) {
         double s = pow(10.0, -4.5 + 0.25 * i);
         double q[4] = {s, 0.0, s, 0.0};
-        double c = cost_at(t, q);
+        double c = cost_below(t, q, fmin(best, bound));
         if (c < best) {
             best = c;
             memcpy(p, q, sizeof q);
@@ -405,17 +561,18 @@ static int lobe_params(mf_vec3 m, mf_mat3 mv, double q[4])
  * view-frame matrix of the previous texel points many lobe widths away from this texel's lobe:
  * at GGX alpha 0.001, 1.3 deg it was a poor start and a useless control variate).  lobe_out: the
  * fitted lobe-frame parameters (may be NULL). */
-static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_theta, const double *start,
+static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_theta, const mf_result *albedo,
+                           const double *start,
                            const double *lobe_start, const mf_ltcfit_options *o, const uint32_t scr[2],
                            workspace *ws, mf_ltcfit_entry *out, double *lobe_out)
 {
-    texel *t = malloc(sizeof *t);
+    texel *t = texel_new();
     if (!t)
         return MF_ERR_ALLOC;
     memset(out, 0, sizeof *out);
-    mf_status st = texel_prepare(m, alpha, cos_theta, scr, ws, t);
+    mf_status st = texel_prepare(m, alpha, cos_theta, scr, albedo, ws, t);
     if (st != MF_OK) {
-        free(t);
+        texel_free(t);
         return st;
     }
     out->magnitude = t->magnitude;
@@ -431,7 +588,7 @@ static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_thet
             lobe_out[0] = lobe_out[2] = 1.0;
             lobe_out[1] = lobe_out[3] = 0.0;
         }
-        free(t);
+        texel_free(t);
         return MF_OK;
     }
     /* the control variate from the warm start (previous texel of the column), or at the column's
@@ -442,7 +599,7 @@ static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_thet
                           : start && lobe_params(t->lobe, mf_ltc_matrix_general(start), q);
     if (!warm) {
         texel_targets_raw(t, ws);
-        closed_form_start(t, q);
+        closed_form_start(t, q, INFINITY);
     }
     texel_control_variate(t, ws, q);
     t->prox = 0.0;
@@ -450,8 +607,10 @@ static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_thet
         t->prox = PROX_WEIGHT;
         memcpy(t->prox_at, q, sizeof q);
     }
-    double c0 = closed_form_start(t, p);
-    if (warm && cost_at(t, q) <= c0)
+    /* the warm start unless some grid point costs less (a NaN warm cost never wins) */
+    double cq = warm ? cost_at(t, q) : NAN;
+    double c0 = closed_form_start(t, p, isnan(cq) ? INFINITY : cq);
+    if (warm && cq <= c0)
         memcpy(p, q, sizeof p);
     double lower[4] = {A_MIN, -INFINITY, A_MIN, -INFINITY}, upper[4] = {INFINITY, INFINITY, INFINITY, INFINITY};
     mf_solver_options so;
@@ -463,7 +622,7 @@ static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_thet
     mf_solver_summary sum;
     st = mf_solver_least_squares(4, t->k + PROX_RESIDUALS, residual_fn, t, p, lower, upper, &so, &sum);
     if (st != MF_OK && st != MF_ERR_NO_CONVERGENCE) {
-        free(t);
+        texel_free(t);
         return st;
     }
     /* The mirror convention.  A lobe whose mean is (near) the normal is (nearly) symmetric under
@@ -501,7 +660,7 @@ static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_thet
     out->residual = sqrt(cost_at(t, p) / t->k);
     if (lobe_out)
         memcpy(lobe_out, p, sizeof p);
-    free(t);
+    texel_free(t);
     return MF_OK;
 }
 
@@ -513,8 +672,8 @@ static int check_options(const mf_ltcfit_options *o)
            o->r_lo < o->r_hi && o->u_lo >= 0.0 && o->u_hi <= 1.0 && o->u_lo < o->u_hi;
 }
 
-mf_status mf_ltcfit_entry_fit(const mf_brdf_model *model, double alpha, double cos_theta, const double *start,
-                              const mf_ltcfit_options *o, mf_ltcfit_entry *out)
+mf_status mf_ltcfit_entry_fit_albedo(const mf_brdf_model *model, double alpha, double cos_theta, const double *start,
+                                     const mf_ltcfit_options *o, const mf_result *albedo, mf_ltcfit_entry *out)
 {
     if (!model || !model->eval_cos || !check_options(o) || !(alpha > 0.0) || !(cos_theta > 0.0 && cos_theta <= 1.0) ||
         !out)
@@ -526,9 +685,15 @@ mf_status mf_ltcfit_entry_fit(const mf_brdf_model *model, double alpha, double c
     }
     uint32_t scr[2];
     sobol_scramble(o->seed, scr);
-    mf_status st = fit_texel(model, alpha, cos_theta, start, NULL, o, scr, &ws, out, NULL);
+    mf_status st = fit_texel(model, alpha, cos_theta, albedo, start, NULL, o, scr, &ws, out, NULL);
     ws_free(&ws);
     return st;
+}
+
+mf_status mf_ltcfit_entry_fit(const mf_brdf_model *model, double alpha, double cos_theta, const double *start,
+                              const mf_ltcfit_options *o, mf_ltcfit_entry *out)
+{
+    return mf_ltcfit_entry_fit_albedo(model, alpha, cos_theta, start, o, NULL, out);
 }
 
 mf_status mf_ltcfit_objective(const mf_brdf_model *model, double alpha, double cos_theta, const mf_ltcfit_options *o,
@@ -537,14 +702,14 @@ mf_status mf_ltcfit_objective(const mf_brdf_model *model, double alpha, double c
     if (!model || !check_options(o) || !(alpha > 0.0) || !(cos_theta > 0.0 && cos_theta <= 1.0) || !res)
         return MF_ERR_DOMAIN;
     workspace ws;
-    texel *t = malloc(sizeof *t);
+    texel *t = texel_new();
     if (!t || !ws_init(&ws, o->samples)) {
-        free(t);
+        texel_free(t);
         return MF_ERR_ALLOC;
     }
     uint32_t scr[2];
     sobol_scramble(o->seed, scr);
-    mf_status st = texel_prepare(model, alpha, cos_theta, scr, &ws, t);
+    mf_status st = texel_prepare(model, alpha, cos_theta, scr, NULL, &ws, t);
     if (st == MF_OK)
         texel_targets_raw(t, &ws);
     double r[LIGHTS_MAX + PROX_RESIDUALS], jb[4 * (LIGHTS_MAX + PROX_RESIDUALS)];
@@ -556,7 +721,7 @@ mf_status mf_ltcfit_objective(const mf_brdf_model *model, double alpha, double c
             memcpy(jac, jb, sizeof *jac * 4 * (size_t)t->k);
     }
     ws_free(&ws);
-    free(t);
+    texel_free(t);
     return st;
 }
 
@@ -770,7 +935,7 @@ static void *worker(void *arg)
         for (int u = 0; u < n_u && st == MF_OK; ++u) {
             if (stop_requested(j))
                 break;
-            st = fit_texel(j->model, alpha, mf_ltc_table_cos_theta(j->table, u), NULL, have_prev ? lobe_prev : NULL,
+            st = fit_texel(j->model, alpha, mf_ltc_table_cos_theta(j->table, u), NULL, NULL, have_prev ? lobe_prev : NULL,
                            j->o, j->scr, &ws, &col[u], lobe_prev);
             if (st == MF_OK) {
                 have_prev = 1;

@@ -37,6 +37,7 @@ void mf_ltc_gate_options_default(mf_ltc_gate_options *o)
     o->polygon_budget_mean = MF_LTC_GATE_POLYGON_MEAN;
     o->polygon_budget_entry = MF_LTC_GATE_POLYGON_ENTRY;
     o->stats = NULL;
+    o->albedo = NULL;
 }
 
 mf_vec3 mf_ltc_gate_view(double cos_theta)
@@ -336,6 +337,14 @@ static void out_of_memory(gate_ctx *g, mf_check *c)
     mf_check_fail(c, "out of memory");
 }
 
+mf_status mf_ltc_gate_texel_albedo(const mf_table *t, const mf_brdf_model *model, int ir, int iu, mf_result *out)
+{
+    gate_layout L;
+    if (!out || !model || !layout_of(t, &L) || ir < 0 || iu < 0 || ir >= L.nr || iu >= L.nu)
+        return MF_ERR_DOMAIN;
+    return gate_albedo(model, mf_ltc_table_alpha(t, ir), mf_ltc_gate_view(mf_ltc_table_cos_theta(t, iu)), out);
+}
+
 /* The model's albedo at texel (ir, iu) by the 64 x 64 quadrature, cached; 0 if it failed. */
 static int quad_albedo(gate_ctx *g, int ir, int iu, mf_result *q)
 {
@@ -346,7 +355,7 @@ static int quad_albedo(gate_ctx *g, int ir, int iu, mf_result *q)
         if (!g->qalb)
             return 0;
         for (size_t i = 0; i < n; ++i)
-            g->qalb[i] = NAN;
+            g->qalb[i] = g->o.albedo ? g->o.albedo[i] : NAN;
     }
     if (isnan(g->qalb[2 * texel])) {
         const mf_table *t = g->t;

@@ -74,6 +74,11 @@ typedef struct mf_ltc_gate_options {
     double polygon_budget_mean;  /* <= 0: the default MF_LTC_GATE_POLYGON_MEAN */
     double polygon_budget_entry; /* <= 0: the default MF_LTC_GATE_POLYGON_ENTRY */
     mf_ltc_gate_stats *stats; /* optional output, NULL by default */
+    /* Optional, NULL by default: the model's albedo at every texel (2 doubles per texel, index
+     * 2 (ir + nr iu): val and err of mf_ltc_gate_texel_albedo for this table and model), computed
+     * beforehand, e.g. by a caller that parallelises it; a NaN val is computed here.  It must be
+     * what mf_ltc_gate_texel_albedo returns: the results are then the same bits as without it. */
+    const double *albedo;
 } mf_ltc_gate_options;
 
 /* Default error budgets of the polygon check, in units of the texel's albedo (docs/validation.md). */
@@ -84,6 +89,11 @@ typedef struct mf_ltc_gate_options {
 #define MF_LTC_GATE_MAX_CHECKS 9
 
 void mf_ltc_gate_options_default(mf_ltc_gate_options *o);
+
+/* The model's albedo at texel (ir, iu) of the LTC table t, as the gate's albedo checks compute it
+ * (mf_model_albedo, 64 points per axis, at alpha = mf_ltc_table_alpha and the view
+ * mf_ltc_gate_view(mf_ltc_table_cos_theta)).  MF_ERR_DOMAIN for a bad table, texel or model. */
+mf_status mf_ltc_gate_texel_albedo(const mf_table *t, const mf_brdf_model *model, int ir, int iu, mf_result *out);
 
 /* Runs the gate on t.  model may be NULL: then only the model-free checks run.  o may be NULL
  * (defaults).  Writes *count checks into checks[0..cap-1] (cap >= MF_LTC_GATE_MAX_CHECKS, else

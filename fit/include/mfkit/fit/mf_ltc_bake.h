@@ -45,6 +45,10 @@ typedef struct {
     const volatile int *cancel; /* polled between columns; non-zero stops (see interrupted) */
     void (*progress)(void *user, int done, int total); /* fitted texels, from the fitting threads */
     void *progress_user;
+    int hdrp;                   /* also fit Unity HDRP's grid and write <p>_hdrp.cs (mf_ltcfit_hdrp.h):
+                                   a second fit of 64 x 64 texels, as long as the table's own, so
+                                   opt-in; only for the default 64 x 64 layout (else MF_ERR_DOMAIN
+                                   before the fit) */
 } mf_ltc_bake_options;
 
 typedef enum {

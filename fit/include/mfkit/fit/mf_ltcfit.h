@@ -130,6 +130,15 @@ void mf_ltcfit_result_free(mf_ltcfit_result *r);
 mf_status mf_ltcfit_entry_fit(const mf_brdf_model *model, double alpha, double cos_theta, const double *start,
                               const mf_ltcfit_options *o, mf_ltcfit_entry *out) MF_WARN_UNUSED;
 
+/* mf_ltcfit_entry_fit with the texel's albedo given instead of computed (albedo NULL: computed):
+ * the fitter computes it by mf_model_albedo_fresnel with 64 points per axis, the rule and points of
+ * mf_ltc_gate_texel_albedo, so a caller holding that value (the texel check of mf_ltc_bake) gets
+ * the same fit, bit for bit, without the quadrature.  out->fresnel is NaN (not computed); a
+ * non-finite albedo->val is MF_ERR_DOMAIN. */
+mf_status mf_ltcfit_entry_fit_albedo(const mf_brdf_model *model, double alpha, double cos_theta, const double *start,
+                                     const mf_ltcfit_options *o, const mf_result *albedo,
+                                     mf_ltcfit_entry *out) MF_WARN_UNUSED;
+
 /* The fitter's objective for one texel at parameters p = (a, b, c, d): fills res[0..K-1] (K =
  * mf_ltcfit_light_count()) and, if jac != NULL, the K x 4 Jacobian.  For tests. */
 int mf_ltcfit_light_count(void);
