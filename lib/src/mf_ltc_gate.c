@@ -772,7 +772,10 @@ static void check_albedo_mc(void *ctx, mf_check *c)
         return;
     for (long k = 0; k < g->nent; ++k) {
         const gate_entry *e = &g->ent[k];
-        record_entry(c, e, fabs(e->mag - e->alb.val) / (GATE_Z * e->alb.err + 1e-3 * fabs(e->mag)),
+        /* magnitude and MC albedo both exactly 0 (a sheen texel whose albedo underflows, every
+         * sample's weight 0, se 0): exact agreement, 0, not 0/0; any other NaN stays NaN */
+        double diff = fabs(e->mag - e->alb.val);
+        record_entry(c, e, diff == 0.0 ? 0.0 : diff / (GATE_Z * e->alb.err + 1e-3 * fabs(e->mag)),
                      e->mag > e->alb.val ? "magnitude above MC" : "magnitude below MC");
     }
 }
