@@ -102,9 +102,56 @@ static uint64_t fnv(uint64_t hsh, const void *p, size_t n)
     return hsh;
 }
 
+/* --albedo-check K: the one-texel albedo of K texels (spread over the map) at every view, by
+ * mf_prefilter_mix_albedo (the fits' rule, MF_PREFILTER_ALBEDO_N) and by mf_model_albedo at
+ * n = 32 and 128, against mf_model_albedo at n = 512. */
+static int check_albedo(const double *nrm, int size, const mf_prefilter_options *o, int k)
+{
+    const mf_brdf_model *base = mf_brdf_model_find(o->base == MF_PREFILTER_BASE_LAMBERT ? "lambert" : "ggx");
+    mf_brdf_params p = mf_brdf_params_iso(o->base == MF_PREFILTER_BASE_LAMBERT ? 1.0 : o->alpha);
+    static const int rule_n[2] = {32, 128};
+    double worst[3] = {0}, sum[3] = {0}, cpu[3] = {0}, under[3] = {0};
+    long n = 0;
+    long ntex = (long)size * size, step = ntex / k > 0 ? ntex / k : 1;
+    for (long t = 0; t < ntex; t += step) {
+        mf_prefilter_mix one;
+        if (mf_prefilter_mix_init(&one, base, nrm + 3 * t, 1) != MF_OK)
+            return 1;
+        for (int a = 0; a < o->n_theta; ++a)
+            for (int b = 0; b < o->n_phi; ++b) {
+                double th = mf_prefilter_theta(o, a), ph = mf_prefilter_phi(o, b);
+                mf_vec3 wo = mf_vec3_make(sin(th) * cos(ph), sin(th) * sin(ph), cos(th));
+                mf_result r[3], ref;
+                for (int q = 0; q < 3; ++q) {
+                    double c0 = cpu_seconds();
+                    mf_status st = q == 0 ? mf_prefilter_mix_albedo(&one, &p, wo, &r[0])
+                                          : mf_model_albedo(&one.model, &p, wo, rule_n[q - 1], &r[q]);
+                    if (st != MF_OK)
+                        return 1;
+                    cpu[q] += cpu_seconds() - c0;
+                }
+                if (mf_model_albedo(&one.model, &p, wo, 512, &ref) != MF_OK)
+                    return 1;
+                for (int q = 0; q < 3; ++q) {
+                    double e = fabs(r[q].val - ref.val);
+                    worst[q] = fmax(worst[q], e), sum[q] += e;
+                    under[q] += e > r[q].err; /* the estimate |Q(n) - Q(n/2)| below the true error */
+                }
+                ++n;
+            }
+        mf_prefilter_mix_free(&one);
+    }
+    printf("albedo check: %ld (texel, view) pairs, |Q(n) - Q(512)|:\n", n);
+    for (int q = 0; q < 3; ++q)
+        printf("  n = %3d%s: worst %.2e, mean %.2e, estimate below the error at %.0f %%, %.3f ms CPU each\n",
+               q ? rule_n[q - 1] : MF_PREFILTER_ALBEDO_N, q ? "" : " (mf_prefilter_mix_albedo)", worst[q], sum[q] / n,
+               100.0 * under[q] / n, 1e3 * cpu[q] / n);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
-    int size = 32, top_levels = 0;
+    int size = 32, top_levels = 0, albedo_check = 0;
     mf_prefilter_options o;
     mf_prefilter_options_default(&o);
     o.threads = 2;
@@ -118,6 +165,8 @@ int main(int argc, char **argv)
             o.threads = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--samples") && i + 1 < argc)
             o.samples = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--albedo-check") && i + 1 < argc)
+            albedo_check = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--levels") && i + 1 < argc)
             top_levels = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--base") && i + 1 < argc) {
@@ -158,6 +207,8 @@ int main(int argc, char **argv)
            "threads %d, levels %d..%d\n",
            MFKIT_VERSION, size, size, lambert ? "lambert" : "ggx", o.n_theta, o.n_phi, o.samples, o.threads, first,
            nl_all);
+    if (albedo_check > 0)
+        return check_albedo(nrm, size, &o, albedo_check);
     mf_prefilter_level *lv = NULL;
     int nl = 0;
     char msg[256];
