@@ -98,6 +98,7 @@ typedef struct {
     int sym;         /* SYM_* flags */
     int fixed[NP];   /* parameters held at 0 */
     double wfloor;   /* the residual weight's floor in albedos (AWEIGHT_FLOOR, or RELATIVE_FLOOR) */
+    int family;      /* FAMILY_* of the lights */
 } atexel;
 
 /* The minimal rotation taking z to the unit m (about the axis z x m; m != -z):
@@ -297,6 +298,7 @@ static mf_status atexel_prepare(const mf_brdf_model *m, mf_brdf_params prm, doub
     double st = theta == 0.0 ? 0.0 : sin(theta), ct = theta == 0.0 ? 1.0 : cos(theta);
     mf_vec3 wo = mf_vec3_make(st * cp, st * sp, ct);
     t->sym = sym;
+    t->family = family;
     ws->n = ct < GRAZING_COS ? GRAZING_FACTOR * ws->base : ws->base;
     if (given_mag) { /* the caller's albedo (value, error); no Fresnel moment */
         t->magnitude = given_mag[0];
@@ -471,6 +473,118 @@ static double integral_value(const mf_vec3 *v, int n, const double adj[9])
     return ltc_clip_integrate_value(q, n);
 }
 
+/* integral_value and its gradient in p by reverse differentiation, written out (the forward dual
+ * numbers of integral_dual carry 7 derivatives through every operation; this pass costs about two
+ * value evaluations).  The value is bitwise integral_value's (the same operations in the same
+ * order as ltc_clip_integrate_value); the gradient agrees with integral_dual's to rounding.
+ * With q_i = A v_i (A = adj M'), the clipped polygon's vertices x_k (a q_i, or the point
+ * s + tau (e - s), tau = s.z / (s.z - e.z), on an edge crossing z = 0), u_k = x_k / |x_k| and
+ * E = 1/(2 pi) sum_k F(u_k, u_k+1), F(u, w) = theta / s c.z, c = u x w, s = |c|,
+ * theta = atan2(s, t), t = u.w:
+ *   dF/du = c.z / s dtheta/du - c.z theta / s^2 ds/du + theta / s (w.y, -w.x, 0),
+ *   ds/du = (w x c) / s, dtheta/du = (t ds/du - s w) / (s^2 + t^2), and for w with
+ *   ds/dw = (c x u) / s, dtheta/dw = (t ds/dw - s u) / (s^2 + t^2), dc.z/dw = (-u.y, u.x, 0);
+ *   dE/dx = (g - u (u.g)) / |x| for g = dE/du; dE/dA_rc = sum_i (dE/dq_i)_r v_i,c; and A's entries
+ *   are the 2 x 2 minors of M' (adj_value), bilinear in p. */
+static double integral_grad(const mf_vec3 *v, int n_in, const double *p, const double adj[9], double g[NP])
+{
+    mf_vec3 q[MF_POLYGON_MAX_VERTICES], cl[MF_POLYGON_MAX_VERTICES + 2], gq[MF_POLYGON_MAX_VERTICES];
+    double inv[MF_POLYGON_MAX_VERTICES + 2], tau[MF_POLYGON_MAX_VERTICES + 2];
+    int from[MF_POLYGON_MAX_VERTICES + 2]; /* the q index of a copy; -1 - i for the crossing on edge i */
+    for (int i = 0; i < NP; ++i)
+        g[i] = 0.0;
+    for (int i = 0; i < n_in; ++i) {
+        q[i].x = adj[0] * v[i].x + adj[1] * v[i].y + adj[2] * v[i].z;
+        q[i].y = adj[3] * v[i].x + adj[4] * v[i].y + adj[5] * v[i].z;
+        q[i].z = adj[6] * v[i].x + adj[7] * v[i].y + adj[8] * v[i].z;
+        gq[i] = mf_vec3_make(0.0, 0.0, 0.0);
+    }
+    int n = 0;
+    for (int i = 0; i < n_in; ++i) {
+        mf_vec3 s = q[i], e = q[(i + 1) % n_in];
+        int s_in = s.z >= 0.0, e_in = e.z >= 0.0;
+        if (s_in)
+            from[n] = i, cl[n++] = s;
+        if (s_in != e_in) {
+            double t = s.z / (s.z - e.z);
+            cl[n].x = s.x + t * (e.x - s.x);
+            cl[n].y = s.y + t * (e.y - s.y);
+            cl[n].z = 0.0;
+            tau[n] = t;
+            from[n++] = -1 - i;
+        }
+    }
+    double sum = 0.0;
+    if (n < 3)
+        return sum;
+    mf_vec3 u[MF_POLYGON_MAX_VERTICES + 2], gu[MF_POLYGON_MAX_VERTICES + 2];
+    for (int k = 0; k < n; ++k) {
+        mf_vec3 x = cl[k];
+        inv[k] = 1.0 / sqrt(x.x * x.x + x.y * x.y + x.z * x.z);
+        u[k].x = x.x * inv[k];
+        u[k].y = x.y * inv[k];
+        u[k].z = x.z * inv[k];
+        gu[k] = mf_vec3_make(0.0, 0.0, 0.0);
+    }
+    for (int k = 0; k < n; ++k) {
+        int k1 = (k + 1) % n;
+        mf_vec3 a = u[k], w = u[k1];
+        double cx = a.y * w.z - a.z * w.y, cy = a.z * w.x - a.x * w.z, cz = a.x * w.y - a.y * w.x;
+        double sn = sqrt(cx * cx + cy * cy + cz * cz);
+        double cth = a.x * w.x + a.y * w.y + a.z * w.z;
+        mf_vec3 dzu = mf_vec3_make(w.y, -w.x, 0.0), dzw = mf_vec3_make(-a.y, a.x, 0.0);
+        if (sn > 1e-12) {
+            double th = atan2(sn, cth);
+            sum = sum + th / sn * cz;
+            mf_vec3 c = mf_vec3_make(cx, cy, cz);
+            mf_vec3 dsu = mf_vec3_scale(mf_vec3_cross(w, c), 1.0 / sn), dsw = mf_vec3_scale(mf_vec3_cross(c, a), 1.0 / sn);
+            double den = 1.0 / (sn * sn + cth * cth);
+            mf_vec3 dtu = mf_vec3_scale(mf_vec3_sub(mf_vec3_scale(dsu, cth), mf_vec3_scale(w, sn)), den);
+            mf_vec3 dtw = mf_vec3_scale(mf_vec3_sub(mf_vec3_scale(dsw, cth), mf_vec3_scale(a, sn)), den);
+            double f1 = cz / sn, f2 = -cz * th / (sn * sn), f3 = th / sn;
+            gu[k] = mf_vec3_add(gu[k], mf_vec3_add(mf_vec3_add(mf_vec3_scale(dtu, f1), mf_vec3_scale(dsu, f2)),
+                                                   mf_vec3_scale(dzu, f3)));
+            gu[k1] = mf_vec3_add(gu[k1], mf_vec3_add(mf_vec3_add(mf_vec3_scale(dtw, f1), mf_vec3_scale(dsw, f2)),
+                                                     mf_vec3_scale(dzw, f3)));
+        } else if (cth > 0.0) {
+            sum = sum + cz;
+            gu[k] = mf_vec3_add(gu[k], dzu);
+            gu[k1] = mf_vec3_add(gu[k1], dzw);
+        }
+    }
+    for (int k = 0; k < n; ++k) {
+        mf_vec3 gx = mf_vec3_scale(mf_vec3_sub(gu[k], mf_vec3_scale(u[k], mf_vec3_dot(u[k], gu[k]))), inv[k]);
+        if (from[k] >= 0) {
+            gq[from[k]] = mf_vec3_add(gq[from[k]], gx);
+        } else {
+            int i = -1 - from[k], i1 = (i + 1) % n_in;
+            mf_vec3 s = q[i], e = q[i1];
+            double t = tau[k], d = s.z - e.z;
+            double gt = gx.x * (e.x - s.x) + gx.y * (e.y - s.y);
+            gq[i].x += gx.x * (1.0 - t), gq[i].y += gx.y * (1.0 - t), gq[i].z += gt * (-e.z / (d * d));
+            gq[i1].x += gx.x * t, gq[i1].y += gx.y * t, gq[i1].z += gt * (s.z / (d * d));
+        }
+    }
+    double ga[9] = {0.0};
+    for (int i = 0; i < n_in; ++i) {
+        const double r[3] = {gq[i].x, gq[i].y, gq[i].z}, c[3] = {v[i].x, v[i].y, v[i].z};
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b)
+                ga[3 * a + b] += r[a] * c[b];
+    }
+    /* adj = (d - e g, b g, -b d, e f - c, a - b f, b c - a e, c g - d f, -a g, a d) */
+    const double a = p[PA], b = p[PB], c = p[PC], d = p[PD], e = p[PE], f = p[PF], gg = p[PG];
+    const double k = 1.0 / (2.0 * MF_PI);
+    g[PA] = k * (ga[4] - e * ga[5] - gg * ga[7] + d * ga[8]);
+    g[PB] = k * (gg * ga[1] - d * ga[2] - f * ga[4] + c * ga[5]);
+    g[PC] = k * (-ga[3] + b * ga[5] + gg * ga[6]);
+    g[PD] = k * (ga[0] - b * ga[2] - f * ga[6] + a * ga[8]);
+    g[PE] = k * (-gg * ga[0] + f * ga[3] - a * ga[5]);
+    g[PF] = k * (e * ga[3] - b * ga[4] - d * ga[6]);
+    g[PG] = k * (-e * ga[0] + b * ga[1] + c * ga[6] - a * ga[7]);
+    return sum * (1.0 / (2.0 * MF_PI));
+}
+
 /* View-frame M = R_m M'. */
 static mf_mat3 view_matrix(const atexel *t, const double *p)
 {
@@ -584,14 +698,28 @@ static int residual_fn(void *user, const double *p, double *res, double *jac)
     const atexel *t = user;
     if (!valid(p))
         return 1;
-    dual adj[9];
-    adj_dual(p, adj);
-    for (int k = 0; k < t->k; ++k) {
-        dual e = integral_dual(t->lights[k].lobe_poly.v, t->lights[k].lobe_poly.n, adj);
-        res[k] = (t->magnitude * e.v - t->target[k]) * t->inv_weight[k];
-        if (jac)
-            for (int j = 0; j < NP; ++j)
-                jac[NP * k + j] = t->magnitude * e.d[j] * t->inv_weight[k];
+    if (t->family == FAMILY_SHAPED) { /* the written-out gradient (the table's fits keep the duals' bits) */
+        double adj[9], g[NP];
+        adj_value(p, adj);
+        for (int k = 0; k < t->k; ++k) {
+            const light *l = &t->lights[k];
+            double e = jac ? integral_grad(l->lobe_poly.v, l->lobe_poly.n, p, adj, g)
+                           : integral_value(l->lobe_poly.v, l->lobe_poly.n, adj);
+            res[k] = (t->magnitude * e - t->target[k]) * t->inv_weight[k];
+            if (jac)
+                for (int j = 0; j < NP; ++j)
+                    jac[NP * k + j] = t->magnitude * g[j] * t->inv_weight[k];
+        }
+    } else {
+        dual adj[9];
+        adj_dual(p, adj);
+        for (int k = 0; k < t->k; ++k) {
+            dual e = integral_dual(t->lights[k].lobe_poly.v, t->lights[k].lobe_poly.n, adj);
+            res[k] = (t->magnitude * e.v - t->target[k]) * t->inv_weight[k];
+            if (jac)
+                for (int j = 0; j < NP; ++j)
+                    jac[NP * k + j] = t->magnitude * e.d[j] * t->inv_weight[k];
+        }
     }
     for (int i = 0; i < NP; ++i) {
         double w = t->prox > 0.0 ? (is_scale(i) ? t->prox / t->prox_at[i] : t->prox) : 0.0;
@@ -680,19 +808,15 @@ static mf_mat3 polar_gauge(mf_mat3 m)
     return r;
 }
 
-static mf_status fit_entry(const mf_brdf_model *model, mf_brdf_params prm, double theta, double phi, int sym,
-                           int family, const double *given_mag, const double *lobe_start, const double *alt_start, const mf_ltcfit_aniso_options *o,
-                           const uint32_t scr[2], workspace *ws, mf_ltcfit_aniso_entry *out)
+/* The solve of a prepared entry: starts, control variate, least squares, stored gauge.  It reads
+ * the preparation (directions, lights, magnitude, lobe frame) and rewrites everything else it uses
+ * (targets, weights, proximal centre, control-variate weights), so two solves of one preparation
+ * give bit for bit what two separate fit_entry calls give. */
+static mf_status solve_entry(atexel *t, workspace *ws, const double *lobe_start, const double *alt_start,
+                             const mf_ltcfit_aniso_options *o, mf_ltcfit_aniso_entry *out)
 {
-    atexel *t = malloc(sizeof *t);
-    if (!t)
-        return MF_ERR_ALLOC;
+    mf_status st;
     memset(out, 0, sizeof *out);
-    mf_status st = atexel_prepare(model, prm, theta, phi, sym, family, given_mag, scr, ws, t);
-    if (st != MF_OK) {
-        free(t);
-        return st;
-    }
     t->wfloor = o->objective == MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE ? RELATIVE_FLOOR : AWEIGHT_FLOOR;
     out->magnitude = t->magnitude;
     out->magnitude_err = t->magnitude_err;
@@ -748,10 +872,8 @@ static mf_status fit_entry(const mf_brdf_model *model, mf_brdf_params prm, doubl
     so.parameter_tolerance = 1e-10;
     mf_solver_summary sum;
     st = mf_solver_least_squares(NP, t->k + NP + 1, residual_fn, t, p, lower, upper, &so, &sum);
-    if (st != MF_OK && st != MF_ERR_NO_CONVERGENCE) {
-        free(t);
+    if (st != MF_OK && st != MF_ERR_NO_CONVERGENCE)
         return st;
-    }
     mf_mat3 mv = polar_gauge(view_matrix(t, p));
     double nz = sqrt(mv.m[0][2] * mv.m[0][2] + mv.m[1][2] * mv.m[1][2] + mv.m[2][2] * mv.m[2][2]);
     for (int i = 0; i < 9; ++i)
@@ -761,8 +883,43 @@ static mf_status fit_entry(const mf_brdf_model *model, mf_brdf_params prm, doubl
     out->converged = sum.converged;
     t->prox = 0.0;
     out->residual = sqrt(cost_at(t, p) / t->k);
-    free(t);
     return MF_OK;
+}
+
+/* One entry: prepared, then solved from lobe_start (NULL: the closed-form start); two_starts (with
+ * lobe_start): solved a second time from the closed-form start on the same preparation, the lower
+ * residual kept and the iterations summed. */
+static mf_status fit_entry_starts(const mf_brdf_model *model, mf_brdf_params prm, double theta, double phi, int sym,
+                                  int family, const double *given_mag, const double *lobe_start,
+                                  const double *alt_start, int two_starts, const mf_ltcfit_aniso_options *o,
+                                  const uint32_t scr[2], workspace *ws, mf_ltcfit_aniso_entry *out)
+{
+    atexel *t = malloc(sizeof *t);
+    if (!t)
+        return MF_ERR_ALLOC;
+    memset(out, 0, sizeof *out);
+    mf_status st = atexel_prepare(model, prm, theta, phi, sym, family, given_mag, scr, ws, t);
+    if (st == MF_OK)
+        st = solve_entry(t, ws, lobe_start, alt_start, o, out);
+    if (st == MF_OK && two_starts && lobe_start) {
+        mf_ltcfit_aniso_entry e2;
+        st = solve_entry(t, ws, NULL, alt_start, o, &e2);
+        if (st == MF_OK) {
+            int it = out->iterations + e2.iterations;
+            if (e2.residual < out->residual)
+                *out = e2;
+            out->iterations = it;
+        }
+    }
+    free(t);
+    return st;
+}
+
+static mf_status fit_entry(const mf_brdf_model *model, mf_brdf_params prm, double theta, double phi, int sym,
+                           int family, const double *given_mag, const double *lobe_start, const double *alt_start, const mf_ltcfit_aniso_options *o,
+                           const uint32_t scr[2], workspace *ws, mf_ltcfit_aniso_entry *out)
+{
+    return fit_entry_starts(model, prm, theta, phi, sym, family, given_mag, lobe_start, alt_start, 0, o, scr, ws, out);
 }
 
 static int check_options(const mf_ltcfit_aniso_options *o)
@@ -792,7 +949,7 @@ static int sym_of(double theta, double phi)
 /* fit_entry for one entry on its own (the public one-entry fits): its own workspace and scramble. */
 static mf_status fit_entry_alone(const mf_brdf_model *model, mf_brdf_params prm, double theta, double phi, int sym,
                                  int family, const double *given_mag, const double *lobe_start, const double *alt_start,
-                                 const mf_ltcfit_aniso_options *o, mf_ltcfit_aniso_entry *out)
+                                 int two_starts, const mf_ltcfit_aniso_options *o, mf_ltcfit_aniso_entry *out)
 {
     workspace ws;
     if (!ws_init(&ws, o->samples)) {
@@ -801,7 +958,8 @@ static mf_status fit_entry_alone(const mf_brdf_model *model, mf_brdf_params prm,
     }
     uint32_t scr[2];
     sobol_scramble(o->seed, scr);
-    mf_status st = fit_entry(model, prm, theta, phi, sym, family, given_mag, lobe_start, alt_start, o, scr, &ws, out);
+    mf_status st = fit_entry_starts(model, prm, theta, phi, sym, family, given_mag, lobe_start, alt_start, two_starts,
+                                    o, scr, &ws, out);
     ws_free(&ws);
     return st;
 }
@@ -814,7 +972,7 @@ mf_status mf_ltcfit_aniso_entry_fit(const mf_brdf_model *model, double alpha_x, 
         !(theta >= 0.0 && theta < 0.5 * MF_PI) || !(phi >= 0.0 && phi < 2.0 * MF_PI) || !out)
         return MF_ERR_DOMAIN;
     mf_brdf_params prm = {alpha_x, alpha_y};
-    return fit_entry_alone(model, prm, theta, phi, sym_of(theta, phi), FAMILY_RANDOM, NULL, lobe_start, NULL, o, out);
+    return fit_entry_alone(model, prm, theta, phi, sym_of(theta, phi), FAMILY_RANDOM, NULL, lobe_start, NULL, 0, o, out);
 }
 
 mf_status mf_ltcfit_aniso_entry_fit_general(const mf_brdf_model *model, mf_brdf_params prm, double theta, double phi,
@@ -826,7 +984,21 @@ mf_status mf_ltcfit_aniso_entry_fit_general(const mf_brdf_model *model, mf_brdf_
         !(magnitude >= 0.0 && magnitude < INFINITY) || !(magnitude_err >= 0.0))
         return MF_ERR_DOMAIN;
     double mag[2] = {magnitude, magnitude_err};
-    return fit_entry_alone(model, prm, theta, phi, 0, FAMILY_SHAPED, mag, lobe_start, NULL, o, out);
+    return fit_entry_alone(model, prm, theta, phi, 0, FAMILY_SHAPED, mag, lobe_start, NULL, 0, o, out);
+}
+
+static mf_status entry_fit_mirrored(const mf_brdf_model *model, mf_brdf_params prm, double theta, int mirrors,
+                                    double magnitude, double magnitude_err, const double *lobe_start,
+                                    const double *alt_start, int two_starts, const mf_ltcfit_aniso_options *o,
+                                    mf_ltcfit_aniso_entry *out)
+{
+    if (!model || !model->eval_cos || !check_options(o) || !(prm.alpha_x > 0.0) || !(prm.alpha_y > 0.0) ||
+        !(theta >= 0.0 && theta < 0.5 * MF_PI) || !out || !(magnitude >= 0.0 && magnitude < INFINITY) ||
+        !(magnitude_err >= 0.0) || (mirrors & ~(SYM_X | SYM_Y)) || ((mirrors & SYM_X) && theta != 0.0))
+        return MF_ERR_DOMAIN;
+    double mag[2] = {magnitude, magnitude_err};
+    return fit_entry_alone(model, prm, theta, 0.0, mirrors, FAMILY_SHAPED, mag, lobe_start, alt_start, two_starts, o,
+                           out);
 }
 
 mf_status mf_ltcfit_aniso_entry_fit_mirrored(const mf_brdf_model *model, mf_brdf_params prm, double theta, int mirrors,
@@ -834,12 +1006,17 @@ mf_status mf_ltcfit_aniso_entry_fit_mirrored(const mf_brdf_model *model, mf_brdf
                                              const double *alt_start, const mf_ltcfit_aniso_options *o,
                                              mf_ltcfit_aniso_entry *out)
 {
-    if (!model || !model->eval_cos || !check_options(o) || !(prm.alpha_x > 0.0) || !(prm.alpha_y > 0.0) ||
-        !(theta >= 0.0 && theta < 0.5 * MF_PI) || !out || !(magnitude >= 0.0 && magnitude < INFINITY) ||
-        !(magnitude_err >= 0.0) || (mirrors & ~(SYM_X | SYM_Y)) || ((mirrors & SYM_X) && theta != 0.0))
+    return entry_fit_mirrored(model, prm, theta, mirrors, magnitude, magnitude_err, lobe_start, alt_start, 0, o, out);
+}
+
+mf_status mf_ltcfit_aniso_entry_fit_mirrored_two(const mf_brdf_model *model, mf_brdf_params prm, double theta,
+                                                 int mirrors, double magnitude, double magnitude_err,
+                                                 const double *lobe_start, const double *alt_start,
+                                                 const mf_ltcfit_aniso_options *o, mf_ltcfit_aniso_entry *out)
+{
+    if (!lobe_start)
         return MF_ERR_DOMAIN;
-    double mag[2] = {magnitude, magnitude_err};
-    return fit_entry_alone(model, prm, theta, 0.0, mirrors, FAMILY_SHAPED, mag, lobe_start, alt_start, o, out);
+    return entry_fit_mirrored(model, prm, theta, mirrors, magnitude, magnitude_err, lobe_start, alt_start, 1, o, out);
 }
 
 /* ---- the table: (alpha_x, alpha_y) jobs over threads ------------------------------------------ */

@@ -61,6 +61,14 @@
 /* ---- forward-mode dual numbers with MF_LTCFIT_DUAL_N derivatives (4 for the isotropic fitter:
  * d/da, d/db, d/dc, d/dd; 7 for the anisotropic one) ------------------------------------------ */
 
+/* The dual operations are forced inline: called out of line (GCC left dcross so), every call
+ * copied its 3 x 8 doubles through memory.  Inlining changes no operation (no contraction). */
+#if defined(__GNUC__) || defined(__clang__)
+#define DUAL_INLINE static inline __attribute__((always_inline))
+#else
+#define DUAL_INLINE static inline
+#endif
+
 typedef struct {
     double v, d[MF_LTCFIT_DUAL_N];
 } dual;
@@ -68,12 +76,12 @@ typedef struct {
     dual x, y, z;
 } dvec3;
 
-static inline dual dconst(double v)
+DUAL_INLINE dual dconst(double v)
 {
     dual r = {v, {0.0}};
     return r;
 }
-static inline dual dadd(dual a, dual b)
+DUAL_INLINE dual dadd(dual a, dual b)
 {
     dual r;
     r.v = a.v + b.v;
@@ -81,7 +89,7 @@ static inline dual dadd(dual a, dual b)
         r.d[i] = a.d[i] + b.d[i];
     return r;
 }
-static inline dual dsub(dual a, dual b)
+DUAL_INLINE dual dsub(dual a, dual b)
 {
     dual r;
     r.v = a.v - b.v;
@@ -89,7 +97,7 @@ static inline dual dsub(dual a, dual b)
         r.d[i] = a.d[i] - b.d[i];
     return r;
 }
-static inline dual dmul(dual a, dual b)
+DUAL_INLINE dual dmul(dual a, dual b)
 {
     dual r;
     r.v = a.v * b.v;
@@ -97,7 +105,7 @@ static inline dual dmul(dual a, dual b)
         r.d[i] = a.d[i] * b.v + a.v * b.d[i];
     return r;
 }
-static inline dual dscale(dual a, double s)
+DUAL_INLINE dual dscale(dual a, double s)
 {
     dual r;
     r.v = a.v * s;
@@ -105,7 +113,7 @@ static inline dual dscale(dual a, double s)
         r.d[i] = a.d[i] * s;
     return r;
 }
-static inline dual ddiv(dual a, dual b)
+DUAL_INLINE dual ddiv(dual a, dual b)
 {
     dual r;
     double inv = 1.0 / b.v;
@@ -114,7 +122,7 @@ static inline dual ddiv(dual a, dual b)
         r.d[i] = (a.d[i] - r.v * b.d[i]) * inv;
     return r;
 }
-static inline dual dsqrt(dual a)
+DUAL_INLINE dual dsqrt(dual a)
 {
     dual r;
     r.v = sqrt(a.v);
@@ -123,7 +131,7 @@ static inline dual dsqrt(dual a)
         r.d[i] = a.d[i] * g;
     return r;
 }
-static inline dual datan2(dual y, dual x)
+DUAL_INLINE dual datan2(dual y, dual x)
 {
     dual r;
     r.v = atan2(y.v, x.v);
@@ -133,14 +141,14 @@ static inline dual datan2(dual y, dual x)
         r.d[i] = (x.v * y.d[i] - y.v * x.d[i]) * g;
     return r;
 }
-static inline dual ddot(dvec3 a, dvec3 b) { return dadd(dadd(dmul(a.x, b.x), dmul(a.y, b.y)), dmul(a.z, b.z)); }
-static inline dvec3 dcross(dvec3 a, dvec3 b)
+DUAL_INLINE dual ddot(dvec3 a, dvec3 b) { return dadd(dadd(dmul(a.x, b.x), dmul(a.y, b.y)), dmul(a.z, b.z)); }
+DUAL_INLINE dvec3 dcross(dvec3 a, dvec3 b)
 {
     dvec3 r = {dsub(dmul(a.y, b.z), dmul(a.z, b.y)), dsub(dmul(a.z, b.x), dmul(a.x, b.z)),
                dsub(dmul(a.x, b.y), dmul(a.y, b.x))};
     return r;
 }
-static inline dvec3 dnormalize(dvec3 a)
+DUAL_INLINE dvec3 dnormalize(dvec3 a)
 {
     dual inv = ddiv(dconst(1.0), dsqrt(ddot(a, a)));
     dvec3 r = {dmul(a.x, inv), dmul(a.y, inv), dmul(a.z, inv)};
@@ -151,7 +159,7 @@ static inline dvec3 dnormalize(dvec3 a)
  * M^-1), clipped at z >= 0 after the transform (docs/math.md, correction C-T4):
  *   E = 1/(2 pi) sum_i theta_i (u_i x u_i+1).z / |u_i x u_i+1|,  theta_i = atan2(|u_i x u_i+1|, u_i.u_i+1)
  * [Nahmias Eq. 2.23, 2.32-2.33] (signed: positive for front-facing polygons), with derivatives. */
-static inline dual ltc_clip_integrate_dual(const dvec3 *q, int pn)
+DUAL_INLINE dual ltc_clip_integrate_dual(const dvec3 *q, int pn)
 {
     /* Sutherland-Hodgman against z >= 0 */
     dvec3 cl[MF_POLYGON_MAX_VERTICES + 1];
@@ -189,7 +197,7 @@ static inline dual ltc_clip_integrate_dual(const dvec3 *q, int pn)
 
 /* The value of ltc_clip_integrate_dual alone, with the same floating-point operations in the same
  * order (so bitwise its .v): for the cost evaluations that need no Jacobian. */
-static inline double ltc_clip_integrate_value(const mf_vec3 *q, int pn)
+DUAL_INLINE double ltc_clip_integrate_value(const mf_vec3 *q, int pn)
 {
     mf_vec3 cl[MF_POLYGON_MAX_VERTICES + 2];
     int n = 0;

@@ -757,22 +757,14 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
             if ((st = mix_set_view(&mix, &p, mf_vec3_make(sin(th), 0.0, cos(th)))) != MF_OK)
                 break;
             mf_ltcfit_aniso_entry e;
-            st = mf_ltcfit_aniso_entry_fit_mirrored(&mix.model, p, th, mir, alb[2 * v], alb[2 * v + 1], prev,
-                                                    parent ? parent + MF_LTCFIT_ANISO_NPARAMS * (pidx + v) : NULL, &fo,
-                                                    &e);
-            if (st == MF_OK && cos(th) < MF_PREFILTER_MULTISTART_COS) {
-                /* grazing rows: a second solve from the closed-form start, the lower residual kept */
-                mf_ltcfit_aniso_entry e2;
-                st = mf_ltcfit_aniso_entry_fit_mirrored(&mix.model, p, th, mir, alb[2 * v], alb[2 * v + 1], NULL,
-                                                        parent ? parent + MF_LTCFIT_ANISO_NPARAMS * (pidx + v) : NULL,
-                                                        &fo, &e2);
-                if (st == MF_OK) {
-                    int it = e.iterations + e2.iterations;
-                    if (e2.residual < e.residual)
-                        e = e2;
-                    e.iterations = it;
-                }
-            }
+            const double *alt = parent ? parent + MF_LTCFIT_ANISO_NPARAMS * (pidx + v) : NULL;
+            if (cos(th) < MF_PREFILTER_MULTISTART_COS) /* grazing rows: a second solve from the closed-form
+                                                         start on the same directions, the lower residual kept */
+                st = mf_ltcfit_aniso_entry_fit_mirrored_two(&mix.model, p, th, mir, alb[2 * v], alb[2 * v + 1], prev, alt,
+                                                            &fo, &e);
+            else
+                st = mf_ltcfit_aniso_entry_fit_mirrored(&mix.model, p, th, mir, alb[2 * v], alb[2 * v + 1], prev, alt,
+                                                        &fo, &e);
             if (st != MF_OK)
                 break;
             if (!(isfinite(e.m[0]) && isfinite(e.m[4]) && isfinite(e.m[8]))) {

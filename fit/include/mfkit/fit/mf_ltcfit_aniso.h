@@ -206,6 +206,15 @@ mf_status mf_ltcfit_aniso_entry_fit_mirrored(const mf_brdf_model *model, mf_brdf
                                              double magnitude, double magnitude_err, const double *lobe_start,
                                              const double *alt_start, const mf_ltcfit_aniso_options *o,
                                              mf_ltcfit_aniso_entry *out) MF_WARN_UNUSED;
+/* Two solves of one entry of mf_ltcfit_aniso_entry_fit_mirrored on one preparation (directions,
+ * lights, targets): from lobe_start (not NULL) and from the closed-form start (lobe_start NULL);
+ * out is the one with the lower residual, with the iterations of both.  Bit for bit the better of
+ * the two separate calls, at the cost of one preparation less. */
+mf_status mf_ltcfit_aniso_entry_fit_mirrored_two(const mf_brdf_model *model, mf_brdf_params p, double theta,
+                                                 int mirrors, double magnitude, double magnitude_err,
+                                                 const double *lobe_start, const double *alt_start,
+                                                 const mf_ltcfit_aniso_options *o,
+                                                 mf_ltcfit_aniso_entry *out) MF_WARN_UNUSED;
 
 /* Writes the published layout: a little-endian float32 .npy of shape (n0, n1, n2, n3, 3, 3),
  * C order (the LAST table axis fastest, unlike mf_table's storage), the forward M of each entry

@@ -67,7 +67,9 @@
  * cosine-weighted lobe, each by mf_model_albedo (n = MF_PREFILTER_ALBEDO_N) of the one-texel
  * mixture (the clip at the geometric horizon is a discontinuity of the integrand: its error is
  * the stored error estimate |Q(n) - Q(n/2)|; measured against n = 512 for 40 normals of slope
- * up to 0.5 and 48 views: worst 2.3e-3 at n = 128, 4.8e-3 at n = 64).  Optionally divided by the
+ * up to 0.5 and 48 views: worst 2.3e-3 at n = 128, 4.8e-3 at n = 64; on the 512 (texel, view)
+ * pairs of `bench_prefilter --size 32 --albedo-check 3`: n = 128 worst 1.3e-3, mean 5.9e-5;
+ * n = 64 worst 2.6e-3, mean 1.6e-4, at a quarter of the cost: n = 64 since revision 2).  Optionally divided by the
  * lobe's mass above the horizon (options.keep_albedo).  Lambert: (1 + n.z) / 2 per texel, exact.
  */
 #ifndef MF_PREFILTER_H
@@ -86,8 +88,8 @@ extern "C" {
 #define MF_PREFILTER_COS_MIN 0.001
 /* Names the fitted values: bump it whenever they change (objective, starts, constants), so that a
  * resumed `mfkit prefilter` refuses tiles of another revision. */
-#define MF_PREFILTER_REVISION 1
-#define MF_PREFILTER_ALBEDO_N 128
+#define MF_PREFILTER_REVISION 2
+#define MF_PREFILTER_ALBEDO_N 64
 #define MF_PREFILTER_THETA_MAX (0.999 * 0.5 * MF_PI)
 /* Footprints of at least MF_PREFILTER_CLUSTER_MIN texels are fitted to a clustered mixture: cells
  * of side cluster_cell * alpha (GGX) or cluster_cell * MF_PREFILTER_CLUSTER_LAMBERT (Lambert) in
