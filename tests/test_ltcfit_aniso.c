@@ -4,7 +4,8 @@
  * mirrored azimuths, continuity of the interpolated lobe along every axis, bitwise determinism
  * across thread counts, the published .npy layout, checkpoint and resume (bitwise the same table
  * after interruptions, a record cut short, other settings refused), the alpha = 1e-4 anchor rows
- * (their collocation relation and its fallback).  Label fit (needs Ceres).
+ * (their collocation relation, its floor, and at the 16-entry step), the gate's magnitude spike
+ * against the albedo.  Label fit (needs Ceres).
  */
 #define _POSIX_C_SOURCE 200809L
 #include "mf_test.h"
@@ -301,10 +302,19 @@ static void test_resume(void)
     mf_ltcfit_aniso_result_free(&rr);
 }
 
+static double det9(const double *m)
+{
+    return m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) + m[2] * (m[3] * m[7] - m[4] * m[6]);
+}
+
 /* The anchor matrix (mf_ltcfit_aniso_anchor_matrix) on given matrices: (M_0 + M_nb) / 2 is s M_mid
  * (s the product of the unit last columns) and M_0's last column is a unit vector; both to 1e-15
- * (a few roundings of O(1) numbers).  When the extrapolation is degenerate (det M_0 <= 0, or
- * s <= 0) the result is M_mid itself, exactly. */
+ * (a few roundings of O(1) numbers).  When the extrapolation is (nearly) degenerate,
+ * det(2 s M_mid - M_nb) < 0.01 det M_mid, M_0 is moved towards M_mid until det M_0 = 0.01 det M_mid
+ * (1e-9 relative: 60 bisection halvings leave ~1e-18 in the blend factor; the rest is rounding),
+ * with a unit last column, and continuously: sweeping the neighbour's width across the threshold
+ * moves M_0 by steps of the sweep's size (no jump to M_mid as the first anchors did).  s <= 0
+ * gives M_mid itself, exactly. */
 static void test_anchor_matrix(void)
 {
     double c = cos(0.3), sn = sin(0.3);
@@ -321,12 +331,33 @@ static void test_anchor_matrix(void)
     for (int a = 0; a < 9; ++a)
         CHECK_ABS(0.5 * (m0[a] + m_nb[a]), s * m_mid[a], 1e-15);
     CHECK_ABS(m0[2] * m0[2] + m0[5] * m0[5] + m0[8] * m0[8], 1.0, 1e-15);
-    /* a neighbour twice as wide along x: 2 M_mid - M_nb has a negative x column, det < 0 */
-    double wide[9];
-    memcpy(wide, m_mid, sizeof wide);
-    wide[0] = 2.5 * m_mid[0], wide[3] = 2.5 * m_mid[3], wide[6] = 2.5 * m_mid[6];
-    CHECK(mf_ltcfit_aniso_anchor_matrix(m_mid, wide, m0) == 0);
-    CHECK(memcmp(m0, m_mid, sizeof m0) == 0);
+    /* a neighbour w times as wide along x (w = 1.9 .. 2.1, det ratio of 2 M_mid - M_nb from ~0.1 to
+     * < 0): below the floor, det M_0 = 0.01 det M_mid; M_0 moves by at most 0.003 per step of 0.001
+     * in w (measured 0.0006, the exact extrapolation's own step; 5x that leaves room for the blend
+     * factor changing faster near the threshold; a switch to M_mid, the first rule, is a step of
+     * ~0.6 in the x column) */
+    double prev[9], worst_step = 0.0, det_mid = det9(m_mid);
+    int shrunk = 0;
+    for (int i = 0; i <= 200; ++i) {
+        double w = 1.9 + 0.001 * i, wide[9];
+        memcpy(wide, m_mid, sizeof wide);
+        wide[0] = w * m_mid[0], wide[3] = w * m_mid[3], wide[6] = w * m_mid[6];
+        int exact = mf_ltcfit_aniso_anchor_matrix(m_mid, wide, m0);
+        if (!exact) {
+            ++shrunk;
+            CHECK_REL(det9(m0), 0.01 * det_mid, 1e-9);
+            CHECK_ABS(m0[2] * m0[2] + m0[5] * m0[5] + m0[8] * m0[8], 1.0, 1e-15);
+        } else {
+            CHECK(det9(m0) >= 0.01 * det_mid);
+        }
+        if (i > 0)
+            for (int a = 0; a < 9; ++a)
+                worst_step = fmax(worst_step, fabs(m0[a] - prev[a]));
+        memcpy(prev, m0, sizeof prev);
+    }
+    printf("anchor matrix sweep: %d of 201 below the floor, largest step %.3g (bound 0.003)\n", shrunk, worst_step);
+    CHECK(shrunk > 20 && shrunk < 190);
+    CHECK(worst_step <= 0.003);
     /* opposite last columns: s < 0 */
     double flip[9];
     memcpy(flip, m_mid, sizeof flip);
@@ -335,11 +366,142 @@ static void test_anchor_matrix(void)
     CHECK(memcmp(m0, m_mid, sizeof m0) == 0);
 }
 
+/* The anchors at a finer alpha step (the 16-entry axes, where the 16^4 table had 1415 anchor
+ * fallbacks): along theta at alpha_x = 1, phi = pi/2, the entries of the neighbour alpha_y = 1/15
+ * and the fits at the cell's midpoint alpha_y = (1e-4 + 1/15) / 2 (one-entry fits from the
+ * closed-form start; 30 fits, well under a second).  At this step the exact extrapolation's width
+ * across y is close to 0 and its determinant falls below 0 at several thetas.  Asserted: such
+ * entries occur here (>= 3: the case is exercised); det M_0 >= 0.01 det M_mid (the floor, 1e-9
+ * relative); the lobe a shader interpolates at the midpoint, (M_0 + M_nb) / 2, is the midpoint
+ * fit's lobe to 0.02 mean polygon difference (test_anchor_rows' tolerance) at every theta; and the
+ * anchor row has no spike along theta beyond the gate's 80 h^2.  The first rule (keep M_mid where
+ * det < 0) gave 0.032 at the worst theta here (printed for comparison). */
+static void test_anchor_fine_step(void)
+{
+    enum { N = 16 };
+    mf_ltcfit_aniso_options o;
+    mf_ltcfit_aniso_options_default(&o);
+    const double ax = 1.0, ph = 0.5 * MF_PI, a_nb = 1.0 / (N - 1), a_mid = 0.5 * (1e-4 + a_nb);
+    double m0[N][9];
+    int shrunk = 0;
+    double worst = 0.0, worst_old = 0.0, floor_ok = 1;
+    for (int k = 1; k < N; ++k) {
+        double th = (double)k / (N - 1) * MF_LTC_ANISO_THETA_MAX;
+        mf_ltcfit_aniso_entry nb, mid;
+        CHECK(mf_ltcfit_aniso_entry_fit(ggx(), ax, a_nb, th, ph, NULL, &o, &nb) == MF_OK);
+        CHECK(mf_ltcfit_aniso_entry_fit(ggx(), ax, a_mid, th, ph, NULL, &o, &mid) == MF_OK);
+        shrunk += !mf_ltcfit_aniso_anchor_matrix(mid.m, nb.m, m0[k]);
+        if (!(det9(m0[k]) >= 0.01 * det9(mid.m) * (1.0 - 1e-9)))
+            floor_ok = 0;
+        double s = mid.m[2] * nb.m[2] + mid.m[5] * nb.m[5] + mid.m[8] * nb.m[8], e[9], interp[9], old[9];
+        for (int a = 0; a < 9; ++a)
+            e[a] = 2.0 * s * mid.m[a] - nb.m[a];
+        for (int a = 0; a < 9; ++a) {
+            interp[a] = 0.5 * (m0[k][a] + nb.m[a]);
+            old[a] = 0.5 * ((det9(e) > 0.0 ? e[a] : mid.m[a]) + nb.m[a]);
+        }
+        double d = lobe_distance(interp, mid.m, ax, a_mid, th, ph, 1.0);
+        worst = fmax(worst, d);
+        worst_old = fmax(worst_old, lobe_distance(old, mid.m, ax, a_mid, th, ph, 1.0));
+        if (!(d <= 0.02))
+            printf("fine step, theta %d: midpoint lobe off by %.4g\n", k, d);
+        CHECK(d <= 0.02);
+    }
+    CHECK(floor_ok);
+    CHECK(shrunk >= 3);
+    double h = 1.0 / (N - 1), spike = 0.0;
+    for (int k = 2; k < N - 1; ++k)
+        for (int a = 0; a < 9; ++a) {
+            double v = m0[k][a], l = m0[k - 1][a], r = m0[k + 1][a];
+            spike = fmax(spike, fmax(v - fmax(l, r), fmin(l, r) - v));
+        }
+    spike /= 80.0 * h * h;
+    printf("anchors at the 16-entry step: %d of %d below the floor, midpoint lobe worst %.4g (tolerance 0.02; "
+           "the first rule: %.4g), theta spike %.3g of the gate's bound\n",
+           shrunk, N - 1, worst, worst_old, spike);
+    CHECK(spike <= 1.0);
+}
+
+/* Convergence (fit_entry in mf_ltcfit_aniso.c): at alpha_x = alpha_y = 1e-4 (the lobe far narrower
+ * than the test lights) two entries of the 16^4 grid, (theta, phi) indices (4, 2) and (5, 9), use
+ * all 100 solver steps without meeting a relative tolerance, at residuals near 1e-5 of the albedo:
+ * they count as converged (residual <= 1e-3, the rule) instead of being retried and reported.
+ * And an entry stopped after 3 steps far from its minimum (residual above 1e-3) is retried: its
+ * step count exceeds the budget of one solve. */
+static void test_convergence_rule(void)
+{
+    mf_ltcfit_aniso_options o;
+    mf_ltcfit_aniso_options_default(&o);
+    const int at[2][2] = {{4, 2}, {5, 9}};
+    for (int i = 0; i < 2; ++i) {
+        double th = at[i][0] / 15.0 * MF_LTC_ANISO_THETA_MAX, ph = at[i][1] / 15.0 * 0.5 * MF_PI;
+        mf_ltcfit_aniso_entry e;
+        CHECK(mf_ltcfit_aniso_entry_fit(ggx(), 1e-4, 1e-4, th, ph, NULL, &o, &e) == MF_OK);
+        printf("alpha 1e-4, theta %.2f deg, phi %.2f deg: %d steps, residual %.3g, converged %d\n", th * 180.0 / MF_PI,
+               ph * 180.0 / MF_PI, e.iterations, e.residual, e.converged);
+        CHECK(e.converged == 1 && e.residual <= 1e-3);
+    }
+    o.max_iterations = 3;
+    mf_ltcfit_aniso_entry e;
+    CHECK(mf_ltcfit_aniso_entry_fit(ggx(), 0.3, 0.6, 1.2, 0.7, NULL, &o, &e) == MF_OK);
+    printf("3-step budget: %d steps in all, residual %.3g, converged %d\n", e.iterations, e.residual, e.converged);
+    CHECK(e.iterations > 3);
+}
+
+/* The gate's magnitude spike against the model's albedo (mf_ltc_aniso_table.h, ltca_smooth_spike):
+ * a (2, 2, 2, 16) table with identity matrices and the model's true albedo as magnitude (by
+ * mf_model_albedo_fresnel, another quadrature than the gate's).  At (alpha_x, alpha_y) = (1, 1e-4),
+ * theta 89.99 deg the albedo drops from 0.995 (phi 84 deg) to 0.519 (phi 90 deg): model-free, that
+ * is a spike of 1.34 of the bound at h = 1/15 (what failed the 16^4 table); against the albedo the
+ * magnitude has no spike (the two quadratures agree to ~1e-5: bound 0.1). */
+static void test_gate_albedo_spike(void)
+{
+    const int n[4] = {2, 2, 2, 16};
+    mf_table t;
+    CHECK(mf_ltc_aniso_table_create(&t, n, MF_LTC_ANISO_PARAM_ALPHA_XY) == MF_OK);
+    for (int l = 0; l < n[3]; ++l)
+        for (int k = 0; k < n[2]; ++k)
+            for (int j = 0; j < n[1]; ++j)
+                for (int i = 0; i < n[0]; ++i) {
+                    int idx[4] = {i, j, k, l};
+                    double ax, ay, th, ph;
+                    mf_ltc_aniso_entry_values(&t, idx, &ax, &ay, &th, &ph);
+                    double *r = mf_table_record(&t, idx);
+                    for (int a = 0; a < 9; ++a)
+                        r[MF_LTCA_F_M00 + a] = r[MF_LTCA_F_MINV00 + a] = a % 4 == 0;
+                    mf_brdf_params prm = {ax, ay};
+                    mf_result alb, fr;
+                    CHECK(mf_model_albedo_fresnel(ggx(), &prm, view(th, ph), 256, &alb, &fr) == MF_OK);
+                    r[MF_LTCA_F_MAGNITUDE] = alb.val;
+                    r[MF_LTCA_F_FRESNEL] = fr.val;
+                    r[MF_LTCA_F_RESIDUAL] = 0.0;
+                }
+    mf_ltc_aniso_gate_options go;
+    mf_ltc_aniso_gate_options_default(&go);
+    go.entries = 2, go.polygons_per_entry = 2, go.mc_samples = 256; /* the model checks are not under test */
+    double spike[2] = {NAN, NAN};
+    for (int with_model = 0; with_model < 2; ++with_model) {
+        mf_check ch[MF_LTC_ANISO_GATE_MAX_CHECKS];
+        int nc = 0;
+        mf_status gs = mf_ltc_aniso_gate_run(&t, with_model ? ggx() : NULL, &go, ch, MF_LTC_ANISO_GATE_MAX_CHECKS, &nc);
+        CHECK(gs == MF_OK || gs == MF_ERR_CHECK_FAILED);
+        for (int i = 0; i < nc; ++i)
+            if (!strcmp(ch[i].name, "ltca_smooth_spike")) {
+                spike[with_model] = ch[i].worst;
+                printf("albedo spike table, %s: ltca_smooth_spike %.4g at %s\n", with_model ? "with the model" : "model-free",
+                       ch[i].worst, ch[i].worst_at);
+            }
+    }
+    CHECK(spike[0] > 1.2);   /* the true albedo's feature, 1.34 */
+    CHECK(spike[1] <= 0.1);  /* the magnitude's error against it */
+    mf_table_free(&t);
+}
+
 /* The anchor rows of a fitted table (an alpha index 0, alpha = 1e-4, the other above it): every
  * stored M_0 has a unit last column (1e-12: the stored normalisation), the zero patterns hold at
- * phi = 0 and pi/2, entries are marked as anchors exactly there (fallbacks counted as the result
- * says), and the lobe a shader interpolates at the cell's midpoint, (M_0 + M_nb) / 2 (for a
- * fallback: M_0 itself, which is the midpoint fit), is the lobe of a fit made at the midpoint:
+ * phi = 0 and pi/2, entries are marked as anchors exactly there (those below the determinant
+ * floor counted as the result says), and the lobe a shader interpolates at the cell's midpoint,
+ * (M_0 + M_nb) / 2, is the lobe of a fit made at the midpoint:
  * mean polygon difference <= 0.02 against mf_ltcfit_aniso_entry_fit there (the fit tolerance of
  * test_isotropic_agreement: the table's fit comes from the warm chain, the direct one from the
  * closed-form start, so they agree to the fit tolerance, not bit for bit).  Without the anchors
@@ -383,7 +545,7 @@ static void test_anchor_rows(const mf_table *t, const mf_ltcfit_aniso_result *r)
                     double axm = 0.5 * (ax0 + ax1), aym = 0.5 * (ay0 + ay1);
                     double mid[9];
                     for (int q = 0; q < 9; ++q)
-                        mid[q] = e->anchor == 2 ? m0[q] : 0.5 * (m0[q] + mb[q]);
+                        mid[q] = 0.5 * (m0[q] + mb[q]);
                     mf_ltcfit_aniso_entry f;
                     CHECK(mf_ltcfit_aniso_entry_fit(ggx(), axm, aym, th, ph, NULL, &o, &f) == MF_OK);
                     double d = lobe_distance(mid, f.m, axm, aym, th, ph, 1.0);
@@ -391,7 +553,7 @@ static void test_anchor_rows(const mf_table *t, const mf_ltcfit_aniso_result *r)
                     worst = fmax(worst, d);
                     if (!(d <= 0.02))
                         printf("anchor (%d, %d, %d, %d)%s: midpoint lobe differs from a fit there by %.4g\n", a[0], a[1],
-                               k, l, e->anchor == 2 ? " (fallback)" : "", d);
+                               k, l, e->anchor == 2 ? " (floored)" : "", d);
                     CHECK(d <= 0.02);
                 }
     CHECK(worst_norm <= 1e-12);
@@ -466,6 +628,9 @@ int main(void)
     test_threads();
     test_resume();
     test_anchor_matrix();
+    test_anchor_fine_step();
+    test_gate_albedo_spike();
+    test_convergence_rule();
     test_isotropic_agreement();
     test_mirrors();
     test_default_table();

@@ -195,6 +195,20 @@ int cli_fit_aniso(int argc, char **argv)
            "anchor fallbacks %d%s\n",
            o.n[0], o.n[1], o.n[2], o.n[3], r.worst_residual, r.worst_index, r.not_converged, r.max_iterations,
            r.anchor_fallbacks, r.pairs_resumed ? " (resumed)" : "");
+    /* every unconverged entry (there should be none), with its indices, values and final cost */
+    for (int i = 0, listed = 0; i < (int)mf_table_texels(&t) && listed < r.not_converged; ++i) {
+        const mf_ltcfit_aniso_entry *e = &r.entries[i];
+        if (e->converged)
+            continue;
+        int idx[4] = {i % o.n[0], i / o.n[0] % o.n[1], i / (o.n[0] * o.n[1]) % o.n[2], i / (o.n[0] * o.n[1] * o.n[2])};
+        double ax, ay, th, ph;
+        mf_ltc_aniso_entry_values(&t, idx, &ax, &ay, &th, &ph);
+        printf("not converged: entry %d (%d, %d, %d, %d: alpha_x %.4g, alpha_y %.4g, theta %.2f deg, phi %.2f deg%s), "
+               "residual %.4g after %d iterations\n",
+               i, idx[0], idx[1], idx[2], idx[3], ax, ay, th * 180.0 / MF_PI, ph * 180.0 / MF_PI,
+               e->anchor ? ", anchor: fitted at the cell midpoint" : "", e->residual, e->iterations);
+        ++listed;
+    }
     mf_ltc_aniso_gate_options go;
     mf_ltc_aniso_gate_options_default(&go);
     go.seed = o.seed;

@@ -375,6 +375,23 @@ static void chk_jump(void *ctx, mf_check *c)
     }
 }
 
+/* The model's albedo at entry idx (mf_model_albedo, MF_MODEL_ALBEDO_N); NaN if it fails. */
+static double entry_albedo(const actx *g, const int idx[4])
+{
+    double ax, ay, th, ph;
+    mf_ltc_aniso_entry_values(g->t, idx, &ax, &ay, &th, &ph);
+    mf_brdf_params prm = {ax, ay};
+    mf_result alb;
+    mf_vec3 wo = mf_vec3_make(sin(th) * cos(ph), sin(th) * sin(ph), cos(th));
+    return mf_model_albedo(g->model, &prm, wo, MF_MODEL_ALBEDO_N, &alb) == MF_OK ? alb.val : NAN;
+}
+
+/* With a model, a spike of the magnitude is measured on its error magnitude - albedo (the
+ * isotropic gate's rule, mf_ltc_gate.c): the true albedo has features no grid resolves, e.g. at
+ * (alpha_x, alpha_y) = (1, 1e-4), theta 89.99 deg it is 0.995 at phi 84 deg and 0.519 at 90 deg
+ * (the view along the smooth axis; 64- and 512-point quadratures agree to 1e-5): an excess of
+ * 0.48, 0.29 of the bound at 8^4 and 1.34 at 16^4 (where it failed the fitted table).  The albedo is computed only where the
+ * magnitude's own excess is over the bound. */
 static void chk_spike(void *ctx, mf_check *c)
 {
     const actx *g = ctx;
@@ -392,6 +409,11 @@ static void chk_spike(void *ctx, mf_check *c)
             for (int f = 0; f < 10; ++f) {
                 double v = sfield(t, idx, f, 1, 1), va = sfield(t, a, f, ax, ay), vb = sfield(t, b, f, bx, by);
                 double ex = fmax(v - fmax(va, vb), fmin(va, vb) - v);
+                if (f == 9 && g->model && ex > SPIKE_PER_H2 * h * h) {
+                    v -= entry_albedo(g, idx), va -= entry_albedo(g, a), vb -= entry_albedo(g, b);
+                    ex = fmax(v - fmax(va, vb), fmin(va, vb) - v);
+                    ex = isnan(ex) ? INFINITY : ex;
+                }
                 worst = fmax(worst, ex);
             }
             char what[16];
@@ -528,8 +550,10 @@ const mf_check_def mf_ltc_aniso_gate_check_table[MF_LTC_ANISO_GATE_MAX_CHECKS] =
     {"ltca_inverse", "max |minv m - I| / (|minv| |m|)", INVERSE_BOUND, 0, chk_inverse},
     {"ltca_smooth_jump", "max |neighbour difference| of m00..m22, magnitude / (16 h), all 4 axes, mirrored across phi = 0",
      1.0, 0, chk_jump},
-    {"ltca_smooth_spike", "excess outside the two neighbours' range / (80 h^2), mirrored at the phi boundaries", 1.0, 0,
-     chk_spike},
+    {"ltca_smooth_spike",
+     "excess outside the two neighbours' range / (80 h^2), mirrored at the phi boundaries (with a model, the "
+     "magnitude's spike is measured on magnitude - albedo)",
+     1.0, 0, chk_spike},
     {"ltca_albedo", "|magnitude - albedo| / max(albedo, 0.01), scaled to the bound 1e-3 + 4 err/albedo", ALBEDO_REL, 1,
      chk_albedo},
     {"ltca_polygon_mean", "mean of max(0, |LTC - MC| - 5.5 se) / albedo over random polygons", POLY_MEAN, 1,

@@ -90,7 +90,9 @@ int mf_ltc_aniso_layout_ok(const mf_table *t, char *why, size_t why_size);
  *                       (S M S of the entry beside the boundary), <= 16 h (h = 1/(n - 1): the
  *                       isotropic gate's rule)                                        (model-free)
  *   ltca_smooth_spike   no entry outside the range of its two neighbours along an axis (mirrored
- *                       neighbours at the phi boundaries) by more than 80 h^2         (model-free)
+ *                       neighbours at the phi boundaries) by more than 80 h^2 (with a model, a
+ *                       magnitude spike is measured on magnitude - albedo, as in mf_ltc_gate.h:
+ *                       the true albedo has sharp features at grazing)                (model-free)
  *   ltca_albedo         |magnitude - albedo| / max(albedo, 0.01) <= 1e-3 + 4 err / albedo, the
  *                       albedo by mf_model_albedo (64 x 64), at the tested entries    (model)
  *   ltca_polygon_mean   at `entries` entries drawn by the seed: random quads and triangles

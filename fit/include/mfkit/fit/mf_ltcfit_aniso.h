@@ -82,7 +82,12 @@
  * second start), and stores M_0 = 2 s M_mid - M_nb with s = c_mid . c_nb, the product of the two
  * unit last columns (mf_ltcfit_aniso_anchor_matrix): M_0's last column is a unit vector too, and
  * quadrilinear interpolation gives (M_0 + M_nb) / 2 = s M_mid at the midpoint, the midpoint fit's
- * lobe exactly; where s <= 0 or det M_0 <= 0 it keeps M_mid (result->anchor_fallbacks).  Magnitude and Fresnel stay those at the anchor's own alphas;
+ * lobe exactly.  The thin axis' width of that M_0 is close to 0 (the lobe narrows about linearly
+ * with alpha), so its determinant scatters about 0 from entry to entry; where
+ * det M_0 < 0.01 det M_mid, M_0 is moved along the line to M_mid until det M_0 = 0.01 det M_mid
+ * (continuous in the fits; result->anchor_fallbacks counts these; where s <= 0 it keeps M_mid).
+ * Keeping M_mid there instead (the first rule) broke the collocation at 1415 of 7680 anchor
+ * entries at 16^4.  Magnitude and Fresnel stay those at the anchor's own alphas;
  * residual, iterations and convergence are the midpoint fit's.  Measured
  * (analysis/bench_ltc_aniso.c, 60 points, alpha in [0.02, 1]): the shape error where
  * min(alpha_x, alpha_y) < 1/7 fell 0.0167 -> 0.0074 (mean absolute) against the fits made at
@@ -143,7 +148,8 @@ typedef struct mf_ltcfit_aniso_entry {
     int converged;       /* the solver met a tolerance */
     double magnitude, magnitude_err, fresnel;
     int anchor;          /* 0: fitted at its own alphas; 1: an anchor entry, M_0 = 2 s M_mid - M_nb;
-                          * 2: an anchor entry that kept M_mid (a fallback; see "Anchor rows") */
+                          * 2: an anchor entry moved towards M_mid by the determinant floor (or
+                          * M_mid where s <= 0; see "Anchor rows") */
 } mf_ltcfit_aniso_entry;
 
 typedef struct mf_ltcfit_aniso_result {
@@ -155,7 +161,7 @@ typedef struct mf_ltcfit_aniso_result {
     int max_iterations;
     long total_iterations;
     int not_converged;
-    int anchor_fallbacks; /* anchor entries that kept the midpoint fit (see mf_ltcfit_aniso_table) */
+    int anchor_fallbacks; /* anchor entries with anchor == 2 (the determinant floor; "Anchor rows") */
     int pairs_done;       /* completed (alpha_x, alpha_y) pairs, including those loaded by resume */
     int pairs_resumed;    /* loaded from the checkpoint */
 } mf_ltcfit_aniso_result;
@@ -190,7 +196,9 @@ mf_status mf_ltcfit_aniso_entry_fit_general(const mf_brdf_model *model, mf_brdf_
 /* The anchor matrix of an alpha = 1e-4 entry (see "Anchor rows" above) from the fit at its cell's
  * midpoint m_mid and its neighbour's entry m_nb (both row-major with unit last columns):
  * m0 = 2 s m_mid - m_nb, s = (last column of m_mid) . (last column of m_nb), and 1; or, when
- * s <= 0 or det(m0) <= 0 (the extrapolated lobe is degenerate), m0 = m_mid and 0 (a fallback). */
+ * det(m0) < 0.01 det(m_mid) (the extrapolated lobe is (nearly) degenerate), the point of the line
+ * from m_mid to that m0 where the determinant (last column normalised) is 0.01 det(m_mid), and 0;
+ * m_mid itself and 0 when s <= 0. */
 int mf_ltcfit_aniso_anchor_matrix(const double m_mid[9], const double m_nb[9], double m0[9]);
 
 /* mf_ltcfit_aniso_entry_fit_general at phi = 0 (the view in the xz plane) for a model the caller
