@@ -90,6 +90,16 @@ mf_status mf_energy_dielectric_eavg(mf_ndf_type ndf, mf_g2_form g2, double alpha
  * MF_ERR_NO_CONVERGENCE if a rule ran out of intervals (out keeps its estimate). */
 mf_status mf_energy_dielectric_transmission_reference(mf_ndf ndf, mf_g2_form g2, double mu, double eta, double tol,
                                                       mf_result *out) MF_WARN_UNUSED;
+/* The independent reference of E_R and E_T for the gate and the tests: nested adaptive Gauss-Kronrod
+ * over the micro-normal's polar angles about wo (not the normal), where total internal reflection is
+ * the constant angle asin(eta) from wo; every kink (that one, the horizons of wi, wt and h) is a panel
+ * end on each ray, and every azimuth where the kinks change order is a panel end of the outer rule,
+ * with a square-root substitution beside the critical angle and beside those azimuths (docs/math.md,
+ * "The dielectric energy reference").  tol absolute, per component; err = the outer rule's estimate
+ * + tol / 4 + 1e-13 |val|.  Isotropic NDFs; MF_ERR_DOMAIN otherwise; MF_ERR_NO_CONVERGENCE if a rule
+ * ran out of intervals (the outputs keep their estimates). */
+mf_status mf_energy_dielectric_reference(mf_ndf ndf, mf_g2_form g2, double mu, double eta, double tol,
+                                         mf_result *refl, mf_result *trans) MF_WARN_UNUSED;
 /* Allocates and tags an n_mu x n_r x n_z dielectric table (values 0), then
  * mf_energy_dielectric_column fills column c (all mu of (r index c % n_r, z index c / n_r), both
  * sides) from nothing but t's axes and metadata: columns are independent, so any number of threads
