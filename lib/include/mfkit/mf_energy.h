@@ -77,11 +77,12 @@ extern const char *const mf_dielectric_table_fields[MF_DIELECTRIC_NFIELDS];
 #define MF_ENERGY_DIELECTRIC_NCHECKS 4
 /* eta of the z axis: 1 + 2 z^2 (Cycles' z = sqrt((eta - 1) / 2)). */
 double mf_energy_dielectric_eta(double z);
-/* E_avg = 2 integral_0^1 (E_r + E_t)(mu) mu dmu by global-adaptive Gauss-Kronrod in s = sqrt(mu)
- * to 1e-9 (at most 200 intervals per panel), panels ending, for eta < 1, on the kinks of E(mu) at
- * mu = eta and mu = sqrt(1 - eta^2) (total internal reflection); err = the rule's estimate + the
- * largest albedo bound met.  (A fixed 12-point rule with |Q12 - Q8| as its bound was off by 140
- * times that bound at alpha 0.77, eta 0.395: E(mu) has kinks.)  alpha in [1e-4, 1]. */
+/* E_avg = 2 integral_0^1 (E_r + E_t)(mu) mu dmu by global-adaptive Gauss-Kronrod to 1e-8 (at most
+ * 200 intervals per piece) on panels ending, for eta < 1, on the kinks of E(mu): mu = eta,
+ * sqrt(1 - eta^2) and 2 eta sqrt(1 - eta^2) (docs/math.md); each panel halved and each half mapped
+ * with a square towards its kink (mu = kink +- u^2); err = the rule's estimate + the largest albedo
+ * bound met.  (A fixed 12-point rule with |Q12 - Q8| as its bound was off by 140 times that bound at
+ * alpha 0.77, eta 0.395: E(mu) has kinks.)  alpha in [1e-4, 1]. */
 mf_status mf_energy_dielectric_eavg(mf_ndf_type ndf, mf_g2_form g2, double alpha, double eta,
                                     mf_result *eavg) MF_WARN_UNUSED;
 /* The independent reference of E_T for the gate: nested adaptive Gauss-Kronrod over the transmitted
@@ -90,6 +91,16 @@ mf_status mf_energy_dielectric_eavg(mf_ndf_type ndf, mf_g2_form g2, double alpha
  * MF_ERR_NO_CONVERGENCE if a rule ran out of intervals (out keeps its estimate). */
 mf_status mf_energy_dielectric_transmission_reference(mf_ndf ndf, mf_g2_form g2, double mu, double eta, double tol,
                                                       mf_result *out) MF_WARN_UNUSED;
+/* The independent reference of E_R and E_T for the gate and the tests: nested adaptive Gauss-Kronrod
+ * over the micro-normal's polar angles about wo (not the normal), where total internal reflection is
+ * the constant angle asin(eta) from wo; every kink (that one, the horizons of wi, wt and h) is a panel
+ * end on each ray, and every azimuth where the kinks change order is a panel end of the outer rule,
+ * with a square-root substitution beside the critical angle and beside those azimuths (docs/math.md,
+ * "The dielectric energy reference").  tol absolute, per component; err = the outer rule's estimate
+ * + tol / 4 + 1e-13 |val|.  Isotropic NDFs; MF_ERR_DOMAIN otherwise; MF_ERR_NO_CONVERGENCE if a rule
+ * ran out of intervals (the outputs keep their estimates). */
+mf_status mf_energy_dielectric_reference(mf_ndf ndf, mf_g2_form g2, double mu, double eta, double tol,
+                                         mf_result *refl, mf_result *trans) MF_WARN_UNUSED;
 /* Allocates and tags an n_mu x n_r x n_z dielectric table (values 0), then
  * mf_energy_dielectric_column fills column c (all mu of (r index c % n_r, z index c / n_r), both
  * sides) from nothing but t's axes and metadata: columns are independent, so any number of threads
@@ -124,9 +135,9 @@ extern const char *const mf_kulla_conty_table_fields[MF_KULLA_CONTY_NFIELDS];
 mf_status mf_energy_dfg_gate(const mf_table *t, double storage_u, mf_check *checks, int cap, int *count) MF_WARN_UNUSED;
 mf_status mf_energy_kulla_conty_gate(const mf_table *t, double storage_u, mf_check *checks, int cap,
                                      int *count) MF_WARN_UNUSED;
-/* dielectric: finite; E_r, E_t >= 0, E_r + E_t <= 1 at every texel; E_r and E_t against independent
- * references (mf_albedo_microfacet_reference, mf_energy_dielectric_transmission_reference) at the 8
- * corner texels, both sides; the white furnace of the compensation lobe on E = E_r + E_t (as
+/* dielectric: finite; E_r, E_t >= 0, E_r + E_t <= 1 at every texel; E_r and E_t against
+ * mf_energy_dielectric_reference at every mu of the 4 corner (alpha, eta) columns and one mu of every
+ * other column, both sides; the white furnace of the compensation lobe on E = E_r + E_t (as
  * kulla_conty's) at every mu of 3 x 3 (alpha, eta) columns, both sides. */
 mf_status mf_energy_dielectric_gate(const mf_table *t, double storage_u, mf_check *checks, int cap,
                                     int *count) MF_WARN_UNUSED;
