@@ -52,11 +52,11 @@
  * 0.00250.  + 48 random: 0.002413 / 0.0844; 0.00236; 27 s.  48 random alone: 0.002414 / 0.0793;
  * 0.00246; 15.5 s.  96 random alone: 0.002332 / 0.0803; 0.00232; 24 s.  144 random alone:
  * 0.002270 / 0.0841; 0.00221; 32.5 s, 6 entries unconverged.  The published table: 0.002388 /
- * 0.0847.  For scale, a fit at each point to 24 polygons that include the benchmark's own 12
- * quads (in-sample, not a method) reaches 0.00112 / 0.0536 (0.47x / 0.63x the published table):
- * even fitted to the test lights themselves, one LTC per point does not halve the relative
- * error.  The fixed stream is not the benchmark's (seed 5) nor the gate's (the fit's seed,
- * streams from 2^32). */
+ * 0.0847.  How low one LTC per point can go (analysis/study_aniso_oracle.c, docs/validation.md):
+ * fitted to the benchmark's own 12 quads it reaches 0.11x / 0.17x the published table (an
+ * overfit, not a method); fitted to 96 other random quads and scored on them, 0.77x / 0.76x, so on
+ * average over random lights no single-LTC table reaches 0.5x.  The fixed stream is not the
+ * benchmark's (seed 5) nor the gate's (the fit's seed, streams from 2^32). */
 #define RAND_LIGHTS 96
 #define RAND_SEED 0x72616e646c697465ull
 #define RAND_STREAM 0x6669746c69676874ull
