@@ -688,6 +688,28 @@ static dual width_barrier(const double *p)
     return r;
 }
 
+int mf_ltcfit_aniso_gradient_compare(const double p[7], const double *v, int n, double *value_diff,
+                                     double *grad_diff)
+{
+    if (n < 3 || n > MF_POLYGON_MAX_VERTICES || !valid(p))
+        return -1;
+    mf_vec3 q[MF_POLYGON_MAX_VERTICES];
+    for (int i = 0; i < n; ++i)
+        q[i] = mf_vec3_make(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
+    double adj[9], g[NP];
+    dual adjd[9];
+    adj_value(p, adj);
+    adj_dual(p, adjd);
+    double e = integral_grad(q, n, p, adj, g);
+    dual ed = integral_dual(q, n, adjd);
+    *value_diff = fabs(e - integral_value(q, n, adj));
+    double worst = 0.0;
+    for (int j = 0; j < NP; ++j)
+        worst = fmax(worst, fabs(g[j] - ed.d[j]) / fmax(1.0, fabs(ed.d[j])));
+    *grad_diff = worst;
+    return 0;
+}
+
 /* ---- the least-squares problem ---------------------------------------------------------------- */
 
 /* Proximal residuals towards the warm start: the scales a, d relative, the shears absolute. */

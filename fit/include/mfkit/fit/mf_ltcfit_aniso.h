@@ -201,6 +201,16 @@ mf_status mf_ltcfit_aniso_entry_fit_general(const mf_brdf_model *model, mf_brdf_
  * m_mid itself and 0 when s <= 0. */
 int mf_ltcfit_aniso_anchor_matrix(const double m_mid[9], const double m_nb[9], double m0[9]);
 
+/* For tests: the per-entry light integral of the fitter's parameters p (the 7 free entries of M',
+ * see "Parameters" in mf_ltcfit_aniso.c) over the polygon v[0..n-1] (xyz triples, clipped at the
+ * horizon), by the written-out gradient that the prefilter's fits use and by the forward dual
+ * numbers that the table's fits use.  *value_diff = |written value - integral without gradient|
+ * (the two are meant to be bitwise equal), *grad_diff = max over the 7 components of
+ * |written - dual| / max(1, |dual|).  Returns 0, or -1 when p is not a valid matrix or n is out
+ * of range. */
+int mf_ltcfit_aniso_gradient_compare(const double p[7], const double *v, int n, double *value_diff,
+                                     double *grad_diff);
+
 /* mf_ltcfit_aniso_entry_fit_general at phi = 0 (the view in the xz plane) for a model the caller
  * knows to be mirror symmetric: mirrors MF_LTCFIT_ANISO_MIRROR_Y (f invariant under y -> -y)
  * holds the phi = 0 zero pattern exactly, MF_LTCFIT_ANISO_MIRROR_X (under x -> -x; theta == 0
