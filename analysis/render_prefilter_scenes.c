@@ -94,81 +94,6 @@ static int die(const char *fmt, const char *a, const char *b)
     return 2;
 }
 
-static char *slurp(const char *path, size_t *len)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return NULL;
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *b = n >= 0 ? malloc((size_t)n + 1) : NULL;
-    if (!b || fread(b, 1, (size_t)n, f) != (size_t)n) {
-        free(b), fclose(f);
-        return NULL;
-    }
-    fclose(f);
-    b[n] = 0;
-    *len = (size_t)n;
-    return b;
-}
-
-/* float32 C-order .npy of the given rank; NULL on any mismatch. */
-static float *read_npy(const char *path, int rank, long *dims)
-{
-    size_t len;
-    char *b = slurp(path, &len);
-    if (!b || len < 12 || memcmp(b, "\x93NUMPY", 6) != 0) {
-        free(b);
-        return NULL;
-    }
-    size_t hl = b[6] == 1 ? ((unsigned char)b[8] | (size_t)(unsigned char)b[9] << 8) : 0, off = 10;
-    char *sh = hl && off + hl <= len ? strstr(b + off, "'shape': (") : NULL;
-    if (!sh || !strstr(b + off, "'<f4'") || !strstr(b + off, "False")) {
-        free(b);
-        return NULL;
-    }
-    sh += 10;
-    size_t count = 1;
-    for (int i = 0; i < rank; ++i) {
-        char *e;
-        dims[i] = strtol(sh, &e, 10);
-        if (e == sh || dims[i] <= 0) {
-            free(b);
-            return NULL;
-        }
-        count *= (size_t)dims[i];
-        sh = e;
-        while (*sh == ',' || *sh == ' ')
-            ++sh;
-    }
-    float *out = (*sh == ')' && len - off - hl == 4 * count) ? malloc(4 * count) : NULL;
-    if (out)
-        memcpy(out, b + off + hl, 4 * count);
-    free(b);
-    return out;
-}
-
-static int json_string(const char *js, const char *key, char *out, size_t osz)
-{
-    char pat[64];
-    snprintf(pat, sizeof pat, "\"%s\": \"", key);
-    const char *p = strstr(js, pat);
-    if (!p)
-        return 0;
-    p += strlen(pat);
-    size_t n = 0;
-    for (; *p && *p != '"'; ++p) {
-        if (*p == '\\' && p[1])
-            ++p;
-        if (n + 1 >= osz)
-            return 0;
-        out[n++] = *p;
-    }
-    out[n] = 0;
-    return *p == '"';
-}
-
 static mf_vec3 v3(double x, double y, double z) { return mf_vec3_make(x, y, z); }
 
 /* ---- the isotropic LTC table (per-texel shading) ------------------------------------------------ */
@@ -518,12 +443,13 @@ int main(int argc, char **argv)
     char path[4400], map[4096];
     size_t jl;
     snprintf(path, sizeof path, "%s/prefilter.json", pfdir);
-    char *js = slurp(path, &jl);
+    char msg[8800];
+    char *js = mf_prefilter_read_file(path, &jl, msg, sizeof msg);
     if (!js)
-        return die("%s: cannot read: %s", path, strerror(errno)), 3;
+        return die("%s%s", msg, ""), 3;
     const char *key = "\"base_brdf\": {\"model\": \"ggx\", \"alpha\": ";
     const char *ap = strstr(js, key);
-    if (!json_string(js, "map", map, sizeof map) || !ap || sscanf(ap + strlen(key), "%lf", &g_alpha) != 1 ||
+    if (!mf_prefilter_json_string(js, "map", map, sizeof map) || !ap || sscanf(ap + strlen(key), "%lf", &g_alpha) != 1 ||
         !(g_alpha > 0.0 && g_alpha <= 1.0)) {
         free(js);
         return die("%s: not a manifest of mfkit prefilter with a GGX base%s", path, "");
@@ -535,7 +461,6 @@ int main(int argc, char **argv)
     /* the map, decoded as mfkit prefilter's defaults do (8/16-bit: unorm, float: raw; green up) */
     mf_image img;
     mf_image_info info;
-    char msg[1024];
     if (mf_image_read_ex(map, &img, NULL, &info, msg, sizeof msg) != MF_OK)
         return die("%s%s", msg, ""), 3;
     int unorm = !strncmp(info.pixel_type, "uint", 4);
@@ -582,9 +507,9 @@ int main(int argc, char **argv)
     for (int k = 1; k < NL && k <= 16; ++k) {
         long d[6], dm[4];
         snprintf(path, sizeof path, "%s/ltc_mip%d.npy", pfdir, k);
-        float *m = read_npy(path, 6, d);
+        float *m = mf_prefilter_read_npy(path, 6, d, msg, sizeof msg);
         snprintf(path, sizeof path, "%s/magnitude_mip%d.npy", pfdir, k);
-        float *g = read_npy(path, 4, dm);
+        float *g = mf_prefilter_read_npy(path, 4, dm, msg, sizeof msg);
         if (!m || !g || d[0] != (H >> k ? H >> k : 1) || d[1] != (W >> k ? W >> k : 1) || d[4] != 3 || d[5] != 3 ||
             (k > 1 && (d[2] != nt || d[3] != np)) || dm[0] != d[0] || dm[1] != d[1])
             return die("%s: missing or not the shape of level %s of the map", path, k == 1 ? "1" : ">1"), 3;

@@ -116,133 +116,22 @@ int cli_prefilter_eval(int argc, char **argv)
 #define PE_MAX_LIGHTS 8
 #define PE_LIGHT_MAX_ELEV (75.0 * MF_PI / 180.0)
 
-/* Reads a whole small file; NULL with msg on failure. */
-static char *slurp(const char *path, size_t *len, char *msg, size_t msz)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        snprintf(msg, msz, "%s: cannot open: %s", path, strerror(errno));
-        return NULL;
-    }
-    char *b = NULL;
-    size_t n = 0, cap = 0;
-    for (;;) {
-        if (n + 65536 > cap) {
-            cap = 2 * cap + 65536;
-            char *nb = realloc(b, cap + 1);
-            if (!nb) {
-                free(b), fclose(f);
-                snprintf(msg, msz, "out of memory");
-                return NULL;
-            }
-            b = nb;
-        }
-        size_t r = fread(b + n, 1, cap - n, f);
-        n += r;
-        if (r == 0)
-            break;
-    }
-    int bad = ferror(f);
-    fclose(f);
-    if (bad) {
-        free(b);
-        snprintf(msg, msz, "%s: read error", path);
-        return NULL;
-    }
-    b[n] = 0;
-    *len = n;
-    return b;
-}
-
-/* A float32 little-endian C-order .npy of the expected rank; shape in dims. */
+/* A level's .npy (mf_prefilter_read_npy), refused when a value is not finite. */
 static float *read_npy(const char *path, int rank, long *dims, char *msg, size_t msz)
 {
-    size_t len;
-    char *b = slurp(path, &len, msg, msz);
-    if (!b)
+    float *out = mf_prefilter_read_npy(path, rank, dims, msg, msz);
+    if (!out)
         return NULL;
-    float *out = NULL;
-    if (len < 10 || memcmp(b, "\x93NUMPY", 6) != 0) {
-        snprintf(msg, msz, "%s: not a .npy file", path);
-        goto done;
-    }
-    size_t hl, off;
-    if (b[6] == 1)
-        hl = (unsigned char)b[8] | (size_t)(unsigned char)b[9] << 8, off = 10;
-    else
-        hl = (unsigned char)b[8] | (size_t)(unsigned char)b[9] << 8 | (size_t)(unsigned char)b[10] << 16 |
-             (size_t)(unsigned char)b[11] << 24,
-        off = 12;
-    if (off + hl > len) {
-        snprintf(msg, msz, "%s: truncated header", path);
-        goto done;
-    }
-    char hdr[1024];
-    size_t cl = hl < sizeof hdr - 1 ? hl : sizeof hdr - 1;
-    memcpy(hdr, b + off, cl), hdr[cl] = 0;
-    const char *sh = strstr(hdr, "'shape': (");
-    if (!strstr(hdr, "'descr': '<f4'") || !strstr(hdr, "'fortran_order': False") || !sh) {
-        snprintf(msg, msz, "%s: expected little-endian float32 in C order", path);
-        goto done;
-    }
-    sh += 10;
     size_t count = 1;
-    for (int i = 0; i < rank; ++i) {
-        char *end;
-        dims[i] = strtol(sh, &end, 10);
-        if (end == sh || dims[i] <= 0 || dims[i] > (1L << 24)) {
-            snprintf(msg, msz, "%s: expected a shape of rank %d", path, rank);
-            goto done;
-        }
+    for (int i = 0; i < rank; ++i)
         count *= (size_t)dims[i];
-        sh = end;
-        while (*sh == ',' || *sh == ' ')
-            ++sh;
-    }
-    if (*sh != ')') {
-        snprintf(msg, msz, "%s: expected a shape of rank %d", path, rank);
-        goto done;
-    }
-    if (len - off - hl != count * 4) {
-        snprintf(msg, msz, "%s: %zu data bytes for %zu float32 values", path, len - off - hl, count);
-        goto done;
-    }
-    out = malloc(count * sizeof(float));
-    if (!out) {
-        snprintf(msg, msz, "out of memory");
-        goto done;
-    }
-    memcpy(out, b + off + hl, count * 4); /* little-endian hosts (checked by the build's io tests) */
     for (size_t i = 0; i < count; ++i)
         if (!isfinite(out[i])) {
             snprintf(msg, msz, "%s: value %zu is not finite", path, i);
-            free(out), out = NULL;
-            break;
+            free(out);
+            return NULL;
         }
-done:
-    free(b);
     return out;
-}
-
-/* The string value of "key": "..." in a JSON text (no escapes beyond \" and \\). */
-static int json_string(const char *js, const char *key, char *out, size_t osz)
-{
-    char pat[64];
-    snprintf(pat, sizeof pat, "\"%s\": \"", key);
-    const char *p = strstr(js, pat);
-    if (!p)
-        return 0;
-    p += strlen(pat);
-    size_t n = 0;
-    for (; *p && *p != '"'; ++p) {
-        if (*p == '\\' && p[1])
-            ++p;
-        if (n + 1 >= osz)
-            return 0;
-        out[n++] = *p;
-    }
-    out[n] = 0;
-    return *p == '"';
 }
 
 static int parse_lights(const char *s, double *h, int *n)
@@ -454,13 +343,13 @@ static int pe_main(int argc, char **argv)
     char msg[8800], path[4200];
     size_t jl;
     snprintf(path, sizeof path, "%s/prefilter.json", dir);
-    char *js = slurp(path, &jl, msg, sizeof msg);
+    char *js = mf_prefilter_read_file(path, &jl, msg, sizeof msg);
     if (!js)
         return cli_error(k_cmd, "%s", msg), CLI_EXIT_IO;
     char mapbuf[4096];
     const char *map = v[E_MAP].set ? v[E_MAP].s : NULL;
     if (!map) {
-        if (!json_string(js, "map", mapbuf, sizeof mapbuf)) {
+        if (!mf_prefilter_json_string(js, "map", mapbuf, sizeof mapbuf)) {
             free(js);
             return cli_error(k_cmd, "%s: no \"map\" entry (not a manifest of mfkit prefilter?)", path);
         }

@@ -291,6 +291,17 @@ mf_status mf_prefilter_gate_run_ref(const mf_prefilter_level *levels, int nlevel
 double mf_prefilter_theta(const mf_prefilter_options *o, int i);
 double mf_prefilter_phi(const mf_prefilter_options *o, int j);
 
+/* Reading an output directory back (mf_prefilter_files.c).  Each returns NULL (0) with a one-line
+ * reason in msg on failure; the caller frees.
+ * mf_prefilter_read_file: a whole file, NUL-terminated (the manifest prefilter.json).
+ * mf_prefilter_read_npy: a little-endian float32 C-order .npy of the given rank (<= 8); its shape
+ *   in dims.
+ * mf_prefilter_json_string: the string value of "key": "..." in a JSON text (escapes \" and \\
+ *   only), 1 if found and it fits in out. */
+char *mf_prefilter_read_file(const char *path, size_t *len, char *msg, size_t msz);
+float *mf_prefilter_read_npy(const char *path, int rank, long *dims, char *msg, size_t msz);
+int mf_prefilter_json_string(const char *js, const char *key, char *out, size_t osz);
+
 #ifdef __cplusplus
 }
 #endif
