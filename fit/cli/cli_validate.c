@@ -9,6 +9,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
 #include "cli_opt.h"
+#include "cli_plot.h"
 #include "cli_util.h"
 
 #include "mfkit/mfkit.h"
@@ -154,33 +155,24 @@ static int validate_table(const char *path, const char *path2, const char *brdf,
 {
     const char *cmd = "validate";
     mf_table t;
-    char msg[1024];
     mf_status st;
-    int is_ref = 0;
-    mf_table_file_info info = {0};
-    mf_table_format fmt = mf_table_format_from_path(path);
-    size_t plen = strlen(path);
+    int half = 0;
+    /* a pair of LTC textures is read as "P_1+P_2", as every other command spells it */
     char pair_name[2048];
     if (path2) {
-        /* the two textures of one LTC table */
-        st = mf_ltc_read_pair(path, path2, &t, &info.half_float, msg, sizeof msg);
+        if ((size_t)snprintf(pair_name, sizeof pair_name, "%s+%s", path, path2) >= sizeof pair_name)
+            return cli_error(cmd, "%s: path too long", path);
+    }
+    int is_ref = !path2 && mf_table_format_from_path(path) == MF_TABLE_FORMAT_CSV;
+    int rrc = cli_read_any_table(cmd, path2 ? pair_name : path, &t, &half);
+    if (rrc)
+        return rrc;
+    if (path2) {
         snprintf(pair_name, sizeof pair_name, "%s + %s", path, path2);
         path = pair_name;
-    } else if (plen > 3 && strcmp(path + plen - 3, ".js") == 0) {
-        st = mf_ltc_read_threejs(path, &t, msg, sizeof msg);
-    } else if (fmt == MF_TABLE_FORMAT_CSV) {
-        is_ref = 1;
-        st = mf_ltc_reference_read_csv(path, &t, msg, sizeof msg);
-    } else if (mf_table_format_readable(fmt)) {
-        st = mf_table_read(path, &t, &info, msg, sizeof msg);
-    } else {
-        return cli_error(cmd, "%s: not a readable table format (.exr, .dds, .json, .npy, .ktx2, a three.js module "
-                              "<p>_three.js, or a reference .csv)", path);
     }
-    if (st != MF_OK) {
-        cli_error(cmd, "%s", msg[0] ? msg : mf_status_str(st));
-        return cli_exit_code(st);
-    }
+    mf_table_file_info info = {0};
+    info.half_float = half;
     /* the table's kind decides the gate; the LTC gate below keeps its own report */
     char why[256];
     const mf_table_kind *kind = mf_table_kind_of(&t, why, sizeof why);
