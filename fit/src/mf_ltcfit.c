@@ -190,7 +190,7 @@ static void texel_free(texel *t)
 
 /* Samples, magnitude, lobe statistics, lights and their BRDF integrals of one texel. */
 static mf_status texel_prepare(const mf_brdf_model *m, double alpha, double cos_theta, const uint32_t scr[2],
-                               const mf_result *albedo, workspace *ws, texel *t)
+                               const mf_result *albedo, const double *fresnel, workspace *ws, texel *t)
 {
     mf_vec3 wo = view_dir(cos_theta);
     ws->n = cos_theta < GRAZING_COS ? GRAZING_FACTOR * ws->base : ws->base;
@@ -203,10 +203,11 @@ static mf_status texel_prepare(const mf_brdf_model *m, double alpha, double cos_
     t->sc_y = t->sc_x + ws->n;
     t->sc_z = t->sc_y + ws->n;
     mf_status st = MF_OK;
-    if (albedo) { /* given (mf_ltcfit_entry_fit_albedo): the same rule's value; no Fresnel moment */
+    if (albedo) { /* given (mf_ltcfit_entry_fit_albedo, mf_ltcfit_options.albedo): the same rule's
+                   * value; the Fresnel moment when given, else NaN */
         t->magnitude = albedo->val;
         t->magnitude_err = albedo->err;
-        t->fresnel = NAN;
+        t->fresnel = fresnel ? *fresnel : NAN;
         if (!isfinite(albedo->val))
             return MF_ERR_DOMAIN;
     } else if ((st = texel_magnitude(m, alpha, wo, ws, t)) != MF_OK)
@@ -562,7 +563,7 @@ static int lobe_params(mf_vec3 m, mf_mat3 mv, double q[4])
  * at GGX alpha 0.001, 1.3 deg it was a poor start and a useless control variate).  lobe_out: the
  * fitted lobe-frame parameters (may be NULL). */
 static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_theta, const mf_result *albedo,
-                           const double *start,
+                           const double *fresnel, const double *start,
                            const double *lobe_start, const mf_ltcfit_options *o, const uint32_t scr[2],
                            workspace *ws, mf_ltcfit_entry *out, double *lobe_out)
 {
@@ -570,7 +571,7 @@ static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_thet
     if (!t)
         return MF_ERR_ALLOC;
     memset(out, 0, sizeof *out);
-    mf_status st = texel_prepare(m, alpha, cos_theta, scr, albedo, ws, t);
+    mf_status st = texel_prepare(m, alpha, cos_theta, scr, albedo, fresnel, ws, t);
     if (st != MF_OK) {
         texel_free(t);
         return st;
@@ -685,7 +686,7 @@ mf_status mf_ltcfit_entry_fit_albedo(const mf_brdf_model *model, double alpha, d
     }
     uint32_t scr[2];
     sobol_scramble(o->seed, scr);
-    mf_status st = fit_texel(model, alpha, cos_theta, albedo, start, NULL, o, scr, &ws, out, NULL);
+    mf_status st = fit_texel(model, alpha, cos_theta, albedo, NULL, start, NULL, o, scr, &ws, out, NULL);
     ws_free(&ws);
     return st;
 }
@@ -709,7 +710,7 @@ mf_status mf_ltcfit_objective(const mf_brdf_model *model, double alpha, double c
     }
     uint32_t scr[2];
     sobol_scramble(o->seed, scr);
-    mf_status st = texel_prepare(model, alpha, cos_theta, scr, NULL, &ws, t);
+    mf_status st = texel_prepare(model, alpha, cos_theta, scr, NULL, NULL, &ws, t);
     if (st == MF_OK)
         texel_targets_raw(t, &ws);
     double r[LIGHTS_MAX + PROX_RESIDUALS], jb[4 * (LIGHTS_MAX + PROX_RESIDUALS)];
@@ -935,8 +936,13 @@ static void *worker(void *arg)
         for (int u = 0; u < n_u && st == MF_OK; ++u) {
             if (stop_requested(j))
                 break;
-            st = fit_texel(j->model, alpha, mf_ltc_table_cos_theta(j->table, u), NULL, NULL, have_prev ? lobe_prev : NULL,
-                           j->o, j->scr, &ws, &col[u], lobe_prev);
+            /* the texel's albedo and Fresnel moment when the caller computed them (NaN: not) */
+            const double *given = j->o->albedo ? j->o->albedo + 3 * ((size_t)c + (size_t)n_r * (size_t)u) : NULL;
+            mf_result alb = {given ? given[0] : NAN, given ? given[1] : NAN};
+            int use = given && isfinite(given[0]);
+            st = fit_texel(j->model, alpha, mf_ltc_table_cos_theta(j->table, u), use ? &alb : NULL,
+                           use ? &given[2] : NULL, NULL, have_prev ? lobe_prev : NULL, j->o, j->scr, &ws, &col[u],
+                           lobe_prev);
             if (st == MF_OK) {
                 have_prev = 1;
                 pthread_mutex_lock(&j->lock);
