@@ -124,7 +124,6 @@ typedef struct {
     double *sc_dot; /* scratch of texel_light_sums: the cap dot products of a centre's candidates */
     int *sc_in;     /* and the indices inside one light (all sized for the texel's directions) */
     double *sc_x, *sc_y, *sc_z; /* the candidates' components */
-    int64_t *sc_mask;           /* the candidates' edge-test results */
     mf_vec3 lobe;   /* mean direction m of f cos (unit, xz plane); the lobe frame is R = [[mz, 0, mx],
                      * [0, 1, 0], [-mx, 0, mz]] (R z = m), and the solver's parameters are those of
                      * M' = R^T M = [[a', 0, b'], [0, c', 0], [d', 0, 1]]: the same 4-parameter family
@@ -173,7 +172,7 @@ static texel *texel_new(void)
 {
     texel *t = malloc(sizeof *t);
     if (t)
-        t->sc_dot = t->sc_x = NULL, t->sc_in = NULL, t->sc_mask = NULL;
+        t->sc_dot = t->sc_x = NULL, t->sc_in = NULL;
     return t;
 }
 
@@ -183,7 +182,6 @@ static void texel_free(texel *t)
         free(t->sc_dot);
         free(t->sc_in);
         free(t->sc_x);
-        free(t->sc_mask);
         free(t);
     }
 }
@@ -197,8 +195,7 @@ static mf_status texel_prepare(const mf_brdf_model *m, double alpha, double cos_
     t->sc_dot = malloc(sizeof *t->sc_dot * (size_t)ws->n);
     t->sc_in = malloc(sizeof *t->sc_in * (size_t)ws->n);
     t->sc_x = malloc(sizeof *t->sc_x * 3 * (size_t)ws->n);
-    t->sc_mask = malloc(sizeof *t->sc_mask * (size_t)ws->n);
-    if (!t->sc_dot || !t->sc_in || !t->sc_x || !t->sc_mask)
+    if (!t->sc_dot || !t->sc_in || !t->sc_x)
         return MF_ERR_ALLOC;
     t->sc_y = t->sc_x + ws->n;
     t->sc_z = t->sc_y + ws->n;
@@ -277,6 +274,53 @@ static mf_status texel_prepare(const mf_brdf_model *m, double alpha, double cos_
     return MF_OK;
 }
 
+/* The candidates i < m (components X, Y, Z, indices cand) inside every edge plane of light l
+ * (light_inside's test X ex + Y ey + Z ez > 0 for every edge, without its early exit: the same
+ * answer, the tests have no side effects): their indices into in[], in order; returns their count.
+ * Two candidates at a time in 2-wide vectors where the compiler has them (GCC and Clang vector
+ * extensions): the same IEEE operations in the same order per element (the build contracts
+ * nothing), all edges in registers; the scalar loop is the same test. */
+#if defined(__GNUC__) || defined(__clang__)
+#define LS_VEC2 1
+typedef double ls_v2d __attribute__((vector_size(16)));
+typedef long long ls_v2l __attribute__((vector_size(16)));
+#endif
+static int edge_select(const light *l, int m, const double *X, const double *Y, const double *Z, const int *cand,
+                       int *in)
+{
+    const int ne = l->poly.n;
+    int n = 0, i = 0;
+#ifdef LS_VEC2
+    ls_v2d ex[MF_POLYGON_MAX_VERTICES], ey[MF_POLYGON_MAX_VERTICES], ez[MF_POLYGON_MAX_VERTICES];
+    for (int e = 0; e < ne; ++e) {
+        ex[e] = (ls_v2d){l->edge_n[e].x, l->edge_n[e].x};
+        ey[e] = (ls_v2d){l->edge_n[e].y, l->edge_n[e].y};
+        ez[e] = (ls_v2d){l->edge_n[e].z, l->edge_n[e].z};
+    }
+    for (; i + 2 <= m; i += 2) {
+        ls_v2d x, y, z;
+        memcpy(&x, X + i, sizeof x);
+        memcpy(&y, Y + i, sizeof y);
+        memcpy(&z, Z + i, sizeof z);
+        ls_v2l ok = (x * ex[0] + y * ey[0] + z * ez[0]) > 0.0;
+        for (int e = 1; e < ne; ++e)
+            ok &= (x * ex[e] + y * ey[e] + z * ez[e]) > 0.0;
+        in[n] = cand[i];
+        n += ok[0] != 0;
+        in[n] = cand[i + 1];
+        n += ok[1] != 0;
+    }
+#endif
+    for (; i < m; ++i) {
+        int ok = 1;
+        for (int e = 0; e < ne; ++e)
+            ok &= X[i] * l->edge_n[e].x + Y[i] * l->edge_n[e].y + Z[i] * l->edge_n[e].z > 0.0;
+        in[n] = cand[i];
+        n += ok;
+    }
+    return n;
+}
+
 /* The sums over the live directions inside each light k (light_inside's test: the bounding cap,
  * then the edge planes), in index order: out[4 k + 0..3] = sum of w, and with cv also of cw, cw^2
  * and cw w (light_sum, light_sums_cv).  The same sums, bit for bit, with less work: lights whose
@@ -310,7 +354,6 @@ static void texel_light_sums(const texel *t, const workspace *ws, int cv, double
             }
         const double cx = c.x, cy = c.y, cz = c.z, cr0 = t->lights[grp[0]].cos_radius;
         double *X = t->sc_x, *Y = t->sc_y, *Z = t->sc_z;
-        int64_t *mask = t->sc_mask;
         int m = 0;
         for (int j = 0; j < live; ++j) {
             double d = x[j] * cx + y[j] * cy + z[j] * cz;
@@ -338,22 +381,7 @@ static void texel_light_sums(const texel *t, const workspace *ws, int cv, double
                 m = m2;
                 cr_done = cr;
             }
-            /* every edge plane tested (light_inside's test without its early exit: the same
-             * answer, the tests have no side effects), edge by edge over the candidates'
-             * component arrays, which the compiler vectorises (the same operations per element) */
-            const int ne = l->poly.n;
-            for (int i = 0; i < m; ++i)
-                mask[i] = 1;
-            for (int e = 0; e < ne; ++e) {
-                const double ex = l->edge_n[e].x, ey = l->edge_n[e].y, ez = l->edge_n[e].z;
-                for (int i = 0; i < m; ++i)
-                    mask[i] &= X[i] * ex + Y[i] * ey + Z[i] * ez > 0.0;
-            }
-            int n = 0;
-            for (int i = 0; i < m; ++i) {
-                in[n] = cand[i];
-                n += (int)mask[i];
-            }
+            const int n = edge_select(l, m, X, Y, Z, cand, in);
             double *o = out + 4 * grp[g];
             if (!cv) {
                 double sy = 0.0;
