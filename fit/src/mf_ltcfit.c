@@ -209,8 +209,15 @@ static mf_status texel_prepare(const mf_brdf_model *m, double alpha, double cos_
             return MF_ERR_DOMAIN;
     } else if ((st = texel_magnitude(m, alpha, wo, ws, t)) != MF_OK)
         return st;
-    for (int j = 0; j < ws->n; ++j)
-        mf_sobol2((uint32_t)j, scr[0], scr[1], ws->u + 2 * j);
+    /* the points depend on the index and the scramble only: every texel of a worker uses the same
+     * prefix, computed once (u_n points of u_scr kept in the workspace) */
+    if (ws->u_n < ws->n || ws->u_scr[0] != scr[0] || ws->u_scr[1] != scr[1]) {
+        for (int j = 0; j < ws->n; ++j)
+            mf_sobol2((uint32_t)j, scr[0], scr[1], ws->u + 2 * j);
+        ws->u_n = ws->n;
+        ws->u_scr[0] = scr[0];
+        ws->u_scr[1] = scr[1];
+    }
     model_sample_weights(m, alpha, wo, ws->n, ws->u, ws->dir, ws->pdf, ws->w);
     double sum;
     mf_vec3 mean;
@@ -771,6 +778,8 @@ typedef struct {
     size_t msg_size;
     uint32_t scr[2];
     pthread_mutex_t lock;
+    pthread_mutex_t ckpt_lock; /* one checkpoint write at a time (outside `lock`) */
+    long ckpt_taken, ckpt_written; /* snapshots taken (under lock) and the newest written */
 } job;
 
 static void entry_to_doubles(const mf_ltcfit_entry *e, double *x)
@@ -841,31 +850,57 @@ static uint64_t ckpt_checksum(const unsigned char *p, size_t n)
 
 /* The file: the header, one done byte per column, ENTRY_DOUBLES doubles per entry (native byte
  * order: a checkpoint is resumed on the machine that wrote it), then the 8-byte checksum of all
- * that.  Written atomically (mf_io.h).  Called with the lock held. */
-static mf_status ckpt_write(job *j)
+ * that.  ckpt_snapshot builds it in *b (called with the lock held: a consistent state); ckpt_commit
+ * writes it atomically (mf_io.h) without the lock, so that the other workers go on fitting (and
+ * reporting progress, which takes the lock) while the file is written and synced. */
+static void ckpt_snapshot(job *j, mf_buf *b);
+
+static mf_status ckpt_write_buf(job *j, mf_buf *b)
 {
     const char *path = j->o->checkpoint;
-    mf_buf b = {0};
+    char why[512];
+    mf_status st = b->failed ? MF_ERR_ALLOC : mf_io_write_buf_atomic(path, b, why, sizeof why);
+    if (st != MF_OK && j->msg) {
+        pthread_mutex_lock(&j->lock);
+        if (j->status == MF_OK)
+            snprintf(j->msg, j->msg_size, "cannot write the checkpoint: %s", b->failed ? "out of memory" : why);
+        pthread_mutex_unlock(&j->lock);
+    }
+    return st;
+}
+
+/* Writes the snapshot number seq unless a newer one was written already (snapshots can reach
+ * the writer out of order: the file only ever moves forward).  Frees b. */
+static mf_status ckpt_commit(job *j, mf_buf *b, long seq)
+{
+    mf_status st = MF_OK;
+    pthread_mutex_lock(&j->ckpt_lock);
+    if (seq > j->ckpt_written) {
+        st = ckpt_write_buf(j, b);
+        if (st == MF_OK)
+            j->ckpt_written = seq;
+    }
+    pthread_mutex_unlock(&j->ckpt_lock);
+    mf_buf_free(b);
+    return st;
+}
+
+static void ckpt_snapshot(job *j, mf_buf *b)
+{
     ckpt_header h;
     ckpt_header_make(j, &h);
-    mf_buf_put(&b, &h, sizeof h);
-    mf_buf_put(&b, j->done, (size_t)j->o->n_r);
+    mf_buf_put(b, &h, sizeof h);
+    mf_buf_put(b, j->done, (size_t)j->o->n_r);
     size_t n = (size_t)j->o->n_r * (size_t)j->o->n_u;
-    for (size_t i = 0; i < n && !b.failed; ++i) {
+    for (size_t i = 0; i < n && !b->failed; ++i) {
         double x[ENTRY_DOUBLES];
         entry_to_doubles(&j->entries[i], x);
-        mf_buf_put(&b, x, sizeof x);
+        mf_buf_put(b, x, sizeof x);
     }
-    if (!b.failed) {
-        uint64_t sum = ckpt_checksum((const unsigned char *)b.data, b.len);
-        mf_buf_put(&b, &sum, sizeof sum);
+    if (!b->failed) {
+        uint64_t sum = ckpt_checksum((const unsigned char *)b->data, b->len);
+        mf_buf_put(b, &sum, sizeof sum);
     }
-    char why[512];
-    mf_status st = mf_io_write_buf_atomic(path, &b, why, sizeof why);
-    mf_buf_free(&b);
-    if (st != MF_OK && j->msg)
-        snprintf(j->msg, j->msg_size, "cannot write the checkpoint: %s", why);
-    return st;
 }
 
 /* Loads a checkpoint: MF_OK (columns marked done), MF_ERR_IO (no file: nothing loaded, not an
@@ -980,6 +1015,8 @@ static void *worker(void *arg)
                 pthread_mutex_unlock(&j->lock);
             }
         }
+        mf_buf snap = {0};
+        long snap_seq = 0;
         pthread_mutex_lock(&j->lock);
         if (st != MF_OK) {
             if (j->status == MF_OK) {
@@ -993,12 +1030,22 @@ static void *worker(void *arg)
                 j->entries[c + n_r * u] = col[u];
             j->done[c] = 1;
             if (j->o->checkpoint) {
-                mf_status cs = ckpt_write(j);
-                if (cs != MF_OK && j->status == MF_OK)
-                    j->status = cs;
+                snap_seq = ++j->ckpt_taken;
+                ckpt_snapshot(j, &snap);
             }
         }
         pthread_mutex_unlock(&j->lock);
+        if (snap_seq > 0) { /* written outside the lock (ckpt_commit) */
+            mf_status cs = ckpt_commit(j, &snap, snap_seq);
+            memset(&snap, 0, sizeof snap);
+            snap_seq = 0;
+            if (cs != MF_OK) {
+                pthread_mutex_lock(&j->lock);
+                if (j->status == MF_OK)
+                    j->status = cs;
+                pthread_mutex_unlock(&j->lock);
+            }
+        }
     }
     if (!col) {
         pthread_mutex_lock(&j->lock);
@@ -1073,6 +1120,7 @@ mf_status mf_ltcfit_table(const mf_brdf_model *model, const mf_ltcfit_options *o
     j.total_entries = (int)n;
     j.entries_done = result->columns_resumed * o->n_u;
     pthread_mutex_init(&j.lock, NULL);
+    pthread_mutex_init(&j.ckpt_lock, NULL);
     int nt = o->threads;
     pthread_t th[256];
     int started = 0;
@@ -1086,6 +1134,7 @@ mf_status mf_ltcfit_table(const mf_brdf_model *model, const mf_ltcfit_options *o
     for (int i = 0; i < started; ++i)
         pthread_join(th[i], NULL);
     pthread_mutex_destroy(&j.lock);
+    pthread_mutex_destroy(&j.ckpt_lock);
     int done = 0;
     for (int c = 0; c < o->n_r; ++c)
         done += j.done[c];
