@@ -778,8 +778,11 @@ typedef struct {
     size_t msg_size;
     uint32_t scr[2];
     pthread_mutex_t lock;
-    pthread_mutex_t ckpt_lock; /* one checkpoint write at a time (outside `lock`) */
-    long ckpt_taken, ckpt_written; /* snapshots taken (under lock) and the newest written */
+    /* the checkpoint writer (ckpt_writer): the newest snapshot not yet taken, under `lock` */
+    pthread_cond_t ckpt_cond;
+    mf_buf ckpt_pending;
+    int ckpt_has_pending, ckpt_quit;
+    int ckpt_sync; /* no writer thread could be started: the worker writes (under the lock) */
 } job;
 
 static void entry_to_doubles(const mf_ltcfit_entry *e, double *x)
@@ -850,39 +853,55 @@ static uint64_t ckpt_checksum(const unsigned char *p, size_t n)
 
 /* The file: the header, one done byte per column, ENTRY_DOUBLES doubles per entry (native byte
  * order: a checkpoint is resumed on the machine that wrote it), then the 8-byte checksum of all
- * that.  ckpt_snapshot builds it in *b (called with the lock held: a consistent state); ckpt_commit
- * writes it atomically (mf_io.h) without the lock, so that the other workers go on fitting (and
- * reporting progress, which takes the lock) while the file is written and synced. */
+ * that.  ckpt_snapshot builds it in *b (called with the lock held: a consistent state) after each
+ * completed column; a thread of its own (ckpt_writer) writes the newest snapshot atomically (mf_io.h),
+ * so that no worker waits for the file to be written and synced (64 fsyncs per default table, each
+ * up to tens of milliseconds on a busy disk).  A snapshot replaces one the writer has not taken yet:
+ * the file is rewritten after completed columns, always with the newest state, and the writer
+ * finishes the last one before mf_ltcfit_table returns. */
 static void ckpt_snapshot(job *j, mf_buf *b);
 
-static mf_status ckpt_write_buf(job *j, mf_buf *b)
+/* Writes b to the checkpoint; on failure the reason in why.  Touches nothing shared. */
+static mf_status ckpt_write_buf(const job *j, const mf_buf *b, char *why, size_t why_size)
 {
-    const char *path = j->o->checkpoint;
-    char why[512];
-    mf_status st = b->failed ? MF_ERR_ALLOC : mf_io_write_buf_atomic(path, b, why, sizeof why);
-    if (st != MF_OK && j->msg) {
-        pthread_mutex_lock(&j->lock);
-        if (j->status == MF_OK)
-            snprintf(j->msg, j->msg_size, "cannot write the checkpoint: %s", b->failed ? "out of memory" : why);
-        pthread_mutex_unlock(&j->lock);
+    if (b->failed) {
+        snprintf(why, why_size, "out of memory");
+        return MF_ERR_ALLOC;
     }
-    return st;
+    return mf_io_write_buf_atomic(j->o->checkpoint, b, why, why_size);
 }
 
-/* Writes the snapshot number seq unless a newer one was written already (snapshots can reach
- * the writer out of order: the file only ever moves forward).  Frees b. */
-static mf_status ckpt_commit(job *j, mf_buf *b, long seq)
+/* The first failure becomes the fit's status and message.  Called with the lock held. */
+static void ckpt_failed(job *j, mf_status st, const char *why)
 {
-    mf_status st = MF_OK;
-    pthread_mutex_lock(&j->ckpt_lock);
-    if (seq > j->ckpt_written) {
-        st = ckpt_write_buf(j, b);
-        if (st == MF_OK)
-            j->ckpt_written = seq;
+    if (st == MF_OK || j->status != MF_OK)
+        return;
+    j->status = st;
+    if (j->msg)
+        snprintf(j->msg, j->msg_size, "cannot write the checkpoint: %s", why);
+}
+
+static void *ckpt_writer(void *arg)
+{
+    job *j = arg;
+    pthread_mutex_lock(&j->lock);
+    for (;;) {
+        while (!j->ckpt_has_pending && !j->ckpt_quit)
+            pthread_cond_wait(&j->ckpt_cond, &j->lock);
+        if (!j->ckpt_has_pending)
+            break; /* quit, nothing left to write */
+        mf_buf b = j->ckpt_pending;
+        memset(&j->ckpt_pending, 0, sizeof j->ckpt_pending);
+        j->ckpt_has_pending = 0;
+        pthread_mutex_unlock(&j->lock);
+        char why[512];
+        mf_status st = ckpt_write_buf(j, &b, why, sizeof why);
+        mf_buf_free(&b);
+        pthread_mutex_lock(&j->lock);
+        ckpt_failed(j, st, why);
     }
-    pthread_mutex_unlock(&j->ckpt_lock);
-    mf_buf_free(b);
-    return st;
+    pthread_mutex_unlock(&j->lock);
+    return NULL;
 }
 
 static void ckpt_snapshot(job *j, mf_buf *b)
@@ -1015,8 +1034,6 @@ static void *worker(void *arg)
                 pthread_mutex_unlock(&j->lock);
             }
         }
-        mf_buf snap = {0};
-        long snap_seq = 0;
         pthread_mutex_lock(&j->lock);
         if (st != MF_OK) {
             if (j->status == MF_OK) {
@@ -1029,23 +1046,20 @@ static void *worker(void *arg)
             for (int u = 0; u < n_u; ++u)
                 j->entries[c + n_r * u] = col[u];
             j->done[c] = 1;
-            if (j->o->checkpoint) {
-                snap_seq = ++j->ckpt_taken;
-                ckpt_snapshot(j, &snap);
+            if (j->o->checkpoint) { /* the newest state for the writer (ckpt_writer) */
+                mf_buf_free(&j->ckpt_pending);
+                memset(&j->ckpt_pending, 0, sizeof j->ckpt_pending);
+                ckpt_snapshot(j, &j->ckpt_pending);
+                if (j->ckpt_sync) {
+                    char why[512];
+                    ckpt_failed(j, ckpt_write_buf(j, &j->ckpt_pending, why, sizeof why), why);
+                } else {
+                    j->ckpt_has_pending = 1;
+                    pthread_cond_signal(&j->ckpt_cond);
+                }
             }
         }
         pthread_mutex_unlock(&j->lock);
-        if (snap_seq > 0) { /* written outside the lock (ckpt_commit) */
-            mf_status cs = ckpt_commit(j, &snap, snap_seq);
-            memset(&snap, 0, sizeof snap);
-            snap_seq = 0;
-            if (cs != MF_OK) {
-                pthread_mutex_lock(&j->lock);
-                if (j->status == MF_OK)
-                    j->status = cs;
-                pthread_mutex_unlock(&j->lock);
-            }
-        }
     }
     if (!col) {
         pthread_mutex_lock(&j->lock);
@@ -1120,7 +1134,10 @@ mf_status mf_ltcfit_table(const mf_brdf_model *model, const mf_ltcfit_options *o
     j.total_entries = (int)n;
     j.entries_done = result->columns_resumed * o->n_u;
     pthread_mutex_init(&j.lock, NULL);
-    pthread_mutex_init(&j.ckpt_lock, NULL);
+    pthread_cond_init(&j.ckpt_cond, NULL);
+    pthread_t writer_tid;
+    int writer = o->checkpoint && pthread_create(&writer_tid, NULL, ckpt_writer, &j) == 0;
+    j.ckpt_sync = o->checkpoint && !writer;
     int nt = o->threads;
     pthread_t th[256];
     int started = 0;
@@ -1133,8 +1150,16 @@ mf_status mf_ltcfit_table(const mf_brdf_model *model, const mf_ltcfit_options *o
         worker(&j);
     for (int i = 0; i < started; ++i)
         pthread_join(th[i], NULL);
+    if (writer) { /* the last snapshot written, then the writer ends */
+        pthread_mutex_lock(&j.lock);
+        j.ckpt_quit = 1;
+        pthread_cond_signal(&j.ckpt_cond);
+        pthread_mutex_unlock(&j.lock);
+        pthread_join(writer_tid, NULL);
+    }
+    mf_buf_free(&j.ckpt_pending);
+    pthread_cond_destroy(&j.ckpt_cond);
     pthread_mutex_destroy(&j.lock);
-    pthread_mutex_destroy(&j.ckpt_lock);
     int done = 0;
     for (int c = 0; c < o->n_r; ++c)
         done += j.done[c];
