@@ -368,6 +368,42 @@ static void test_albedo_given(void)
         CHECK(same);
     }
     free(alb);
+    /* the whole table with the albedo and Fresnel moment handed in (mf_ltcfit_options.albedo, as
+     * mf_ltc_bake does with mf_ltc_gate_texel_albedo_fresnel): every field the same bits; and the
+     * combined routine's albedo is mf_ltc_gate_texel_albedo's.  One texel's albedo left NaN is
+     * computed by the fitter (the same bits again). */
+    double *a3 = malloc(sizeof *a3 * 3 * n);
+    CHECK(a3 != NULL);
+    for (size_t k = 0; a3 && k < n; ++k) {
+        mf_result q, qa, qf;
+        int ir = (int)(k % (size_t)o.n_r), iu = (int)(k / (size_t)o.n_r);
+        CHECK(mf_ltc_gate_texel_albedo_fresnel(&t, m, ir, iu, &qa, &qf) == MF_OK);
+        CHECK(mf_ltc_gate_texel_albedo(&t, m, ir, iu, &q) == MF_OK);
+        CHECK(q.val == qa.val && q.err == qa.err);
+        a3[3 * k] = qa.val;
+        a3[3 * k + 1] = qa.err;
+        a3[3 * k + 2] = qf.val;
+    }
+    if (a3) {
+        a3[3 * 9] = NAN;
+        mf_ltcfit_options og = o;
+        og.albedo = a3;
+        og.threads = 2;
+        mf_table tg;
+        mf_ltcfit_result rg;
+        CHECK(mf_ltcfit_table(m, &og, &tg, &rg, msg, sizeof msg) == MF_OK && !rg.interrupted);
+        size_t nv = n * (size_t)t.nfields, diff = 0;
+        for (size_t i = 0; i < nv; ++i)
+            diff += memcmp(&t.data[i], &tg.data[i], sizeof(double)) != 0;
+        for (size_t k = 0; k < n; ++k)
+            diff += memcmp(&r.entries[k], &rg.entries[k], sizeof r.entries[k]) != 0;
+        if (diff)
+            printf("table with the albedo given: %zu values differ from the fitter's own\n", diff);
+        CHECK(diff == 0);
+        mf_table_free(&tg);
+        mf_ltcfit_result_free(&rg);
+        free(a3);
+    }
     mf_table_free(&t);
     mf_ltcfit_result_free(&r);
 }

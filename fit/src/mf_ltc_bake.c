@@ -221,6 +221,7 @@ static void texel_job_init(texel_job *j, const mf_table *t, const mf_brdf_model 
     j->full.resume = 0;
     j->full.cancel = NULL;
     j->full.progress = NULL;
+    j->full.albedo = NULL; /* the refits get the albedo per texel (texel_refit_d) */
     j->quick = j->full;
     j->quick.samples = fit->samples / 4 >= 64 ? fit->samples / 4 : 64;
     j->quick.max_iterations = TEXEL_CHECK_STEPS < fit->max_iterations ? TEXEL_CHECK_STEPS : fit->max_iterations;
@@ -368,10 +369,15 @@ mf_status mf_ltc_bake_texel_check(const mf_table *t, const mf_brdf_model *model,
     return texel_check(t, model, fit, gate_seed, threads, NULL, c);
 }
 
-/* The model's albedo at every texel (mf_ltc_gate_texel_albedo; NaN where it fails), over threads:
- * the gate's albedo checks and the texel check's refits share it (one quadrature per texel instead
- * of two, and none on one thread).  Texel k goes to worker k mod threads; each value is computed
- * alone, so the array does not depend on the thread count. */
+/* The model's albedo and Fresnel moment at every texel of the table's layout
+ * (mf_ltc_gate_texel_albedo_fresnel; 3 doubles per texel: albedo, its error, moment; NaN where it
+ * fails), over threads, before the fit: the gate's quadrature, which the fitter takes for its
+ * magnitude and Fresnel fields (mf_ltcfit_options.albedo: the values it would compute, so the same
+ * table) and the gate's albedo checks and the texel check's refits use in turn.  One quadrature
+ * per texel instead of two.  The gate's albedo stays its own: computed from the model at the
+ * table's axes by the gate's routine, not read from the fit, and ltc_energy / ltc_albedo_quad still
+ * compare the table's magnitude field with it.  Texel k goes to worker k mod threads; each value
+ * is computed alone, so the array does not depend on the thread count. */
 typedef struct albedo_job {
     const mf_table *t;
     const mf_brdf_model *model;
@@ -385,22 +391,25 @@ static void *albedo_worker(void *arg)
     const int nr = (int)a->t->axes[0].size;
     const size_t n = (size_t)nr * a->t->axes[1].size;
     for (size_t k = (size_t)a->id; k < n; k += (size_t)a->threads) {
-        mf_result r;
-        if (mf_ltc_gate_texel_albedo(a->t, a->model, (int)(k % (size_t)nr), (int)(k / (size_t)nr), &r) == MF_OK) {
-            a->out[2 * k] = r.val;
-            a->out[2 * k + 1] = r.err;
+        mf_result r, f;
+        if (mf_ltc_gate_texel_albedo_fresnel(a->t, a->model, (int)(k % (size_t)nr), (int)(k / (size_t)nr), &r, &f) ==
+            MF_OK) {
+            a->out[3 * k] = r.val;
+            a->out[3 * k + 1] = r.err;
+            a->out[3 * k + 2] = f.val;
         } else {
-            a->out[2 * k] = a->out[2 * k + 1] = NAN;
+            a->out[3 * k] = a->out[3 * k + 1] = a->out[3 * k + 2] = NAN;
         }
     }
     return NULL;
 }
 
-/* NULL if out of memory (the gate then computes the albedo itself). */
+/* NULL if out of memory (the fit and the gate then compute the albedo themselves).  t: any table
+ * of the fit's layout (its fields are not read). */
 static double *texel_albedos(const mf_table *t, const mf_brdf_model *model, int threads)
 {
     const size_t n = (size_t)t->axes[0].size * t->axes[1].size;
-    double *out = malloc(sizeof *out * 2 * n);
+    double *out = malloc(sizeof *out * 3 * n);
     if (!out)
         return NULL;
     if (threads > 256)
@@ -638,14 +647,27 @@ mf_status mf_ltc_bake(const mf_ltc_bake_options *o, mf_ltc_bake_report *r)
 
     mf_table t;
     double t0 = now_seconds(), f0 = cpu_seconds();
+    /* the albedo and Fresnel moment of every texel, once for the fit and the gate (texel_albedos);
+     * counted in the fit's time (they are its magnitude and Fresnel fields) */
+    double *albedo3 = NULL;
+    mf_table lay;
+    if (mf_ltc_table_create_range(&lay, fo.n_r, fo.r_lo, fo.r_hi, fo.n_u, fo.u_lo, fo.u_hi) == MF_OK) {
+        if (mf_ltc_gate_layout_ok(&lay, NULL, 0))
+            albedo3 = texel_albedos(&lay, o->model, fo.threads >= 1 ? fo.threads : 1);
+        mf_table_free(&lay);
+    }
+    fo.albedo = albedo3;
     st = mf_ltcfit_table(o->model, &fo, &t, &r->fit, msg, sizeof msg);
+    fo.albedo = NULL;
     r->fit_seconds = now_seconds() - t0;
     r->fit_cpu_seconds = cpu_seconds() - f0;
     if (st != MF_OK) {
+        free(albedo3);
         set_msg(r, "%s%s%s", mf_status_str(st), msg[0] ? ": " : "", msg);
         return st;
     }
     if (r->fit.interrupted) {
+        free(albedo3);
         r->interrupted = 1;
         set_msg(r, "interrupted after %d of %d columns; no table written; resume continues from %s",
                 r->fit.columns_done, fo.n_r, r->checkpoint);
@@ -653,6 +675,7 @@ mf_status mf_ltc_bake(const mf_ltc_bake_options *o, mf_ltc_bake_report *r)
     }
 
     r->stage = MF_LTC_BAKE_STAGE_GATE;
+    const size_t n_texels = (size_t)fo.n_r * (size_t)fo.n_u;
     mf_ltc_gate_options go;
     mf_ltc_gate_options_default(&go);
     go.seed = fo.seed;
@@ -664,7 +687,16 @@ mf_status mf_ltc_bake(const mf_ltc_bake_options *o, mf_ltc_bake_report *r)
     go.mc_samples = MF_LTC_BAKE_GATE_MC_SAMPLES;
     t0 = now_seconds();
     double c0 = cpu_seconds();
-    double *albedo = mf_ltc_gate_layout_ok(&t, NULL, 0) ? texel_albedos(&t, o->model, fo.threads) : NULL;
+    /* the gate's albedo array (val, err per texel) from the quadrature above; NaN entries (and all
+     * of them if it could not be allocated) are computed by the gate */
+    double *albedo = NULL;
+    if (albedo3 && mf_ltc_gate_layout_ok(&t, NULL, 0) && (albedo = malloc(sizeof *albedo * 2 * n_texels)) != NULL)
+        for (size_t k = 0; k < n_texels; ++k) {
+            albedo[2 * k] = albedo3[3 * k];
+            albedo[2 * k + 1] = albedo3[3 * k + 1];
+        }
+    free(albedo3);
+    albedo3 = NULL;
     go.albedo = albedo;
     /* The library gate (single-threaded) runs in a thread of its own beside the texel check's
      * workers when more than one thread is allowed: the two read the table and the albedo array

@@ -124,7 +124,6 @@ typedef struct {
     double *sc_dot; /* scratch of texel_light_sums: the cap dot products of a centre's candidates */
     int *sc_in;     /* and the indices inside one light (all sized for the texel's directions) */
     double *sc_x, *sc_y, *sc_z; /* the candidates' components */
-    int64_t *sc_mask;           /* the candidates' edge-test results */
     mf_vec3 lobe;   /* mean direction m of f cos (unit, xz plane); the lobe frame is R = [[mz, 0, mx],
                      * [0, 1, 0], [-mx, 0, mz]] (R z = m), and the solver's parameters are those of
                      * M' = R^T M = [[a', 0, b'], [0, c', 0], [d', 0, 1]]: the same 4-parameter family
@@ -173,7 +172,7 @@ static texel *texel_new(void)
 {
     texel *t = malloc(sizeof *t);
     if (t)
-        t->sc_dot = t->sc_x = NULL, t->sc_in = NULL, t->sc_mask = NULL;
+        t->sc_dot = t->sc_x = NULL, t->sc_in = NULL;
     return t;
 }
 
@@ -183,36 +182,42 @@ static void texel_free(texel *t)
         free(t->sc_dot);
         free(t->sc_in);
         free(t->sc_x);
-        free(t->sc_mask);
         free(t);
     }
 }
 
 /* Samples, magnitude, lobe statistics, lights and their BRDF integrals of one texel. */
 static mf_status texel_prepare(const mf_brdf_model *m, double alpha, double cos_theta, const uint32_t scr[2],
-                               const mf_result *albedo, workspace *ws, texel *t)
+                               const mf_result *albedo, const double *fresnel, workspace *ws, texel *t)
 {
     mf_vec3 wo = view_dir(cos_theta);
     ws->n = cos_theta < GRAZING_COS ? GRAZING_FACTOR * ws->base : ws->base;
     t->sc_dot = malloc(sizeof *t->sc_dot * (size_t)ws->n);
     t->sc_in = malloc(sizeof *t->sc_in * (size_t)ws->n);
     t->sc_x = malloc(sizeof *t->sc_x * 3 * (size_t)ws->n);
-    t->sc_mask = malloc(sizeof *t->sc_mask * (size_t)ws->n);
-    if (!t->sc_dot || !t->sc_in || !t->sc_x || !t->sc_mask)
+    if (!t->sc_dot || !t->sc_in || !t->sc_x)
         return MF_ERR_ALLOC;
     t->sc_y = t->sc_x + ws->n;
     t->sc_z = t->sc_y + ws->n;
     mf_status st = MF_OK;
-    if (albedo) { /* given (mf_ltcfit_entry_fit_albedo): the same rule's value; no Fresnel moment */
+    if (albedo) { /* given (mf_ltcfit_entry_fit_albedo, mf_ltcfit_options.albedo): the same rule's
+                   * value; the Fresnel moment when given, else NaN */
         t->magnitude = albedo->val;
         t->magnitude_err = albedo->err;
-        t->fresnel = NAN;
+        t->fresnel = fresnel ? *fresnel : NAN;
         if (!isfinite(albedo->val))
             return MF_ERR_DOMAIN;
     } else if ((st = texel_magnitude(m, alpha, wo, ws, t)) != MF_OK)
         return st;
-    for (int j = 0; j < ws->n; ++j)
-        mf_sobol2((uint32_t)j, scr[0], scr[1], ws->u + 2 * j);
+    /* the points depend on the index and the scramble only: every texel of a worker uses the same
+     * prefix, computed once (u_n points of u_scr kept in the workspace) */
+    if (ws->u_n < ws->n || ws->u_scr[0] != scr[0] || ws->u_scr[1] != scr[1]) {
+        for (int j = 0; j < ws->n; ++j)
+            mf_sobol2((uint32_t)j, scr[0], scr[1], ws->u + 2 * j);
+        ws->u_n = ws->n;
+        ws->u_scr[0] = scr[0];
+        ws->u_scr[1] = scr[1];
+    }
     model_sample_weights(m, alpha, wo, ws->n, ws->u, ws->dir, ws->pdf, ws->w);
     double sum;
     mf_vec3 mean;
@@ -276,6 +281,53 @@ static mf_status texel_prepare(const mf_brdf_model *m, double alpha, double cos_
     return MF_OK;
 }
 
+/* The candidates i < m (components X, Y, Z, indices cand) inside every edge plane of light l
+ * (light_inside's test X ex + Y ey + Z ez > 0 for every edge, without its early exit: the same
+ * answer, the tests have no side effects): their indices into in[], in order; returns their count.
+ * Two candidates at a time in 2-wide vectors where the compiler has them (GCC and Clang vector
+ * extensions): the same IEEE operations in the same order per element (the build contracts
+ * nothing), all edges in registers; the scalar loop is the same test. */
+#if defined(__GNUC__) || defined(__clang__)
+#define LS_VEC2 1
+typedef double ls_v2d __attribute__((vector_size(16)));
+typedef long long ls_v2l __attribute__((vector_size(16)));
+#endif
+static int edge_select(const light *l, int m, const double *X, const double *Y, const double *Z, const int *cand,
+                       int *in)
+{
+    const int ne = l->poly.n;
+    int n = 0, i = 0;
+#ifdef LS_VEC2
+    ls_v2d ex[MF_POLYGON_MAX_VERTICES], ey[MF_POLYGON_MAX_VERTICES], ez[MF_POLYGON_MAX_VERTICES];
+    for (int e = 0; e < ne; ++e) {
+        ex[e] = (ls_v2d){l->edge_n[e].x, l->edge_n[e].x};
+        ey[e] = (ls_v2d){l->edge_n[e].y, l->edge_n[e].y};
+        ez[e] = (ls_v2d){l->edge_n[e].z, l->edge_n[e].z};
+    }
+    for (; i + 2 <= m; i += 2) {
+        ls_v2d x, y, z;
+        memcpy(&x, X + i, sizeof x);
+        memcpy(&y, Y + i, sizeof y);
+        memcpy(&z, Z + i, sizeof z);
+        ls_v2l ok = (x * ex[0] + y * ey[0] + z * ez[0]) > 0.0;
+        for (int e = 1; e < ne; ++e)
+            ok &= (x * ex[e] + y * ey[e] + z * ez[e]) > 0.0;
+        in[n] = cand[i];
+        n += ok[0] != 0;
+        in[n] = cand[i + 1];
+        n += ok[1] != 0;
+    }
+#endif
+    for (; i < m; ++i) {
+        int ok = 1;
+        for (int e = 0; e < ne; ++e)
+            ok &= X[i] * l->edge_n[e].x + Y[i] * l->edge_n[e].y + Z[i] * l->edge_n[e].z > 0.0;
+        in[n] = cand[i];
+        n += ok;
+    }
+    return n;
+}
+
 /* The sums over the live directions inside each light k (light_inside's test: the bounding cap,
  * then the edge planes), in index order: out[4 k + 0..3] = sum of w, and with cv also of cw, cw^2
  * and cw w (light_sum, light_sums_cv).  The same sums, bit for bit, with less work: lights whose
@@ -309,7 +361,6 @@ static void texel_light_sums(const texel *t, const workspace *ws, int cv, double
             }
         const double cx = c.x, cy = c.y, cz = c.z, cr0 = t->lights[grp[0]].cos_radius;
         double *X = t->sc_x, *Y = t->sc_y, *Z = t->sc_z;
-        int64_t *mask = t->sc_mask;
         int m = 0;
         for (int j = 0; j < live; ++j) {
             double d = x[j] * cx + y[j] * cy + z[j] * cz;
@@ -337,22 +388,7 @@ static void texel_light_sums(const texel *t, const workspace *ws, int cv, double
                 m = m2;
                 cr_done = cr;
             }
-            /* every edge plane tested (light_inside's test without its early exit: the same
-             * answer, the tests have no side effects), edge by edge over the candidates'
-             * component arrays, which the compiler vectorises (the same operations per element) */
-            const int ne = l->poly.n;
-            for (int i = 0; i < m; ++i)
-                mask[i] = 1;
-            for (int e = 0; e < ne; ++e) {
-                const double ex = l->edge_n[e].x, ey = l->edge_n[e].y, ez = l->edge_n[e].z;
-                for (int i = 0; i < m; ++i)
-                    mask[i] &= X[i] * ex + Y[i] * ey + Z[i] * ez > 0.0;
-            }
-            int n = 0;
-            for (int i = 0; i < m; ++i) {
-                in[n] = cand[i];
-                n += (int)mask[i];
-            }
+            const int n = edge_select(l, m, X, Y, Z, cand, in);
             double *o = out + 4 * grp[g];
             if (!cv) {
                 double sy = 0.0;
@@ -405,14 +441,55 @@ static void texel_targets_raw(texel *t, const workspace *ws)
  * light between neighbouring texels) cancels to the extent that magnitude D_0 matches f cos.
  * Measured at GGX alpha 1, 4096 samples: the weakly determined skew (view-frame d, 65-88 deg)
  * wandered by +-0.006 between neighbouring rows from this noise; +-0.001 with the control. */
+/* cw_j = magnitude D(w_j) / pdf_j for the live directions: mf_ltc_eval's operations, in its order,
+ * two directions at a time in 2-wide vectors where the compiler has them (the same IEEE operations
+ * per element, nothing contracted); a pair with a direction mf_ltc_eval would reject (not finite,
+ * zero or overflowing length) goes through mf_ltc_eval itself.  1 if every cw_j is finite. */
+static int cv_weights(const mf_ltc *ltc, double magnitude, const workspace *ws, int live)
+{
+    int j = 0;
+#ifdef LS_VEC2
+    const mf_mat3 a = ltc->inv;
+    const ls_v2d k = {ltc->abs_det_inv, ltc->abs_det_inv};
+    for (; j + 2 <= live; j += 2) {
+        ls_v2d x, y, z, pdf;
+        memcpy(&x, ws->x + j, sizeof x);
+        memcpy(&y, ws->y + j, sizeof y);
+        memcpy(&z, ws->z + j, sizeof z);
+        memcpy(&pdf, ws->pdf + j, sizeof pdf);
+        ls_v2d len = x * x + y * y + z * z;
+        len = (ls_v2d){sqrt(len[0]), sqrt(len[1])};
+        if (!(isfinite(x[0]) && isfinite(y[0]) && isfinite(z[0]) && isfinite(x[1]) && isfinite(y[1]) && isfinite(z[1]) &&
+              len[0] > 0.0 && len[1] > 0.0 && isfinite(len[0]) && isfinite(len[1]))) {
+            for (int q = j; q < j + 2; ++q)
+                ws->cw[q] = magnitude * mf_ltc_eval(ltc, ws->dir[q]) / ws->pdf[q];
+            continue;
+        }
+        ls_v2d s = 1.0 / len;
+        ls_v2d vx = x * s, vy = y * s, vz = z * s;
+        ls_v2d ux = a.m[0][0] * vx + a.m[0][1] * vy + a.m[0][2] * vz;
+        ls_v2d uy = a.m[1][0] * vx + a.m[1][1] * vy + a.m[1][2] * vz;
+        ls_v2d uz = a.m[2][0] * vx + a.m[2][1] * vy + a.m[2][2] * vz;
+        ls_v2d r = ux * ux + uy * uy + uz * uz;
+        r = (ls_v2d){sqrt(r[0]), sqrt(r[1])};
+        ls_v2d d = (uz / r) * (k / (r * r * r)) * MF_INV_PI;
+        ls_v2d cw = magnitude * d / pdf;
+        ws->cw[j] = uz[0] > 0.0 ? cw[0] : magnitude * 0.0 / ws->pdf[j];
+        ws->cw[j + 1] = uz[1] > 0.0 ? cw[1] : magnitude * 0.0 / ws->pdf[j + 1];
+    }
+#endif
+    for (; j < live; ++j)
+        ws->cw[j] = magnitude * mf_ltc_eval(ltc, ws->dir[j]) / ws->pdf[j];
+    int ok = 1;
+    for (j = 0; j < live; ++j)
+        ok &= isfinite(ws->cw[j]) != 0;
+    return ok;
+}
+
 static void texel_control_variate(texel *t, workspace *ws, const double p0[4])
 {
     mf_ltc ltc;
-    int ok = mf_ltc_init(&ltc, view_matrix(t->lobe, p0)) == MF_OK;
-    for (int j = 0; ok && j < t->live; ++j) {
-        ws->cw[j] = t->magnitude * mf_ltc_eval(&ltc, ws->dir[j]) / ws->pdf[j];
-        ok = isfinite(ws->cw[j]);
-    }
+    int ok = mf_ltc_init(&ltc, view_matrix(t->lobe, p0)) == MF_OK && cv_weights(&ltc, t->magnitude, ws, t->live);
     if (!ok) {
         texel_targets_raw(t, ws);
         return;
@@ -562,7 +639,7 @@ static int lobe_params(mf_vec3 m, mf_mat3 mv, double q[4])
  * at GGX alpha 0.001, 1.3 deg it was a poor start and a useless control variate).  lobe_out: the
  * fitted lobe-frame parameters (may be NULL). */
 static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_theta, const mf_result *albedo,
-                           const double *start,
+                           const double *fresnel, const double *start,
                            const double *lobe_start, const mf_ltcfit_options *o, const uint32_t scr[2],
                            workspace *ws, mf_ltcfit_entry *out, double *lobe_out)
 {
@@ -570,7 +647,7 @@ static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_thet
     if (!t)
         return MF_ERR_ALLOC;
     memset(out, 0, sizeof *out);
-    mf_status st = texel_prepare(m, alpha, cos_theta, scr, albedo, ws, t);
+    mf_status st = texel_prepare(m, alpha, cos_theta, scr, albedo, fresnel, ws, t);
     if (st != MF_OK) {
         texel_free(t);
         return st;
@@ -685,7 +762,7 @@ mf_status mf_ltcfit_entry_fit_albedo(const mf_brdf_model *model, double alpha, d
     }
     uint32_t scr[2];
     sobol_scramble(o->seed, scr);
-    mf_status st = fit_texel(model, alpha, cos_theta, albedo, start, NULL, o, scr, &ws, out, NULL);
+    mf_status st = fit_texel(model, alpha, cos_theta, albedo, NULL, start, NULL, o, scr, &ws, out, NULL);
     ws_free(&ws);
     return st;
 }
@@ -709,7 +786,7 @@ mf_status mf_ltcfit_objective(const mf_brdf_model *model, double alpha, double c
     }
     uint32_t scr[2];
     sobol_scramble(o->seed, scr);
-    mf_status st = texel_prepare(model, alpha, cos_theta, scr, NULL, &ws, t);
+    mf_status st = texel_prepare(model, alpha, cos_theta, scr, NULL, NULL, &ws, t);
     if (st == MF_OK)
         texel_targets_raw(t, &ws);
     double r[LIGHTS_MAX + PROX_RESIDUALS], jb[4 * (LIGHTS_MAX + PROX_RESIDUALS)];
@@ -742,6 +819,11 @@ typedef struct {
     size_t msg_size;
     uint32_t scr[2];
     pthread_mutex_t lock;
+    /* the checkpoint writer (ckpt_writer): the newest snapshot not yet taken, under `lock` */
+    pthread_cond_t ckpt_cond;
+    mf_buf ckpt_pending;
+    int ckpt_has_pending, ckpt_quit;
+    int ckpt_sync; /* no writer thread could be started: the worker writes (under the lock) */
 } job;
 
 static void entry_to_doubles(const mf_ltcfit_entry *e, double *x)
@@ -812,31 +894,73 @@ static uint64_t ckpt_checksum(const unsigned char *p, size_t n)
 
 /* The file: the header, one done byte per column, ENTRY_DOUBLES doubles per entry (native byte
  * order: a checkpoint is resumed on the machine that wrote it), then the 8-byte checksum of all
- * that.  Written atomically (mf_io.h).  Called with the lock held. */
-static mf_status ckpt_write(job *j)
+ * that.  ckpt_snapshot builds it in *b (called with the lock held: a consistent state) after each
+ * completed column; a thread of its own (ckpt_writer) writes the newest snapshot atomically (mf_io.h),
+ * so that no worker waits for the file to be written and synced (64 fsyncs per default table, each
+ * up to tens of milliseconds on a busy disk).  A snapshot replaces one the writer has not taken yet:
+ * the file is rewritten after completed columns, always with the newest state, and the writer
+ * finishes the last one before mf_ltcfit_table returns. */
+static void ckpt_snapshot(job *j, mf_buf *b);
+
+/* Writes b to the checkpoint; on failure the reason in why.  Touches nothing shared. */
+static mf_status ckpt_write_buf(const job *j, const mf_buf *b, char *why, size_t why_size)
 {
-    const char *path = j->o->checkpoint;
-    mf_buf b = {0};
+    if (b->failed) {
+        snprintf(why, why_size, "out of memory");
+        return MF_ERR_ALLOC;
+    }
+    return mf_io_write_buf_atomic(j->o->checkpoint, b, why, why_size);
+}
+
+/* The first failure becomes the fit's status and message.  Called with the lock held. */
+static void ckpt_failed(job *j, mf_status st, const char *why)
+{
+    if (st == MF_OK || j->status != MF_OK)
+        return;
+    j->status = st;
+    if (j->msg)
+        snprintf(j->msg, j->msg_size, "cannot write the checkpoint: %s", why);
+}
+
+static void *ckpt_writer(void *arg)
+{
+    job *j = arg;
+    pthread_mutex_lock(&j->lock);
+    for (;;) {
+        while (!j->ckpt_has_pending && !j->ckpt_quit)
+            pthread_cond_wait(&j->ckpt_cond, &j->lock);
+        if (!j->ckpt_has_pending)
+            break; /* quit, nothing left to write */
+        mf_buf b = j->ckpt_pending;
+        memset(&j->ckpt_pending, 0, sizeof j->ckpt_pending);
+        j->ckpt_has_pending = 0;
+        pthread_mutex_unlock(&j->lock);
+        char why[512];
+        mf_status st = ckpt_write_buf(j, &b, why, sizeof why);
+        mf_buf_free(&b);
+        pthread_mutex_lock(&j->lock);
+        ckpt_failed(j, st, why);
+    }
+    pthread_mutex_unlock(&j->lock);
+    return NULL;
+}
+
+static void ckpt_snapshot(job *j, mf_buf *b)
+{
     ckpt_header h;
     ckpt_header_make(j, &h);
-    mf_buf_put(&b, &h, sizeof h);
-    mf_buf_put(&b, j->done, (size_t)j->o->n_r);
+    mf_buf_put(b, &h, sizeof h);
+    mf_buf_put(b, j->done, (size_t)j->o->n_r);
     size_t n = (size_t)j->o->n_r * (size_t)j->o->n_u;
-    for (size_t i = 0; i < n && !b.failed; ++i) {
+    for (size_t i = 0; i < n && !b->failed; ++i) {
         double x[ENTRY_DOUBLES];
         entry_to_doubles(&j->entries[i], x);
-        mf_buf_put(&b, x, sizeof x);
+        mf_buf_put(b, x, sizeof x);
     }
-    if (!b.failed) {
-        uint64_t sum = ckpt_checksum((const unsigned char *)b.data, b.len);
-        mf_buf_put(&b, &sum, sizeof sum);
+    if (!b->failed) {
+        uint64_t sum = ckpt_checksum((const unsigned char *)b->data, b->len);
+        mf_buf_put(b, &sum, sizeof sum);
     }
-    char why[512];
-    mf_status st = mf_io_write_buf_atomic(path, &b, why, sizeof why);
-    mf_buf_free(&b);
-    if (st != MF_OK && j->msg)
-        snprintf(j->msg, j->msg_size, "cannot write the checkpoint: %s", why);
-    return st;
 }
 
 /* Loads a checkpoint: MF_OK (columns marked done), MF_ERR_IO (no file: nothing loaded, not an
@@ -935,8 +1059,13 @@ static void *worker(void *arg)
         for (int u = 0; u < n_u && st == MF_OK; ++u) {
             if (stop_requested(j))
                 break;
-            st = fit_texel(j->model, alpha, mf_ltc_table_cos_theta(j->table, u), NULL, NULL, have_prev ? lobe_prev : NULL,
-                           j->o, j->scr, &ws, &col[u], lobe_prev);
+            /* the texel's albedo and Fresnel moment when the caller computed them (NaN: not) */
+            const double *given = j->o->albedo ? j->o->albedo + 3 * ((size_t)c + (size_t)n_r * (size_t)u) : NULL;
+            mf_result alb = {given ? given[0] : NAN, given ? given[1] : NAN};
+            int use = given && isfinite(given[0]);
+            st = fit_texel(j->model, alpha, mf_ltc_table_cos_theta(j->table, u), use ? &alb : NULL,
+                           use ? &given[2] : NULL, NULL, have_prev ? lobe_prev : NULL, j->o, j->scr, &ws, &col[u],
+                           lobe_prev);
             if (st == MF_OK) {
                 have_prev = 1;
                 pthread_mutex_lock(&j->lock);
@@ -958,10 +1087,17 @@ static void *worker(void *arg)
             for (int u = 0; u < n_u; ++u)
                 j->entries[c + n_r * u] = col[u];
             j->done[c] = 1;
-            if (j->o->checkpoint) {
-                mf_status cs = ckpt_write(j);
-                if (cs != MF_OK && j->status == MF_OK)
-                    j->status = cs;
+            if (j->o->checkpoint) { /* the newest state for the writer (ckpt_writer) */
+                mf_buf_free(&j->ckpt_pending);
+                memset(&j->ckpt_pending, 0, sizeof j->ckpt_pending);
+                ckpt_snapshot(j, &j->ckpt_pending);
+                if (j->ckpt_sync) {
+                    char why[512];
+                    ckpt_failed(j, ckpt_write_buf(j, &j->ckpt_pending, why, sizeof why), why);
+                } else {
+                    j->ckpt_has_pending = 1;
+                    pthread_cond_signal(&j->ckpt_cond);
+                }
             }
         }
         pthread_mutex_unlock(&j->lock);
@@ -1039,6 +1175,10 @@ mf_status mf_ltcfit_table(const mf_brdf_model *model, const mf_ltcfit_options *o
     j.total_entries = (int)n;
     j.entries_done = result->columns_resumed * o->n_u;
     pthread_mutex_init(&j.lock, NULL);
+    pthread_cond_init(&j.ckpt_cond, NULL);
+    pthread_t writer_tid;
+    int writer = o->checkpoint && pthread_create(&writer_tid, NULL, ckpt_writer, &j) == 0;
+    j.ckpt_sync = o->checkpoint && !writer;
     int nt = o->threads;
     pthread_t th[256];
     int started = 0;
@@ -1051,6 +1191,15 @@ mf_status mf_ltcfit_table(const mf_brdf_model *model, const mf_ltcfit_options *o
         worker(&j);
     for (int i = 0; i < started; ++i)
         pthread_join(th[i], NULL);
+    if (writer) { /* the last snapshot written, then the writer ends */
+        pthread_mutex_lock(&j.lock);
+        j.ckpt_quit = 1;
+        pthread_cond_signal(&j.ckpt_cond);
+        pthread_mutex_unlock(&j.lock);
+        pthread_join(writer_tid, NULL);
+    }
+    mf_buf_free(&j.ckpt_pending);
+    pthread_cond_destroy(&j.ckpt_cond);
     pthread_mutex_destroy(&j.lock);
     int done = 0;
     for (int c = 0; c < o->n_r; ++c)

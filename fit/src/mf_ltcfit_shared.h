@@ -337,6 +337,9 @@ typedef struct {
     int *cand;         /* indices passing a light's cap test */
     int n;             /* directions of this texel: base, or GRAZING_FACTOR base at grazing views */
     int base;          /* the options' samples (GRAZING_FACTOR base allocated) */
+    int u_n;           /* u holds the first u_n Sobol points of the scramble u_scr (0: none; the
+                        * isotropic fitter fills it once per worker, mf_ltcfit.c texel_prepare) */
+    uint32_t u_scr[2];
 } workspace;
 
 /* The quadrature of texel_magnitude: QUAD_PANELS 8-point panels per axis (mf_model_albedo). */
@@ -355,6 +358,8 @@ static inline int ws_init(workspace *ws, int base)
     ws->z = ws->x ? ws->x + 2 * (size_t)n : NULL;
     ws->cand = malloc(sizeof *ws->cand * (size_t)n);
     ws->n = ws->base = base;
+    ws->u_n = 0;
+    ws->u_scr[0] = ws->u_scr[1] = 0;
     return ws->dir && ws->w && ws->pdf && ws->cw && ws->x && ws->cand && ws->u;
 }
 static inline void ws_free(workspace *ws)

@@ -345,6 +345,17 @@ mf_status mf_ltc_gate_texel_albedo(const mf_table *t, const mf_brdf_model *model
     return gate_albedo(model, mf_ltc_table_alpha(t, ir), mf_ltc_gate_view(mf_ltc_table_cos_theta(t, iu)), out);
 }
 
+mf_status mf_ltc_gate_texel_albedo_fresnel(const mf_table *t, const mf_brdf_model *model, int ir, int iu,
+                                           mf_result *albedo, mf_result *fresnel)
+{
+    gate_layout L;
+    if (!albedo || !fresnel || !model || !layout_of(t, &L) || ir < 0 || iu < 0 || ir >= L.nr || iu >= L.nu)
+        return MF_ERR_DOMAIN;
+    mf_brdf_params p = mf_brdf_params_iso(mf_ltc_table_alpha(t, ir));
+    return mf_model_albedo_fresnel(model, &p, mf_ltc_gate_view(mf_ltc_table_cos_theta(t, iu)), GATE_QUAD_N, albedo,
+                                   fresnel);
+}
+
 /* The model's albedo at texel (ir, iu) by the 64 x 64 quadrature, cached; 0 if it failed. */
 static int quad_albedo(gate_ctx *g, int ir, int iu, mf_result *q)
 {

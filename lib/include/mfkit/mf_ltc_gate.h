@@ -95,6 +95,15 @@ void mf_ltc_gate_options_default(mf_ltc_gate_options *o);
  * mf_ltc_gate_view(mf_ltc_table_cos_theta)).  MF_ERR_DOMAIN for a bad table, texel or model. */
 mf_status mf_ltc_gate_texel_albedo(const mf_table *t, const mf_brdf_model *model, int ir, int iu, mf_result *out);
 
+/* mf_ltc_gate_texel_albedo and, from the same pass over the same points, the Schlick moment of the
+ * LTC table's Fresnel field (mf_model_albedo_fresnel): *albedo is the same bits as
+ * mf_ltc_gate_texel_albedo's whenever this returns MF_OK (it fails also where the moment alone is
+ * not finite).  These are the values the LTC fitter computes for its magnitude and Fresnel fields
+ * (mf_ltcfit.h, mf_ltcfit_options.albedo), so one quadrature per texel can serve the gate and the
+ * fit (mf_ltc_bake). */
+mf_status mf_ltc_gate_texel_albedo_fresnel(const mf_table *t, const mf_brdf_model *model, int ir, int iu,
+                                           mf_result *albedo, mf_result *fresnel);
+
 /* Runs the gate on t.  model may be NULL: then only the model-free checks run.  o may be NULL
  * (defaults).  Writes *count checks into checks[0..cap-1] (cap >= MF_LTC_GATE_MAX_CHECKS, else
  * MF_ERR_DOMAIN).  Returns MF_OK when all passed, MF_ERR_CHECK_FAILED otherwise, MF_ERR_DOMAIN for a

@@ -87,6 +87,13 @@ typedef struct mf_ltcfit_options {
     void *progress_user;
     double r_lo, r_hi;         /* the roughness axis r (alpha = max(r^2, 1e-4)): default [0, 1] */
     double u_lo, u_hi;         /* the view axis u = sqrt(1 - cos theta_o): default [0, 1]; 0 <= lo < hi <= 1 */
+    /* Optional, NULL by default (mf_ltcfit_table only): 3 doubles per texel, index 3 (ir + n_r iu):
+     * the albedo, its error estimate and the Fresnel moment at the texel, as
+     * mf_ltc_gate_texel_albedo_fresnel returns them for a table of this layout, computed beforehand
+     * (mf_ltc_bake computes them once for the fit and the gate).  They are the values the fitter
+     * computes (mf_model_albedo_fresnel, 64 points per axis, at the texel's alpha and view), so the
+     * table is the same bits with or without them; a NaN albedo is computed by the fitter. */
+    const double *albedo;
 } mf_ltcfit_options;
 
 void mf_ltcfit_options_default(mf_ltcfit_options *o);
