@@ -179,12 +179,16 @@ mf_status mf_ltc_gate_polygon_mc_params(const mf_brdf_model *model, const mf_brd
     mf_pcg32 rng;
     mf_pcg32_seed(&rng, seed, stream);
     double a1 = 0.0, a2 = 0.0;
-    /* The sums of squares are of w s, s = 4^j fixed by the first nonzero weight (w s in [1, 4)):
-     * a sheen texel's weights are ~1e-257 (charlie, alpha 1e-4, 51 deg), whose squares underflow
-     * to 0 and gave se = 0 (ltc_albedo_mc 23.4 on Monte Carlo noise alone).  s is an even power
-     * of two, so wherever nothing underflows or overflows every sum, the variance and sqrt scale
-     * exactly: the same bits as without it. */
-    double s = 0.0;
+    /* The sums of squares are of w s, s = 4^-j with j = floor(log2(max |w| so far) / 2) (the
+     * largest w s in [1, 4); when the maximum grows, the sums so far are rescaled): a sheen
+     * texel's weights are ~1e-257 (charlie, alpha 1e-4, 51 deg), whose squares underflow to 0 and
+     * gave se = 0 (ltc_albedo_mc 23.4 on Monte Carlo noise alone); a scale fixed by the first
+     * weight fails the other way when later weights are 1e200 times larger (charlie, alpha 0.004,
+     * 76 deg).  s and the rescalings are even powers of two, so wherever nothing underflows or
+     * overflows, every sum, the variance and the square root scale exactly: the same bits as
+     * without the scale. */
+    double s = 1.0;
+    int jcur = 0, have_j = 0;
     mf_status st = MF_OK;
     /* The samples in batches (mf_model_sample_weights: the bits of sample + eval_cos one at a time,
      * with the view-dependent parts computed once per batch), drawn in the same order. */
@@ -204,9 +208,17 @@ mf_status mf_ltc_gate_polygon_mc_params(const mf_brdf_model *model, const mf_brd
             }
             if (w == 0.0)
                 continue;
-            if (s == 0.0) {
-                int e = ilogb(w), j = e >= 0 ? e / 2 : -((1 - e) / 2); /* j = floor(e / 2) */
-                s = ldexp(1.0, -2 * j);
+            if (!have_j || fabs(w) * s >= 4.0) { /* a new maximum beyond the scale's [1, 4) (exact test) */
+                int lg = ilogb(w), jw = lg >= 0 ? lg / 2 : -((1 - lg) / 2); /* floor(lg / 2) */
+                if (have_j) {
+                    double f = ldexp(1.0, -4 * (jw - jcur)); /* (s_new / s_old)^2 */
+                    a2 *= f;
+                    for (int i = 0; i < n; ++i)
+                        s2[i] *= f;
+                }
+                jcur = jw;
+                have_j = 1;
+                s = ldexp(1.0, -2 * jcur);
             }
             const mf_vec3 wi = dir[q];
             const double ws = w * s;
@@ -225,7 +237,7 @@ mf_status mf_ltc_gate_polygon_mc_params(const mf_brdf_model *model, const mf_brd
         }
     }
     if (st == MF_OK) {
-        double nn = (double)nsamples, is = s > 0.0 ? 1.0 / s : 1.0;
+        double nn = (double)nsamples, is = 1.0 / s;
         for (int i = 0; i < n; ++i) {
             double m = s1[i] / nn, ms = m * s, var = s2[i] / nn - ms * ms; /* var of w s */
             val[i] = m;
