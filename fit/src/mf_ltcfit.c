@@ -24,8 +24,9 @@
  * (objective, lights, constants), so that --resume refuses a checkpoint of another revision
  * instead of mixing columns of two fitters.  2: control variate, proximal shears, mirror
  * convention, 4x directions at grazing views.  3: proximal scales too. */
-/* Revision 4: the body is followed by its FNV-1a 64 checksum (revision 3 files are refused). */
-#define CKPT_MAGIC "MFLTCCK4"
+/* Revision 4: the body is followed by its FNV-1a 64 checksum (revision 3 files are refused).
+ * 5: the cap about the normal faded for narrow lobes near its rim (normal_cap_factor). */
+#define CKPT_MAGIC "MFLTCCK5"
 #define ENTRY_DOUBLES 19
 #define PROX_RESIDUALS 4
 
@@ -92,13 +93,54 @@ static double ltc_integral_value(const mf_polygon *p, const double prm[4])
     return ltc_integral_value_v(p->v, p->n, prm);
 }
 
+/* The residual weight of the large cap about the normal (radius NCAP_RADIUS, a vertex at the
+ * lobe's azimuth 0 or pi) for a lobe of mean direction m and RMS angular width w:
+ *   1 - g(w) h(x),  x = |theta_m - NCAP_RADIUS| / w  (the lobe's distance to the cap's rim in widths),
+ * g = 1 for w <= NCAP_FADE_W0 and h = 1 for x <= NCAP_FADE_X0, each falling to 0 by a smoothstep
+ * at NCAP_FADE_W1, NCAP_FADE_X1: continuous in the texel, and exactly 1 for lobes wider than
+ * NCAP_FADE_W1 or more than NCAP_FADE_X1 widths from the rim.
+ * Why: for a narrow lobe the rim is a straight edge through its tail, and the cap's integral is
+ * the lobe's tail mass on one side of it.  The LTC's tails are not the model's (Beckmann's fall
+ * like a Gaussian), so the fit bent the lobe's skew to match that one number in the rows the rim
+ * passes through: Beckmann 64 x 64, alpha 0.004, 69.8 deg (the rim 1.1 deg from the lobe, x = 3.1)
+ * took minv_22 across its neighbours' range (the gate's ltc_smooth_spike 1.253), the skew d
+ * jumping from -0.04 to +0.07 and back within two rows, at alpha 0.0023 .. 0.0063.  The other
+ * lights about the lobe (0.25 w .. 4 w, offsets w and 2.5 w) still hold its shape there. */
+#define NCAP_RADIUS 1.2
+#define NCAP_FADE_W0 0.015
+#define NCAP_FADE_W1 0.03
+#define NCAP_FADE_X0 8.0
+#define NCAP_FADE_X1 16.0
+
+static double smooth_fall(double v, double lo, double hi)
+{
+    if (v <= lo)
+        return 1.0;
+    if (v >= hi)
+        return 0.0;
+    double s = (v - lo) / (hi - lo);
+    return 1.0 - s * s * (3.0 - 2.0 * s);
+}
+
+static double normal_cap_factor(mf_vec3 m, double w)
+{
+    if (!(w < NCAP_FADE_W1))
+        return 1.0;
+    double x = fabs(acos(fmin(1.0, fmax(-1.0, m.z))) - NCAP_RADIUS) / w;
+    if (!(x < NCAP_FADE_X1))
+        return 1.0;
+    return 1.0 - smooth_fall(w, NCAP_FADE_W0, NCAP_FADE_W1) * smooth_fall(x, NCAP_FADE_X0, NCAP_FADE_X1);
+}
+
 /* The light family around a lobe of mean direction m (unit, in the xz plane of the view frame)
- * and angular width w (radians). */
+ * and angular width w (radians); the cap about the normal weighted by normal_cap_factor. */
 static int make_lights(mf_vec3 m, double w, light *out)
 {
     mf_vec3 t2 = mf_vec3_make(0.0, 1.0, 0.0);
     mf_vec3 t1 = mf_vec3_cross(t2, m);
-    return make_lights_basis(m, t1, t2, w, out);
+    int k = make_lights_basis(m, t1, t2, w, out);
+    out[k - 2].factor = normal_cap_factor(m, w); /* the large cap about the normal (make_lights_basis) */
+    return k;
 }
 
 int mf_ltcfit_light_count(void)

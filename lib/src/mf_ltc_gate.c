@@ -179,6 +179,16 @@ mf_status mf_ltc_gate_polygon_mc_params(const mf_brdf_model *model, const mf_brd
     mf_pcg32 rng;
     mf_pcg32_seed(&rng, seed, stream);
     double a1 = 0.0, a2 = 0.0;
+    /* The sums of squares are of w s, s = 4^-j with j = floor(log2(max |w| so far) / 2) (the
+     * largest w s in [1, 4); when the maximum grows, the sums so far are rescaled): a sheen
+     * texel's weights are ~1e-257 (charlie, alpha 1e-4, 51 deg), whose squares underflow to 0 and
+     * gave se = 0 (ltc_albedo_mc 23.4 on Monte Carlo noise alone); a scale fixed by the first
+     * weight fails the other way when later weights are 1e200 times larger (charlie, alpha 0.004,
+     * 76 deg).  s and the rescalings are even powers of two, so wherever nothing underflows or
+     * overflows, every sum, the variance and the square root scale exactly: the same bits as
+     * without the scale. */
+    double s = 1.0;
+    int jcur = 0, have_j = 0;
     mf_status st = MF_OK;
     /* The samples in batches (mf_model_sample_weights: the bits of sample + eval_cos one at a time,
      * with the view-dependent parts computed once per batch), drawn in the same order. */
@@ -198,9 +208,22 @@ mf_status mf_ltc_gate_polygon_mc_params(const mf_brdf_model *model, const mf_brd
             }
             if (w == 0.0)
                 continue;
+            if (!have_j || fabs(w) * s >= 4.0) { /* a new maximum beyond the scale's [1, 4) (exact test) */
+                int lg = ilogb(w), jw = lg >= 0 ? lg / 2 : -((1 - lg) / 2); /* floor(lg / 2) */
+                if (have_j) {
+                    double f = ldexp(1.0, -4 * (jw - jcur)); /* (s_new / s_old)^2 */
+                    a2 *= f;
+                    for (int i = 0; i < n; ++i)
+                        s2[i] *= f;
+                }
+                jcur = jw;
+                have_j = 1;
+                s = ldexp(1.0, -2 * jcur);
+            }
             const mf_vec3 wi = dir[q];
+            const double ws = w * s;
             a1 += w;
-            a2 += w * w;
+            a2 += ws * ws;
             for (int i = 0; i < n; ++i) {
                 const mf_vec3 *e = edge + i * MF_POLYGON_MAX_VERTICES;
                 int inside = 1;
@@ -208,22 +231,22 @@ mf_status mf_ltc_gate_polygon_mc_params(const mf_brdf_model *model, const mf_brd
                     inside = mf_vec3_dot(wi, e[j]) >= 0.0;
                 if (inside) {
                     s1[i] += w;
-                    s2[i] += w * w;
+                    s2[i] += ws * ws;
                 }
             }
         }
     }
     if (st == MF_OK) {
-        double nn = (double)nsamples;
+        double nn = (double)nsamples, is = 1.0 / s;
         for (int i = 0; i < n; ++i) {
-            double m = s1[i] / nn, var = s2[i] / nn - m * m;
+            double m = s1[i] / nn, ms = m * s, var = s2[i] / nn - ms * ms; /* var of w s */
             val[i] = m;
-            se[i] = sqrt((var > 0.0 ? var : 0.0) / (nn - 1.0));
+            se[i] = sqrt((var > 0.0 ? var : 0.0) / (nn - 1.0)) * is;
         }
         if (albedo) {
-            double m = a1 / nn, var = a2 / nn - m * m;
+            double m = a1 / nn, ms = m * s, var = a2 / nn - ms * ms;
             albedo->val = m;
-            albedo->err = sqrt((var > 0.0 ? var : 0.0) / (nn - 1.0));
+            albedo->err = sqrt((var > 0.0 ? var : 0.0) / (nn - 1.0)) * is;
         }
     }
     free(edge);
@@ -582,20 +605,33 @@ static void check_smooth_jump(void *ctx, mf_check *c)
     }
 }
 
+/* The model's Schlick moment (the fresnel field's quantity, mf_model_albedo_fresnel) at texel
+ * (ir, iu) by the same 64 x 64 quadrature; not cached (needed at a few texels only); 0 if it failed. */
+static int quad_fresnel(gate_ctx *g, int ir, int iu, mf_result *q)
+{
+    mf_brdf_params p = mf_brdf_params_iso(mf_ltc_table_alpha(g->t, ir));
+    mf_result a;
+    return mf_model_albedo_fresnel(g->model, &p, mf_ltc_gate_view(mf_ltc_table_cos_theta(g->t, iu)), GATE_QUAD_N, &a,
+                                   q) == MF_OK;
+}
+
 /* With a model, a spike of the magnitude is measured on its error magnitude - Q (Q the model's
  * albedo by quadrature, computed for the texels involved only): the true albedo itself has
  * spikes at the grazing rows of low roughness that no 64-row table resolves
  * (docs/validation.md: GGX alpha 0.016, 86.4 / 88.2 / 89.95 deg: 0.962, 0.912, 0.990, a dip
- * of 2.5 x 80 h^2), and a wrong magnitude is a spike of the error as much as of the value. */
+ * of 2.5 x 80 h^2), and a wrong magnitude is a spike of the error as much as of the value.  The
+ * fresnel field (the Schlick moment) has the same true spikes (Beckmann alpha 0.00025 / 0.001 /
+ * 0.0023 at 89.95 deg: 0.9848, 0.9095, 0.9325 by 1024 x 1024, a dip of 1.14 x 80 h^2 along r), so
+ * it is measured on fresnel - the model's moment the same way. */
 static void check_smooth_spike(void *ctx, mf_check *c)
 {
     gate_ctx *g = ctx;
     const mf_table *t = g->t;
-    const int mag_field = g->L.f[MF_LTC_F_MAGNITUDE];
+    const int mag_field = g->L.f[MF_LTC_F_MAGNITUDE], fres_field = g->L.f[MF_LTC_F_FRESNEL];
     if (g->model)
         snprintf(c->what, sizeof c->what, "%s",
-                 "max excess of a texel outside its 2 neighbours' range / (80 h^2), every field (magnitude: "
-                 "its error against the model's albedo), both axes");
+                 "max excess of a texel outside its 2 neighbours' range / (80 h^2), every field (magnitude, fresnel: "
+                 "minus the model's albedo, Schlick moment), both axes");
     for (int f = 0; f < t->nfields; ++f) {
         if (!strcmp(t->fields[f], "zero"))
             continue;
@@ -614,13 +650,14 @@ static void check_smooth_spike(void *ctx, mf_check *c)
                     snprintf(w, sizeof w, "%s along %s", t->fields[f], axis == 0 ? "r" : "u");
                     double lo = l < b ? l : b, hi = l < b ? b : l;
                     double ex = a > hi ? a - hi : (a < lo ? lo - a : 0.0);
-                    if (g->model && f == mag_field && ex > GATE_SPIKE_PER_H2 * h * h) {
+                    int is_fres = f == fres_field && fres_field >= 0;
+                    if (g->model && (f == mag_field || is_fres) && ex > GATE_SPIKE_PER_H2 * h * h) {
                         const int tr[3] = {ir - dr, ir, ir + dr}, tu[3] = {iu - du, iu, iu + du};
                         double e[3];
                         int ok = 1;
                         for (int k = 0; k < 3 && ok; ++k) {
                             mf_result q;
-                            ok = quad_albedo(g, tr[k], tu[k], &q);
+                            ok = is_fres ? quad_fresnel(g, tr[k], tu[k], &q) : quad_albedo(g, tr[k], tu[k], &q);
                             if (ok)
                                 e[k] = rec(t, tr[k], tu[k])[f] - q.val;
                         }
@@ -632,7 +669,8 @@ static void check_smooth_spike(void *ctx, mf_check *c)
                             lo = e[0] < e[2] ? e[0] : e[2];
                             hi = e[0] < e[2] ? e[2] : e[0];
                             ex = e[1] > hi ? e[1] - hi : (e[1] < lo ? lo - e[1] : 0.0);
-                            snprintf(w, sizeof w, "%s - albedo along %s", t->fields[f], axis == 0 ? "r" : "u");
+                            snprintf(w, sizeof w, "%s - %s along %s", t->fields[f], is_fres ? "moment" : "albedo",
+                                     axis == 0 ? "r" : "u");
                         }
                     }
                     record_texel(c, ex / (GATE_SPIKE_PER_H2 * h * h), w, ir, iu, mf_ltc_table_alpha(t, ir),
