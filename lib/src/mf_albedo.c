@@ -833,7 +833,8 @@ mf_status mf_albedo_charlie_reference(double alpha, double mu, double tol, mf_re
  * docs/math.md, "The rough dielectric rule"):
  *   X_k = +1 at b_1 = (pi/2 - theta_o) / 2,  X_k = -1 at b_2 = (pi/2 + theta_o) / 2 (E_R is 0 beyond),
  *   X_h = +1 at b_h = pi/2 - theta_o (X_h > -1 always),
- *   X_t = -1 at tan b_t = eta sin(d) / (1 - eta cos(d)), d = pi/2 - theta_o (eta < 1; X_t < 1 always),
+ *   X_t = -1 at tan b_t = eta sin(d) / (1 - eta cos(d)), d = pi/2 - theta_o (eta < 1 and theta_o > b_c
+ *   only; X_t < 1 always),
  *   and b_c.
  * Every one of them ends an outer panel, and the panels beside them are integrated in u with
  * b = event +- u^2 (smooth in u); the outer panels are graded around the peak of D at b = theta_o,
@@ -1030,7 +1031,7 @@ static void dielectric_component(dctx *c, double tol, double *val, double *err)
     } else {
         end = bc;
         ev[nev++] = 0.5 * MF_PI - theta_o;
-        if (c->eta < 1.0) {
+        if (c->eta < 1.0 && theta_o > bc) { /* else the root is spurious (asin(sin b / eta) = pi - b - d) */
             double d = 0.5 * MF_PI - theta_o;
             ev[nev++] = atan2(c->eta * sin(d), 1.0 - c->eta * cos(d));
         }
