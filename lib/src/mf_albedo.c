@@ -867,7 +867,16 @@ static double dielectric_point(const dctx *c, double p)
     }
     if (!(wz > 0.0))
         return 0.0;
-    double d = mf_ndf_d(c->a.ndf, mf_vec3_make(hx, hy, hz));
+    /* D of the unit h, isotropic [Walter 2007, Eq. 33 (GGX) and 25 (Beckmann)]: GGX
+     * 1 / (pi a^2 ((hx^2 + hy^2) / a^2 + hz^2)^2), Beckmann exp(-tan^2 / a^2) / (pi a^2 hz^4) */
+    double a2 = c->a.ndf.alpha_x * c->a.ndf.alpha_x, t2 = hx * hx + hy * hy, d;
+    if (c->a.ndf.type == MF_NDF_GGX) {
+        double q = t2 / a2 + hz * hz;
+        d = 1.0 / (MF_PI * a2 * q * q);
+    } else {
+        double z2 = hz * hz, e = t2 / (a2 * z2);
+        d = e > 800.0 ? 0.0 : exp(-e) / (MF_PI * a2 * z2 * z2); /* exp(-800) underflows, z2^2 may too */
+    }
     double li = lambda_i(&c->a, wx, wy, wz);
     double g2 = c->a.g2 == MF_G2_SEPARABLE ? 1.0 / ((1.0 + c->a.lambda_o) * (1.0 + li)) : 1.0 / (1.0 + c->a.lambda_o + li);
     return d * g2 * c->cb / c->c * c->sb;
