@@ -922,7 +922,7 @@ static void dielectric_inner(const dctx *c, double b, double *v, double *e)
     *v = *e = 0.0;
     double lo = 0.0, hi = MF_PI, den = c->s * c->sb;
     /* the ends: E_R p > acos(X_k); E_T acos(X_h) < p < acos(X_t) */
-    double dwz_dp = 0.0; /* |d w.z / d cos p| at the ends where G2 vanishes, / sin p there */
+    double dwz_dp = 0.0; /* |d w.z / d p| / sin p at the end where G2 vanishes (w.z = 0) */
     if (!c->trans) {
         double c2 = c->c * (c->cb - c->sb) * (c->cb + c->sb), s2 = 2.0 * c->s * c->sb * c->cb;
         if (s2 > 0.0)
@@ -955,10 +955,8 @@ static void dielectric_inner(const dctx *c, double b, double *v, double *e)
         if (hi == MF_PI)
             nb = dielectric_grade(lo, hi, MF_PI, 0.25 * (alpha + fabs(b - atan2(c->s, c->c))) / c->sb, bp, nb, 2 * MAX_LEVELS);
         /* the turnover of G2 at an end where w.z = 0: ~alpha wide in w.z, |dw.z/dp| = dwz_dp sin p */
-        double ends[2] = {c->trans ? hi : lo, c->trans ? -1.0 : -1.0};
-        int ne = (!c->trans || c->eta < 1.0) ? 1 : 0;
-        for (int i = 0; i < ne; ++i) {
-            double x = ends[i], slope = fabs(dwz_dp * sin(x));
+        if (!c->trans || c->eta < 1.0) { /* that end: E_R's lo, E_T's hi (none for eta >= 1) */
+            double x = c->trans ? hi : lo, slope = fabs(dwz_dp * sin(x));
             if (x > 0.0 && x < MF_PI && slope > 0.0)
                 nb = dielectric_grade(lo, hi, x, fmax(LAYER_FACTOR * c->a.layer / slope, 1e-12), bp, nb, 4 * MAX_LEVELS);
         }
