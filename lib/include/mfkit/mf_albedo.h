@@ -84,8 +84,10 @@ mf_status mf_albedo_charlie_reference(double alpha, double mu, double tol, mf_re
  *   E_R = int f_r |wi.z| dwi over the upper hemisphere, E_T = int f_t |wi.z| dwi over the lower one,
  * with Walter 2007's BSDFs (Eq. 20, 21), E_T the transmitted energy (without the 1 / eta^2 radiance
  * scaling), G2 of the transmission 1 / (1 + Lambda_o + Lambda_t) (pbrt-v4's and Cycles' form).
- * Same method and bound target as mf_albedo_microfacet, panels also ending on the critical angle and
- * the transmission's horizon.  eta = 1 gives E_R = 0 and E_T = G2(wo, -wo mirrored) exactly. */
+ * Same bound target as mf_albedo_microfacet (<= 5e-10 each); the micro-normal in angles (b, p) about
+ * wo, b outer: every kink (the critical angle, the horizons of wi, wt and h, and the angles b where
+ * they reach p = 0 or pi) is a panel end in closed form (docs/math.md, "The rough dielectric rule").
+ * About 3 ms of CPU.  eta = 1 gives E_R = 0 and E_T = G2(wo, -wo mirrored) exactly. */
 mf_status mf_albedo_dielectric(mf_ndf ndf, mf_g2_form g2, double mu, double eta, mf_result *refl,
                                mf_result *trans) MF_WARN_UNUSED;
 
