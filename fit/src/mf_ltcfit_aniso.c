@@ -99,6 +99,8 @@ typedef struct {
     int fixed[NP];   /* parameters held at 0 */
     double wfloor;   /* the residual weight's floor in albedos (AWEIGHT_FLOOR, or RELATIVE_FLOOR) */
     int family;      /* FAMILY_* of the lights */
+    uint64_t *mask;  /* NULL, or per live direction the lights (bit k) it is inside (inside_masks) */
+    int mask_ok;     /* mask holds this preparation's sets */
 } atexel;
 
 /* The minimal rotation taking z to the unit m (about the axis z x m; m != -z):
@@ -595,10 +597,58 @@ static mf_mat3 view_matrix(const atexel *t, const double *p)
 
 /* ---- targets ---------------------------------------------------------------------------------- */
 
-static void targets_raw(atexel *t, const workspace *ws)
+/* The prefilter's fits (t->mask set, at most 64 lights): which lights each live direction is
+ * inside, found once per preparation (light_inside, the same sets) and kept as bits, so that the
+ * light sums of the cold start's raw targets, of the control variate and of a second solve on the
+ * same preparation are one pass over the directions each instead of a containment test of every
+ * direction against every light.  Each light's sums still add its directions in index order: the
+ * same bits as light_sum and light_sums_cv. */
+static int use_masks(atexel *t, workspace *ws)
 {
+    if (!t->mask || t->k > 64)
+        return 0;
+    if (!t->mask_ok) {
+        for (int j = 0; j < t->live; ++j)
+            t->mask[j] = 0;
+        for (int k = 0; k < t->k; ++k) {
+            int n = light_inside(&t->lights[k], ws, t->live);
+            for (int i = 0; i < n; ++i)
+                t->mask[ws->cand[i]] |= (uint64_t)1 << k;
+        }
+        t->mask_ok = 1;
+    }
+    return 1;
+}
+
+/* sm[4 k + 0..3]: light_sums_cv of every light (cv 0: only sm[4 k] is summed, light_sum). */
+static void mask_sums(const atexel *t, const workspace *ws, int cv, double *sm)
+{
+    for (int i = 0; i < 4 * t->k; ++i)
+        sm[i] = 0.0;
+    for (int j = 0; j < t->live; ++j) {
+        uint64_t m = t->mask[j];
+        double w = ws->w[j], c = cv ? ws->cw[j] : 0.0;
+        while (m) {
+            double *o = sm + 4 * __builtin_ctzll(m);
+            m &= m - 1;
+            o[0] += w;
+            if (cv) {
+                o[1] += c;
+                o[2] += c * c;
+                o[3] += c * w;
+            }
+        }
+    }
+}
+
+static void targets_raw(atexel *t, workspace *ws)
+{
+    double sm[4 * 64];
+    int masks = use_masks(t, ws);
+    if (masks)
+        mask_sums(t, ws, 0, sm);
     for (int k = 0; k < t->k; ++k) {
-        t->target[k] = light_sum(&t->lights[k], ws, t->live) * t->invn;
+        t->target[k] = (masks ? sm[4 * k] : light_sum(&t->lights[k], ws, t->live)) * t->invn;
         t->inv_weight[k] = t->lights[k].factor / (t->target[k] + t->wfloor * t->magnitude + 1e-300);
     }
 }
@@ -620,10 +670,15 @@ static void control_variate(atexel *t, workspace *ws, const double *p0)
     double adj[9];
     adj_value(p0, adj);
     const double n = ws->n;
+    double all[4 * 64];
+    int masks = use_masks(t, ws);
+    if (masks)
+        mask_sums(t, ws, 1, all);
     for (int k = 0; k < t->k; ++k) {
         const light *l = &t->lights[k];
-        double sm[4];
-        light_sums_cv(l, ws, t->live, sm);
+        double sm_own[4], *sm = masks ? all + 4 * k : sm_own;
+        if (!masks)
+            light_sums_cv(l, ws, t->live, sm);
         double my = sm[0] * t->invn, mx = sm[1] / n;
         double sxx = sm[2] - n * mx * mx, sxy = t->scale * sm[3] - n * mx * my;
         double beta = sxx > 0.0 ? fmin(fmax(sxy / sxx, 0.0), 1.0) : 0.0;
@@ -758,7 +813,11 @@ static int residual_fn(void *user, const double *p, double *res, double *jac)
     return 0;
 }
 
-static double cost_at(const atexel *t, const double *p)
+/* The cost at p; once the running sum of the light terms exceeds `bound` it stops and returns
+ * that partial sum (every term is >= 0 and a rounded sum of non-negative terms never decreases, so
+ * the full cost would exceed `bound` too: a caller that only asks "is it below bound?" gets the
+ * same answer, and a cost below bound is bit for bit the full one). */
+static double cost_at_bound(const atexel *t, const double *p, double bound)
 {
     if (!valid(p))
         return INFINITY;
@@ -770,6 +829,8 @@ static double cost_at(const atexel *t, const double *p)
                     t->target[k]) *
                    t->inv_weight[k];
         c += r * r;
+        if (c > bound)
+            return c;
     }
     for (int i = 0; i < NP && t->prox > 0.0; ++i) {
         double w = is_scale(i) ? t->prox / t->prox_at[i] : t->prox;
@@ -780,9 +841,16 @@ static double cost_at(const atexel *t, const double *p)
     return c + b * b;
 }
 
+static double cost_at(const atexel *t, const double *p) { return cost_at_bound(t, p, INFINITY); }
+
 /* The closed-form start: the cosine scaled by (s, s) about the lobe's mean, s on the log grid
- * 10^(-4.5 + 0.25 i), i = 0..20, then the aspect: (s r, s / r), r = 10^(0.25 j), j = -8..8. */
-static double closed_form_start(const atexel *t, double *p)
+ * 10^(-4.5 + 0.25 i), i = 0..20, then the aspect: (s r, s / r), r = 10^(0.25 j), j = -8..8.
+ * Returns its cost.  The grid's costs are summed against the best so far (cost_at_bound: a point
+ * that cannot win stops early, the choice is the same); the aspect points also against bound2
+ * (a competing start's cost, or INFINITY): a point at or above it is not taken, so when the
+ * result is below bound2 it is the same point and cost as with INFINITY, and otherwise it is at or
+ * above bound2 too (the caller keeps its competitor either way). */
+static double closed_form_start(const atexel *t, double *p, double bound2)
 {
     double best = INFINITY, s_best = 1.0;
     for (int i = 0; i < NP; ++i)
@@ -791,7 +859,7 @@ static double closed_form_start(const atexel *t, double *p)
     for (int i = 0; i <= 20; ++i) {
         double s = pow(10.0, -4.5 + 0.25 * i);
         double q[NP] = {s, 0.0, 0.0, s, 0.0, 0.0, 0.0};
-        double c = cost_at(t, q);
+        double c = cost_at_bound(t, q, best);
         if (c < best) {
             best = c;
             s_best = s;
@@ -801,8 +869,9 @@ static double closed_form_start(const atexel *t, double *p)
     for (int j = -8; j <= 8; ++j) {
         double r = pow(10.0, 0.25 * j);
         double q[NP] = {s_best * r, 0.0, 0.0, s_best / r, 0.0, 0.0, 0.0};
-        double c = cost_at(t, q);
-        if (c < best) {
+        double lim = fmin(best, bound2);
+        double c = cost_at_bound(t, q, lim);
+        if (c < lim) {
             best = c;
             memcpy(p, q, sizeof q);
         }
@@ -870,7 +939,7 @@ static mf_status solve_entry(atexel *t, workspace *ws, const double *lobe_start,
     }
     if (!warm) {
         targets_raw(t, ws);
-        closed_form_start(t, q);
+        closed_form_start(t, q, INFINITY);
     }
     control_variate(t, ws, q);
     t->prox = 0.0;
@@ -878,10 +947,11 @@ static mf_status solve_entry(atexel *t, workspace *ws, const double *lobe_start,
         t->prox = PROX_WEIGHT;
         memcpy(t->prox_at, q, sizeof q);
     }
-    double c0 = closed_form_start(t, p);
-    if (warm && cost_at(t, q) <= c0) {
+    double cw = warm ? cost_at(t, q) : INFINITY;
+    double c0 = closed_form_start(t, p, cw);
+    if (warm && cw <= c0) {
         memcpy(p, q, sizeof p);
-        c0 = cost_at(t, q);
+        c0 = cw;
     }
     if (alt_start) {
         double r[NP];
@@ -889,7 +959,7 @@ static mf_status solve_entry(atexel *t, workspace *ws, const double *lobe_start,
         for (int i = 0; i < NP; ++i)
             if (t->fixed[i])
                 r[i] = 0.0;
-        if (valid(r) && cost_at(t, r) < c0)
+        if (valid(r) && cost_at_bound(t, r, c0) < c0)
             memcpy(p, r, sizeof p);
     }
     double lower[NP], upper[NP];
@@ -924,7 +994,7 @@ static mf_status solve_entry(atexel *t, workspace *ws, const double *lobe_start,
         if (attempt == 0)
             memcpy(r, p, sizeof r);
         else
-            closed_form_start(t, r);
+            closed_form_start(t, r, INFINITY);
         for (int i = 0; i < NP; ++i)
             if (t->fixed[i])
                 r[i] = 0.0;
@@ -958,13 +1028,15 @@ static mf_status solve_entry(atexel *t, workspace *ws, const double *lobe_start,
 static mf_status fit_entry_starts(const mf_brdf_model *model, mf_brdf_params prm, double theta, double phi, int sym,
                                   int family, const double *given_mag, const double *lobe_start,
                                   const double *alt_start, int two_starts, const mf_ltcfit_aniso_options *o,
-                                  const uint32_t scr[2], workspace *ws, mf_ltcfit_aniso_entry *out)
+                                  const uint32_t scr[2], workspace *ws, uint64_t *mask, mf_ltcfit_aniso_entry *out)
 {
     atexel *t = malloc(sizeof *t);
     if (!t)
         return MF_ERR_ALLOC;
     memset(out, 0, sizeof *out);
     mf_status st = atexel_prepare(model, prm, theta, phi, sym, family, given_mag, scr, ws, t);
+    t->mask = mask;
+    t->mask_ok = 0;
     if (st == MF_OK)
         st = solve_entry(t, ws, lobe_start, alt_start, o, out);
     if (st == MF_OK && two_starts && lobe_start) {
@@ -985,7 +1057,8 @@ static mf_status fit_entry(const mf_brdf_model *model, mf_brdf_params prm, doubl
                            int family, const double *given_mag, const double *lobe_start, const double *alt_start, const mf_ltcfit_aniso_options *o,
                            const uint32_t scr[2], workspace *ws, mf_ltcfit_aniso_entry *out)
 {
-    return fit_entry_starts(model, prm, theta, phi, sym, family, given_mag, lobe_start, alt_start, 0, o, scr, ws, out);
+    return fit_entry_starts(model, prm, theta, phi, sym, family, given_mag, lobe_start, alt_start, 0, o, scr, ws, NULL,
+                            out);
 }
 
 static int check_options(const mf_ltcfit_aniso_options *o)
@@ -1015,18 +1088,22 @@ static int sym_of(double theta, double phi)
 /* fit_entry for one entry on its own (the public one-entry fits): its own workspace and scramble. */
 static mf_status fit_entry_alone(const mf_brdf_model *model, mf_brdf_params prm, double theta, double phi, int sym,
                                  int family, const double *given_mag, const double *lobe_start, const double *alt_start,
-                                 int two_starts, const mf_ltcfit_aniso_options *o, mf_ltcfit_aniso_entry *out)
+                                 int two_starts, int masks, const mf_ltcfit_aniso_options *o,
+                                 mf_ltcfit_aniso_entry *out)
 {
     workspace ws;
-    if (!ws_init(&ws, o->samples)) {
+    uint64_t *mask = masks ? malloc(sizeof *mask * (size_t)GRAZING_FACTOR * o->samples) : NULL;
+    if (!ws_init(&ws, o->samples) || (masks && !mask)) {
         ws_free(&ws);
+        free(mask);
         return MF_ERR_ALLOC;
     }
     uint32_t scr[2];
     sobol_scramble(o->seed, scr);
     mf_status st = fit_entry_starts(model, prm, theta, phi, sym, family, given_mag, lobe_start, alt_start, two_starts,
-                                    o, scr, &ws, out);
+                                    o, scr, &ws, mask, out);
     ws_free(&ws);
+    free(mask);
     return st;
 }
 
@@ -1038,7 +1115,8 @@ mf_status mf_ltcfit_aniso_entry_fit(const mf_brdf_model *model, double alpha_x, 
         !(theta >= 0.0 && theta < 0.5 * MF_PI) || !(phi >= 0.0 && phi < 2.0 * MF_PI) || !out)
         return MF_ERR_DOMAIN;
     mf_brdf_params prm = {alpha_x, alpha_y};
-    return fit_entry_alone(model, prm, theta, phi, sym_of(theta, phi), FAMILY_RANDOM, NULL, lobe_start, NULL, 0, o, out);
+    return fit_entry_alone(model, prm, theta, phi, sym_of(theta, phi), FAMILY_RANDOM, NULL, lobe_start, NULL, 0, 0, o,
+                           out);
 }
 
 mf_status mf_ltcfit_aniso_entry_fit_general(const mf_brdf_model *model, mf_brdf_params prm, double theta, double phi,
@@ -1050,7 +1128,7 @@ mf_status mf_ltcfit_aniso_entry_fit_general(const mf_brdf_model *model, mf_brdf_
         !(magnitude >= 0.0 && magnitude < INFINITY) || !(magnitude_err >= 0.0))
         return MF_ERR_DOMAIN;
     double mag[2] = {magnitude, magnitude_err};
-    return fit_entry_alone(model, prm, theta, phi, 0, FAMILY_SHAPED, mag, lobe_start, NULL, 0, o, out);
+    return fit_entry_alone(model, prm, theta, phi, 0, FAMILY_SHAPED, mag, lobe_start, NULL, 0, 0, o, out);
 }
 
 static mf_status entry_fit_mirrored(const mf_brdf_model *model, mf_brdf_params prm, double theta, int mirrors,
@@ -1063,7 +1141,7 @@ static mf_status entry_fit_mirrored(const mf_brdf_model *model, mf_brdf_params p
         !(magnitude_err >= 0.0) || (mirrors & ~(SYM_X | SYM_Y)) || ((mirrors & SYM_X) && theta != 0.0))
         return MF_ERR_DOMAIN;
     double mag[2] = {magnitude, magnitude_err};
-    return fit_entry_alone(model, prm, theta, 0.0, mirrors, FAMILY_SHAPED, mag, lobe_start, alt_start, two_starts, o,
+    return fit_entry_alone(model, prm, theta, 0.0, mirrors, FAMILY_SHAPED, mag, lobe_start, alt_start, two_starts, 1, o,
                            out);
 }
 
