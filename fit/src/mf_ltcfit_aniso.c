@@ -603,6 +603,43 @@ static mf_mat3 view_matrix(const atexel *t, const double *p)
  * same preparation are one pass over the directions each instead of a containment test of every
  * direction against every light.  Each light's sums still add its directions in index order: the
  * same bits as light_sum and light_sums_cv. */
+/* light_inside's sets as bit k of mask: the same cap pass, then the edge planes tested without
+ * the early exit (every plane of a candidate, the results and-ed: the same sets, no branch to
+ * mispredict; the dot products are mf_vec3_dot's, in its order). */
+#define MASK_EDGES(NE)                                                                             \
+    for (int i = 0; i < m; ++i) {                                                                  \
+        int j = cand[i], in = 1;                                                                   \
+        for (int e = 0; e < (NE); ++e)                                                             \
+            in &= x[j] * en[e].x + y[j] * en[e].y + z[j] * en[e].z > 0.0;                          \
+        mask[j] |= (uint64_t)in << k;                                                              \
+    }
+static void mask_light(const light *l, const workspace *ws, int live, int k, uint64_t *mask)
+{
+    const double cx = l->centre.x, cy = l->centre.y, cz = l->centre.z, cr = l->cos_radius;
+    const double *x = ws->x, *y = ws->y, *z = ws->z;
+    const mf_vec3 *en = l->edge_n;
+    int *cand = ws->cand, m = 0, ne = l->poly.n;
+    for (int j = 0; j < live; ++j) {
+        cand[m] = j;
+        m += x[j] * cx + y[j] * cy + z[j] * cz >= cr;
+    }
+    switch (ne) {
+    case 3:
+        MASK_EDGES(3)
+        break;
+    case 4:
+        MASK_EDGES(4)
+        break;
+    case 8:
+        MASK_EDGES(8)
+        break;
+    default:
+        MASK_EDGES(ne)
+        break;
+    }
+}
+#undef MASK_EDGES
+
 static int use_masks(atexel *t, workspace *ws)
 {
     if (!t->mask || t->k > 64)
@@ -610,11 +647,8 @@ static int use_masks(atexel *t, workspace *ws)
     if (!t->mask_ok) {
         for (int j = 0; j < t->live; ++j)
             t->mask[j] = 0;
-        for (int k = 0; k < t->k; ++k) {
-            int n = light_inside(&t->lights[k], ws, t->live);
-            for (int i = 0; i < n; ++i)
-                t->mask[ws->cand[i]] |= (uint64_t)1 << k;
-        }
+        for (int k = 0; k < t->k; ++k)
+            mask_light(&t->lights[k], ws, t->live, k, t->mask);
         t->mask_ok = 1;
     }
     return 1;

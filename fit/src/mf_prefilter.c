@@ -47,26 +47,74 @@ static mf_vec3 texel_view(const double *r, mf_vec3 wo)
 
 /* Isotropic GGX in closed form (the "ggx" model's formulas, mf_model_ggx.c: f = D G2 / (4 wo.z wi.z),
  * height-correlated G2 [Heitz 2014], density G1(wo) D(h) / (4 wo.z) [Heitz 2018; Walter 2007,
- * Eq. 14]), f cos and density sharing D(h) and Lambda(wo) -- one component of the mixture. */
+ * Eq. 14]), f cos and density sharing D(h) and Lambda(wo) -- one component of the mixture
+ * (evaluated by ggx_fpdf_cached below). */
 static double ggx_lambda_iso(double a2, mf_vec3 w)
 {
     double t = a2 * (w.x * w.x + w.y * w.y) / (w.z * w.z);
     return 0.5 * t / (1.0 + sqrt(1.0 + t));
 }
 
-static void ggx_fpdf(double a2, mf_vec3 vo, double lo, mf_vec3 vi, double *f, double *pdf)
+
+/* Per view, per component, VC_N doubles (view_cache_fill): the texel-frame view vo and Lambda(vo),
+ * then the visible-normal sampler's frame of vo [Heitz 2018, Listing 1]: vh, t1, t2 and
+ * s = (1 + vh.z) / 2, computed with mf_sample_ggx_vndf's operations (so a sample from the cache
+ * has its bits). */
+#define VC_N 17
+static void view_cache_fill(double alpha, mf_vec3 vo, double *c)
+{
+    double a2 = alpha * alpha, lo = ggx_lambda_iso(a2, vo);
+    c[14] = a2 / (4.0 * MF_PI * vo.z), c[15] = 1.0 + 2.0 * lo, c[16] = 1.0 / (1.0 + lo);
+    c[0] = vo.x, c[1] = vo.y, c[2] = vo.z, c[3] = ggx_lambda_iso(alpha * alpha, vo);
+    mf_vec3 vh = mf_vec3_normalize(mf_vec3_make(alpha * vo.x, alpha * vo.y, vo.z));
+    double lensq = vh.x * vh.x + vh.y * vh.y;
+    mf_vec3 t1 = lensq > 0.0 ? mf_vec3_scale(mf_vec3_make(-vh.y, vh.x, 0.0), 1.0 / sqrt(lensq))
+                             : mf_vec3_make(1.0, 0.0, 0.0);
+    mf_vec3 t2 = mf_vec3_cross(vh, t1);
+    c[4] = vh.x, c[5] = vh.y, c[6] = vh.z, c[7] = t1.x, c[8] = t1.y, c[9] = t1.z, c[10] = t2.x, c[11] = t2.y;
+    c[12] = t2.z, c[13] = 0.5 * (1.0 + vh.z);
+}
+
+/* ggx_fpdf at a cached view, rearranged to two divisions and one square root (the model's form: five and
+ * two): with h = vo + vi, s = h.x^2 + h.y^2, z = h.z^2, den = a^2 z + s,
+ *   D / (4 vo.z) = [a^2 / (4 pi vo.z)] (s + z)^2 / den^2,
+ *   1 + Lambda(vo) + Lambda(vi) = (1 + 2 Lambda(vo) + sqrt(1 + t)) / 2 with t = a^2 (vi.x^2 + vi.y^2) / vi.z^2
+ *     (Lambda = (sqrt(1 + t) - 1) / 2; the sum has no cancellation), and
+ *     sqrt(1 + t) = sqrt(vi.z^2 + a^2 (vi.x^2 + vi.y^2)) / vi.z,
+ * so f cos = 2 dq vi.z / ((1 + 2 Lambda(vo)) vi.z + sqrt(vi.z^2 + a^2 (vi.x^2 + vi.y^2))) and
+ * pdf = dq / (1 + Lambda(vo)), dq = D / (4 vo.z) (the model's values to rounding). */
+static void ggx_fpdf_cached(double a2, const double *c, mf_vec3 vi, double *f, double *pdf)
 {
     *f = *pdf = 0.0;
     if (!(vi.z > 0.0))
         return;
-    mf_vec3 h = mf_vec3_add(vo, vi);
-    double s2 = h.x * h.x + h.y * h.y, z2 = h.z * h.z;
+    double hx = c[0] + vi.x, hy = c[1] + vi.y, hz = c[2] + vi.z;
+    double s2 = hx * hx + hy * hy, z2 = hz * hz;
     double den = a2 * z2 + s2, l2 = s2 + z2;
-    double d = a2 * l2 * l2 / (MF_PI * den * den);
-    double q = 1.0 / (4.0 * vo.z);
-    *f = d / (1.0 + lo + ggx_lambda_iso(a2, vi)) * q;
-    if (h.z > 0.0 && mf_vec3_dot(vo, h) > 0.0)
-        *pdf = d / (1.0 + lo) * q;
+    double dq = c[14] * (l2 * l2) / (den * den);
+    *f = 2.0 * dq * vi.z / (c[15] * vi.z + sqrt(vi.z * vi.z + a2 * (vi.x * vi.x + vi.y * vi.y)));
+    if (hz > 0.0 && c[0] * hx + c[1] * hy + c[2] * hz > 0.0)
+        *pdf = dq * c[16];
+}
+
+/* mf_sample_ggx_vndf at the cached view (the same operations), reflected: the texel-frame wi, and
+ * whether the model's sampler would give it a positive density (wi.z > 0, vo.wm > 0, wm.z > 0). */
+static mf_vec3 ggx_sample_cached(double alpha, const double *c, const double u[2], int *ok)
+{
+    double r = sqrt(u[0]);
+    double phi = 2.0 * MF_PI * u[1];
+    double p1 = r * cos(phi), p2 = r * sin(phi);
+    double s = c[13];
+    p2 = (1.0 - s) * sqrt(fmax(0.0, 1.0 - p1 * p1)) + s * p2;
+    double pz = sqrt(fmax(0.0, 1.0 - p1 * p1 - p2 * p2));
+    mf_vec3 nh = mf_vec3_add(mf_vec3_add(mf_vec3_scale(mf_vec3_make(c[7], c[8], c[9]), p1),
+                                         mf_vec3_scale(mf_vec3_make(c[10], c[11], c[12]), p2)),
+                             mf_vec3_scale(mf_vec3_make(c[4], c[5], c[6]), pz));
+    mf_vec3 wm = mf_vec3_normalize(mf_vec3_make(alpha * nh.x, alpha * nh.y, fmax(0.0, nh.z)));
+    mf_vec3 vo = mf_vec3_make(c[0], c[1], c[2]);
+    mf_vec3 wi = mf_vec3_reflect(vo, wm);
+    *ok = wi.z > 0.0 && mf_vec3_dot(vo, wm) > 0.0 && wm.z > 0.0;
+    return wi;
 }
 
 /* Per view, per component: the texel-frame view and Lambda there (mix_set_view). */
@@ -97,9 +145,9 @@ static void mix_eval_pdf(const mf_prefilter_mix *x, const mf_brdf_params *p, mf_
     if (vc) {
         double a2 = p->alpha_x * p->alpha_x;
         for (int j = 0; j < x->n; ++j) {
-            const double *r = x->rot + 9 * j, *c = vc + 4 * j;
+            const double *r = x->rot + 9 * j, *c = vc + VC_N * j;
             double fj, pj;
-            ggx_fpdf(a2, mf_vec3_make(c[0], c[1], c[2]), c[3], rot_t(r, wi), &fj, &pj);
+            ggx_fpdf_cached(a2, c, rot_t(r, wi), &fj, &pj);
             sf += x->w[j] * fj;
             sp += x->w[j] * pj;
         }
@@ -138,7 +186,7 @@ static double mix_pdf(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 w
 /* The texel from u[0] (the first j with u0 < cdf[j]) and u[0] rescaled into [0, 1) inside its
  * interval, then the base sampler at the texel's view, rotated to the geometric frame. */
 static mf_vec3 mix_sample_texel(const mf_prefilter_mix *x, const mf_brdf_params *p, mf_vec3 wo, const double u[2],
-                                double *base_pdf)
+                                double *base_pdf, const double *vc)
 {
     int lo = 0, hi = x->n - 1;
     while (lo < hi) {
@@ -158,6 +206,12 @@ static mf_vec3 mix_sample_texel(const mf_prefilter_mix *x, const mf_brdf_params 
         *base_pdf = z * MF_INV_PI;
         return rot_apply(r, mf_vec3_make(rr * cos(ph), rr * sin(ph), z));
     }
+    if (vc) { /* the cached view (GGX, mix_set_view): only the sign of the density is read */
+        int ok;
+        mf_vec3 wi_t = ggx_sample_cached(p->alpha_x, vc + VC_N * lo, v, &ok);
+        *base_pdf = ok ? 1.0 : 0.0;
+        return rot_apply(r, wi_t);
+    }
     mf_vec3 wi_t = x->base->sample(x->base, p, texel_view(r, wo), v, base_pdf);
     return rot_apply(r, wi_t);
 }
@@ -169,7 +223,7 @@ static mf_vec3 mix_sample(const mf_brdf_model *m, const mf_brdf_params *p, mf_ve
     if (!(wo.z > 0.0))
         return mf_vec3_make(0.0, 0.0, 1.0);
     double bp;
-    mf_vec3 wi = mix_sample_texel(x, p, wo, u, &bp);
+    mf_vec3 wi = mix_sample_texel(x, p, wo, u, &bp, x->kind == MF_PREFILTER_BASE_GGX ? view_cache(x, p, wo) : NULL);
     if (bp > 0.0 && wi.z > 0.0 && mf_vec3_isfinite(wi)) {
         double f;
         mix_eval_pdf(x, p, wo, wi, &f, pdf);
@@ -181,6 +235,7 @@ static void mix_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, 
                                mf_vec3 *wi, double *pdf, double *w)
 {
     const mf_prefilter_mix *x = mix_of(m);
+    const double *vc = x->kind == MF_PREFILTER_BASE_GGX ? view_cache(x, p, wo) : NULL;
     for (int i = 0; i < n; ++i) {
         pdf[i] = 0.0;
         w[i] = 0.0;
@@ -189,7 +244,7 @@ static void mix_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, 
             continue;
         }
         double bp;
-        wi[i] = mix_sample_texel(x, p, wo, u + 2 * i, &bp);
+        wi[i] = mix_sample_texel(x, p, wo, u + 2 * i, &bp, vc);
         if (bp > 0.0 && wi[i].z > 0.0 && mf_vec3_isfinite(wi[i])) {
             double f;
             mix_eval_pdf(x, p, wo, wi[i], &f, &pdf[i]);
@@ -283,14 +338,10 @@ static mf_status mix_set_view(mf_prefilter_mix *m, const mf_brdf_params *p, mf_v
 {
     if (m->kind != MF_PREFILTER_BASE_GGX || p->alpha_x != p->alpha_y)
         return MF_OK;
-    if (!m->cache && !(m->cache = malloc(sizeof(double) * 4 * (size_t)m->n)))
+    if (!m->cache && !(m->cache = malloc(sizeof(double) * VC_N * (size_t)m->n)))
         return MF_ERR_ALLOC;
-    double a2 = p->alpha_x * p->alpha_x;
-    for (int j = 0; j < m->n; ++j) {
-        mf_vec3 vo = texel_view(m->rot + 9 * j, wo);
-        double *c = m->cache + 4 * j;
-        c[0] = vo.x, c[1] = vo.y, c[2] = vo.z, c[3] = ggx_lambda_iso(a2, vo);
-    }
+    for (int j = 0; j < m->n; ++j)
+        view_cache_fill(p->alpha_x, texel_view(m->rot + 9 * j, wo), m->cache + VC_N * j);
     m->cache_wo[0] = wo.x, m->cache_wo[1] = wo.y, m->cache_wo[2] = wo.z;
     m->cache_a = p->alpha_x;
     return MF_OK;
@@ -323,10 +374,9 @@ mf_status mf_prefilter_mix_albedo(const mf_prefilter_mix *m, const mf_brdf_param
         mf_prefilter_mix one = *m; /* the one-texel mixture of component j */
         one.n = 1;
         one.cache = NULL;
-        double c4[4];
+        double c4[VC_N];
         if (m->kind == MF_PREFILTER_BASE_GGX && p->alpha_x == p->alpha_y) { /* the fused evaluation */
-            mf_vec3 vo = texel_view(m->rot + 9 * j, wo);
-            c4[0] = vo.x, c4[1] = vo.y, c4[2] = vo.z, c4[3] = ggx_lambda_iso(p->alpha_x * p->alpha_x, vo);
+            view_cache_fill(p->alpha_x, texel_view(m->rot + 9 * j, wo), c4);
             one.cache = c4;
             one.cache_wo[0] = wo.x, one.cache_wo[1] = wo.y, one.cache_wo[2] = wo.z;
             one.cache_a = p->alpha_x;
