@@ -933,6 +933,14 @@ static mf_mat3 polar_gauge(mf_mat3 m)
     return r;
 }
 
+/* The solver's function and parameter tolerances in the prefilter's fits (the table's: 1e-10).
+ * Measured on `bench_prefilter --size 8 --threads 1` (2,688 lobes of the synthetic bump map):
+ * 1e-10 / 1e-6 / 1e-4: 22.0 / 11.6 / 6.8 solver steps per fit, 13.0 / 11.6 / 11.1 s of CPU, worst
+ * residual per level 0.0248, 0.0196, 0.0163 / the same / 0.0249, 0.0196, 0.0163: the steps after
+ * a relative cost change of 1e-6 move no lobe by a visible amount.  Quality before and after:
+ * docs/prefilter.md, "Speed of revision 3". */
+#define PREFILTER_TOLERANCE 1e-6
+
 /* See solve_entry: a fit this close to every light is done, whatever the solver's tolerances say. */
 #define RESIDUAL_EXACT 1e-3
 
@@ -1009,6 +1017,8 @@ static mf_status solve_entry(atexel *t, workspace *ws, const double *lobe_start,
     so.function_tolerance = 1e-10;
     so.gradient_tolerance = 1e-14;
     so.parameter_tolerance = 1e-10;
+    if (t->mask) /* the prefilter's fits (entry_fit_mirrored) */
+        so.function_tolerance = so.parameter_tolerance = PREFILTER_TOLERANCE;
     mf_solver_summary sum;
     st = mf_solver_least_squares(NP, t->k + NP + 1, residual_fn, t, p, lower, upper, &so, &sum);
     if (st != MF_OK && st != MF_ERR_NO_CONVERGENCE)
