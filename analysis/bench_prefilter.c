@@ -103,16 +103,28 @@ static uint64_t fnv(uint64_t hsh, const void *p, size_t n)
 }
 
 /* --albedo-check K: the one-texel albedo of K texels (spread over the map) at every view, by
- * mf_prefilter_mix_albedo (the fits' rule, MF_PREFILTER_ALBEDO_N) and by mf_model_albedo at
- * n = 32 and 128, against mf_model_albedo at n = 512. */
+ * mf_prefilter_mix_albedo (the revision-2 rule, MF_PREFILTER_ALBEDO_N), by mf_model_albedo at
+ * n = 32 and 128, by mf_prefilter_texel_albedo (the same rule fused, and its table: what the fits
+ * of revision 3 use), against mf_model_albedo at n = 512. */
+#define NMETH 5
 static int check_albedo(const double *nrm, int size, const mf_prefilter_options *o, int k)
 {
     const mf_brdf_model *base = mf_brdf_model_find(o->base == MF_PREFILTER_BASE_LAMBERT ? "lambert" : "ggx");
     mf_brdf_params p = mf_brdf_params_iso(o->base == MF_PREFILTER_BASE_LAMBERT ? 1.0 : o->alpha);
     static const int rule_n[2] = {32, 128};
-    double worst[3] = {0}, sum[3] = {0}, cpu[3] = {0}, under[3] = {0};
+    static const char *names[NMETH] = {"mix_albedo n = 64 (revision 2)", "mf_model_albedo n = 32",
+                                       "mf_model_albedo n = 128", "texel_albedo fused n = 64",
+                                       "texel_albedo table (revision 3)"};
+    int nm = o->base == MF_PREFILTER_BASE_GGX ? NMETH : 3;
+    double worst[NMETH] = {0}, sum[NMETH] = {0}, cpu[NMETH] = {0}, under[NMETH] = {0}, dtab = 0.0;
     long n = 0;
     long ntex = (long)size * size, step = ntex / k > 0 ? ntex / k : 1;
+    /* the table's nodes are filled on first use: fill them before timing the lookups */
+    for (long t = 0; nm == NMETH && t < ntex; t += step) {
+        mf_result r;
+        if (mf_prefilter_texel_albedo(o->alpha, nrm + 3 * t, mf_vec3_make(0.0, 0.0, 1.0), 0, &r) != MF_OK)
+            return 1;
+    }
     for (long t = 0; t < ntex; t += step) {
         mf_prefilter_mix one;
         if (mf_prefilter_mix_init(&one, base, nrm + 3 * t, 1) != MF_OK)
@@ -121,31 +133,35 @@ static int check_albedo(const double *nrm, int size, const mf_prefilter_options 
             for (int b = 0; b < o->n_phi; ++b) {
                 double th = mf_prefilter_theta(o, a), ph = mf_prefilter_phi(o, b);
                 mf_vec3 wo = mf_vec3_make(sin(th) * cos(ph), sin(th) * sin(ph), cos(th));
-                mf_result r[3], ref;
-                for (int q = 0; q < 3; ++q) {
+                mf_result r[NMETH], ref;
+                for (int q = 0; q < nm; ++q) {
                     double c0 = cpu_seconds();
-                    mf_status st = q == 0 ? mf_prefilter_mix_albedo(&one, &p, wo, &r[0])
-                                          : mf_model_albedo(&one.model, &p, wo, rule_n[q - 1], &r[q]);
+                    mf_status st = q == 0   ? mf_prefilter_mix_albedo(&one, &p, wo, &r[0])
+                                   : q < 3  ? mf_model_albedo(&one.model, &p, wo, rule_n[q - 1], &r[q])
+                                            : mf_prefilter_texel_albedo(o->alpha, nrm + 3 * t, wo, q == 3, &r[q]);
                     if (st != MF_OK)
                         return 1;
                     cpu[q] += cpu_seconds() - c0;
                 }
                 if (mf_model_albedo(&one.model, &p, wo, 512, &ref) != MF_OK)
                     return 1;
-                for (int q = 0; q < 3; ++q) {
+                for (int q = 0; q < nm; ++q) {
                     double e = fabs(r[q].val - ref.val);
                     worst[q] = fmax(worst[q], e), sum[q] += e;
                     under[q] += e > r[q].err; /* the estimate |Q(n) - Q(n/2)| below the true error */
                 }
+                if (nm == NMETH)
+                    dtab = fmax(dtab, fabs(r[4].val - r[3].val));
                 ++n;
             }
         mf_prefilter_mix_free(&one);
     }
-    printf("albedo check: %ld (texel, view) pairs, |Q(n) - Q(512)|:\n", n);
-    for (int q = 0; q < 3; ++q)
-        printf("  n = %3d%s: worst %.2e, mean %.2e, estimate below the error at %.0f %%, %.3f ms CPU each\n",
-               q ? rule_n[q - 1] : MF_PREFILTER_ALBEDO_N, q ? "" : " (mf_prefilter_mix_albedo)", worst[q], sum[q] / n,
-               100.0 * under[q] / n, 1e3 * cpu[q] / n);
+    printf("albedo check: %ld (texel, view) pairs, |Q - Q(512)|:\n", n);
+    for (int q = 0; q < nm; ++q)
+        printf("  %-32s: worst %.2e, mean %.2e, estimate below the error at %.0f %%, %.4f ms CPU each\n", names[q],
+               worst[q], sum[q] / n, 100.0 * under[q] / n, 1e3 * cpu[q] / n);
+    if (nm == NMETH)
+        printf("  table vs fused rule: worst %.2e\n", dtab);
     return 0;
 }
 

@@ -99,6 +99,8 @@ typedef struct {
     int fixed[NP];   /* parameters held at 0 */
     double wfloor;   /* the residual weight's floor in albedos (AWEIGHT_FLOOR, or RELATIVE_FLOOR) */
     int family;      /* FAMILY_* of the lights */
+    uint64_t *mask;  /* NULL, or per live direction the lights (bit k) it is inside (inside_masks) */
+    int mask_ok;     /* mask holds this preparation's sets */
 } atexel;
 
 /* The minimal rotation taking z to the unit m (about the axis z x m; m != -z):
@@ -595,10 +597,92 @@ static mf_mat3 view_matrix(const atexel *t, const double *p)
 
 /* ---- targets ---------------------------------------------------------------------------------- */
 
-static void targets_raw(atexel *t, const workspace *ws)
+/* The prefilter's fits (t->mask set, at most 64 lights): which lights each live direction is
+ * inside, found once per preparation (light_inside, the same sets) and kept as bits, so that the
+ * light sums of the cold start's raw targets, of the control variate and of a second solve on the
+ * same preparation are one pass over the directions each instead of a containment test of every
+ * direction against every light.  Each light's sums still add its directions in index order: the
+ * same bits as light_sum and light_sums_cv. */
+/* light_inside's sets as bit k of mask: the same cap pass, then the edge planes tested without
+ * the early exit (every plane of a candidate, the results and-ed: the same sets, no branch to
+ * mispredict; the dot products are mf_vec3_dot's, in its order). */
+#define MASK_EDGES(NE)                                                                             \
+    for (int i = 0; i < m; ++i) {                                                                  \
+        int j = cand[i], in = 1;                                                                   \
+        for (int e = 0; e < (NE); ++e)                                                             \
+            in &= x[j] * en[e].x + y[j] * en[e].y + z[j] * en[e].z > 0.0;                          \
+        mask[j] |= (uint64_t)in << k;                                                              \
+    }
+static void mask_light(const light *l, const workspace *ws, int live, int k, uint64_t *mask)
 {
+    const double cx = l->centre.x, cy = l->centre.y, cz = l->centre.z, cr = l->cos_radius;
+    const double *x = ws->x, *y = ws->y, *z = ws->z;
+    const mf_vec3 *en = l->edge_n;
+    int *cand = ws->cand, m = 0, ne = l->poly.n;
+    for (int j = 0; j < live; ++j) {
+        cand[m] = j;
+        m += x[j] * cx + y[j] * cy + z[j] * cz >= cr;
+    }
+    switch (ne) {
+    case 3:
+        MASK_EDGES(3)
+        break;
+    case 4:
+        MASK_EDGES(4)
+        break;
+    case 8:
+        MASK_EDGES(8)
+        break;
+    default:
+        MASK_EDGES(ne)
+        break;
+    }
+}
+#undef MASK_EDGES
+
+static int use_masks(atexel *t, workspace *ws)
+{
+    if (!t->mask || t->k > 64)
+        return 0;
+    if (!t->mask_ok) {
+        for (int j = 0; j < t->live; ++j)
+            t->mask[j] = 0;
+        for (int k = 0; k < t->k; ++k)
+            mask_light(&t->lights[k], ws, t->live, k, t->mask);
+        t->mask_ok = 1;
+    }
+    return 1;
+}
+
+/* sm[4 k + 0..3]: light_sums_cv of every light (cv 0: only sm[4 k] is summed, light_sum). */
+static void mask_sums(const atexel *t, const workspace *ws, int cv, double *sm)
+{
+    for (int i = 0; i < 4 * t->k; ++i)
+        sm[i] = 0.0;
+    for (int j = 0; j < t->live; ++j) {
+        uint64_t m = t->mask[j];
+        double w = ws->w[j], c = cv ? ws->cw[j] : 0.0;
+        while (m) {
+            double *o = sm + 4 * __builtin_ctzll(m);
+            m &= m - 1;
+            o[0] += w;
+            if (cv) {
+                o[1] += c;
+                o[2] += c * c;
+                o[3] += c * w;
+            }
+        }
+    }
+}
+
+static void targets_raw(atexel *t, workspace *ws)
+{
+    double sm[4 * 64];
+    int masks = use_masks(t, ws);
+    if (masks)
+        mask_sums(t, ws, 0, sm);
     for (int k = 0; k < t->k; ++k) {
-        t->target[k] = light_sum(&t->lights[k], ws, t->live) * t->invn;
+        t->target[k] = (masks ? sm[4 * k] : light_sum(&t->lights[k], ws, t->live)) * t->invn;
         t->inv_weight[k] = t->lights[k].factor / (t->target[k] + t->wfloor * t->magnitude + 1e-300);
     }
 }
@@ -620,10 +704,15 @@ static void control_variate(atexel *t, workspace *ws, const double *p0)
     double adj[9];
     adj_value(p0, adj);
     const double n = ws->n;
+    double all[4 * 64];
+    int masks = use_masks(t, ws);
+    if (masks)
+        mask_sums(t, ws, 1, all);
     for (int k = 0; k < t->k; ++k) {
         const light *l = &t->lights[k];
-        double sm[4];
-        light_sums_cv(l, ws, t->live, sm);
+        double sm_own[4], *sm = masks ? all + 4 * k : sm_own;
+        if (!masks)
+            light_sums_cv(l, ws, t->live, sm);
         double my = sm[0] * t->invn, mx = sm[1] / n;
         double sxx = sm[2] - n * mx * mx, sxy = t->scale * sm[3] - n * mx * my;
         double beta = sxx > 0.0 ? fmin(fmax(sxy / sxx, 0.0), 1.0) : 0.0;
@@ -758,7 +847,11 @@ static int residual_fn(void *user, const double *p, double *res, double *jac)
     return 0;
 }
 
-static double cost_at(const atexel *t, const double *p)
+/* The cost at p; once the running sum of the light terms exceeds `bound` it stops and returns
+ * that partial sum (every term is >= 0 and a rounded sum of non-negative terms never decreases, so
+ * the full cost would exceed `bound` too: a caller that only asks "is it below bound?" gets the
+ * same answer, and a cost below bound is bit for bit the full one). */
+static double cost_at_bound(const atexel *t, const double *p, double bound)
 {
     if (!valid(p))
         return INFINITY;
@@ -770,6 +863,8 @@ static double cost_at(const atexel *t, const double *p)
                     t->target[k]) *
                    t->inv_weight[k];
         c += r * r;
+        if (c > bound)
+            return c;
     }
     for (int i = 0; i < NP && t->prox > 0.0; ++i) {
         double w = is_scale(i) ? t->prox / t->prox_at[i] : t->prox;
@@ -780,9 +875,16 @@ static double cost_at(const atexel *t, const double *p)
     return c + b * b;
 }
 
+static double cost_at(const atexel *t, const double *p) { return cost_at_bound(t, p, INFINITY); }
+
 /* The closed-form start: the cosine scaled by (s, s) about the lobe's mean, s on the log grid
- * 10^(-4.5 + 0.25 i), i = 0..20, then the aspect: (s r, s / r), r = 10^(0.25 j), j = -8..8. */
-static double closed_form_start(const atexel *t, double *p)
+ * 10^(-4.5 + 0.25 i), i = 0..20, then the aspect: (s r, s / r), r = 10^(0.25 j), j = -8..8.
+ * Returns its cost.  The grid's costs are summed against the best so far (cost_at_bound: a point
+ * that cannot win stops early, the choice is the same); the aspect points also against bound2
+ * (a competing start's cost, or INFINITY): a point at or above it is not taken, so when the
+ * result is below bound2 it is the same point and cost as with INFINITY, and otherwise it is at or
+ * above bound2 too (the caller keeps its competitor either way). */
+static double closed_form_start(const atexel *t, double *p, double bound2)
 {
     double best = INFINITY, s_best = 1.0;
     for (int i = 0; i < NP; ++i)
@@ -791,7 +893,7 @@ static double closed_form_start(const atexel *t, double *p)
     for (int i = 0; i <= 20; ++i) {
         double s = pow(10.0, -4.5 + 0.25 * i);
         double q[NP] = {s, 0.0, 0.0, s, 0.0, 0.0, 0.0};
-        double c = cost_at(t, q);
+        double c = cost_at_bound(t, q, best);
         if (c < best) {
             best = c;
             s_best = s;
@@ -801,8 +903,9 @@ static double closed_form_start(const atexel *t, double *p)
     for (int j = -8; j <= 8; ++j) {
         double r = pow(10.0, 0.25 * j);
         double q[NP] = {s_best * r, 0.0, 0.0, s_best / r, 0.0, 0.0, 0.0};
-        double c = cost_at(t, q);
-        if (c < best) {
+        double lim = fmin(best, bound2);
+        double c = cost_at_bound(t, q, lim);
+        if (c < lim) {
             best = c;
             memcpy(p, q, sizeof q);
         }
@@ -829,6 +932,14 @@ static mf_mat3 polar_gauge(mf_mat3 m)
     }
     return r;
 }
+
+/* The solver's function and parameter tolerances in the prefilter's fits (the table's: 1e-10).
+ * Measured on `bench_prefilter --size 8 --threads 1` (2,688 lobes of the synthetic bump map):
+ * 1e-10 / 1e-6 / 1e-4: 22.0 / 11.6 / 6.8 solver steps per fit, 13.0 / 11.6 / 11.1 s of CPU, worst
+ * residual per level 0.0248, 0.0196, 0.0163 / the same / 0.0249, 0.0196, 0.0163: the steps after
+ * a relative cost change of 1e-6 move no lobe by a visible amount.  Quality before and after:
+ * docs/prefilter.md, "Speed of revision 3". */
+#define PREFILTER_TOLERANCE 1e-6
 
 /* See solve_entry: a fit this close to every light is done, whatever the solver's tolerances say. */
 #define RESIDUAL_EXACT 1e-3
@@ -870,7 +981,7 @@ static mf_status solve_entry(atexel *t, workspace *ws, const double *lobe_start,
     }
     if (!warm) {
         targets_raw(t, ws);
-        closed_form_start(t, q);
+        closed_form_start(t, q, INFINITY);
     }
     control_variate(t, ws, q);
     t->prox = 0.0;
@@ -878,10 +989,11 @@ static mf_status solve_entry(atexel *t, workspace *ws, const double *lobe_start,
         t->prox = PROX_WEIGHT;
         memcpy(t->prox_at, q, sizeof q);
     }
-    double c0 = closed_form_start(t, p);
-    if (warm && cost_at(t, q) <= c0) {
+    double cw = warm ? cost_at(t, q) : INFINITY;
+    double c0 = closed_form_start(t, p, cw);
+    if (warm && cw <= c0) {
         memcpy(p, q, sizeof p);
-        c0 = cost_at(t, q);
+        c0 = cw;
     }
     if (alt_start) {
         double r[NP];
@@ -889,7 +1001,7 @@ static mf_status solve_entry(atexel *t, workspace *ws, const double *lobe_start,
         for (int i = 0; i < NP; ++i)
             if (t->fixed[i])
                 r[i] = 0.0;
-        if (valid(r) && cost_at(t, r) < c0)
+        if (valid(r) && cost_at_bound(t, r, c0) < c0)
             memcpy(p, r, sizeof p);
     }
     double lower[NP], upper[NP];
@@ -905,6 +1017,8 @@ static mf_status solve_entry(atexel *t, workspace *ws, const double *lobe_start,
     so.function_tolerance = 1e-10;
     so.gradient_tolerance = 1e-14;
     so.parameter_tolerance = 1e-10;
+    if (t->mask) /* the prefilter's fits (entry_fit_mirrored) */
+        so.function_tolerance = so.parameter_tolerance = PREFILTER_TOLERANCE;
     mf_solver_summary sum;
     st = mf_solver_least_squares(NP, t->k + NP + 1, residual_fn, t, p, lower, upper, &so, &sum);
     if (st != MF_OK && st != MF_ERR_NO_CONVERGENCE)
@@ -924,7 +1038,7 @@ static mf_status solve_entry(atexel *t, workspace *ws, const double *lobe_start,
         if (attempt == 0)
             memcpy(r, p, sizeof r);
         else
-            closed_form_start(t, r);
+            closed_form_start(t, r, INFINITY);
         for (int i = 0; i < NP; ++i)
             if (t->fixed[i])
                 r[i] = 0.0;
@@ -958,13 +1072,15 @@ static mf_status solve_entry(atexel *t, workspace *ws, const double *lobe_start,
 static mf_status fit_entry_starts(const mf_brdf_model *model, mf_brdf_params prm, double theta, double phi, int sym,
                                   int family, const double *given_mag, const double *lobe_start,
                                   const double *alt_start, int two_starts, const mf_ltcfit_aniso_options *o,
-                                  const uint32_t scr[2], workspace *ws, mf_ltcfit_aniso_entry *out)
+                                  const uint32_t scr[2], workspace *ws, uint64_t *mask, mf_ltcfit_aniso_entry *out)
 {
     atexel *t = malloc(sizeof *t);
     if (!t)
         return MF_ERR_ALLOC;
     memset(out, 0, sizeof *out);
     mf_status st = atexel_prepare(model, prm, theta, phi, sym, family, given_mag, scr, ws, t);
+    t->mask = mask;
+    t->mask_ok = 0;
     if (st == MF_OK)
         st = solve_entry(t, ws, lobe_start, alt_start, o, out);
     if (st == MF_OK && two_starts && lobe_start) {
@@ -985,7 +1101,8 @@ static mf_status fit_entry(const mf_brdf_model *model, mf_brdf_params prm, doubl
                            int family, const double *given_mag, const double *lobe_start, const double *alt_start, const mf_ltcfit_aniso_options *o,
                            const uint32_t scr[2], workspace *ws, mf_ltcfit_aniso_entry *out)
 {
-    return fit_entry_starts(model, prm, theta, phi, sym, family, given_mag, lobe_start, alt_start, 0, o, scr, ws, out);
+    return fit_entry_starts(model, prm, theta, phi, sym, family, given_mag, lobe_start, alt_start, 0, o, scr, ws, NULL,
+                            out);
 }
 
 static int check_options(const mf_ltcfit_aniso_options *o)
@@ -1012,20 +1129,77 @@ static int sym_of(double theta, double phi)
     return 0;
 }
 
+/* The prefilter calls the one-entry fit about 700,000 times for a 128^2 map; a fresh workspace per
+ * call (1.5 MB at 4096 directions) cost 3 % of its CPU in page faults.  So those fits keep one per
+ * thread (freed when the thread exits; the calling thread's is kept for the process): a fit
+ * rewrites every part of it that it reads (atexel_prepare, use_masks), so the results do not
+ * depend on what ran before on the thread. */
+typedef struct {
+    workspace ws;
+    uint64_t *mask;
+    int base;
+} pf_workspace;
+
+static pthread_key_t g_pf_ws_key;
+static pthread_once_t g_pf_ws_once = PTHREAD_ONCE_INIT;
+static int g_pf_ws_key_ok;
+
+static void pf_workspace_free(void *p)
+{
+    pf_workspace *w = p;
+    if (!w)
+        return;
+    ws_free(&w->ws);
+    free(w->mask);
+    free(w);
+}
+
+static void pf_workspace_key(void) { g_pf_ws_key_ok = pthread_key_create(&g_pf_ws_key, pf_workspace_free) == 0; }
+
+static pf_workspace *pf_workspace_get(int base)
+{
+    pthread_once(&g_pf_ws_once, pf_workspace_key);
+    if (!g_pf_ws_key_ok)
+        return NULL;
+    pf_workspace *w = pthread_getspecific(g_pf_ws_key);
+    if (w && w->base == base)
+        return w;
+    pf_workspace_free(w);
+    pthread_setspecific(g_pf_ws_key, NULL);
+    w = calloc(1, sizeof *w);
+    if (!w)
+        return NULL;
+    w->mask = malloc(sizeof *w->mask * (size_t)GRAZING_FACTOR * base);
+    if (!ws_init(&w->ws, base) || !w->mask || pthread_setspecific(g_pf_ws_key, w) != 0) {
+        pf_workspace_free(w);
+        return NULL;
+    }
+    w->base = base;
+    return w;
+}
+
 /* fit_entry for one entry on its own (the public one-entry fits): its own workspace and scramble. */
 static mf_status fit_entry_alone(const mf_brdf_model *model, mf_brdf_params prm, double theta, double phi, int sym,
                                  int family, const double *given_mag, const double *lobe_start, const double *alt_start,
-                                 int two_starts, const mf_ltcfit_aniso_options *o, mf_ltcfit_aniso_entry *out)
+                                 int two_starts, int masks, const mf_ltcfit_aniso_options *o,
+                                 mf_ltcfit_aniso_entry *out)
 {
+    uint32_t scr[2];
+    sobol_scramble(o->seed, scr);
+    if (masks) { /* the prefilter's fits: the thread's workspace */
+        pf_workspace *w = pf_workspace_get(o->samples);
+        if (!w)
+            return MF_ERR_ALLOC;
+        return fit_entry_starts(model, prm, theta, phi, sym, family, given_mag, lobe_start, alt_start, two_starts, o,
+                                scr, &w->ws, w->mask, out);
+    }
     workspace ws;
     if (!ws_init(&ws, o->samples)) {
         ws_free(&ws);
         return MF_ERR_ALLOC;
     }
-    uint32_t scr[2];
-    sobol_scramble(o->seed, scr);
     mf_status st = fit_entry_starts(model, prm, theta, phi, sym, family, given_mag, lobe_start, alt_start, two_starts,
-                                    o, scr, &ws, out);
+                                    o, scr, &ws, NULL, out);
     ws_free(&ws);
     return st;
 }
@@ -1038,7 +1212,8 @@ mf_status mf_ltcfit_aniso_entry_fit(const mf_brdf_model *model, double alpha_x, 
         !(theta >= 0.0 && theta < 0.5 * MF_PI) || !(phi >= 0.0 && phi < 2.0 * MF_PI) || !out)
         return MF_ERR_DOMAIN;
     mf_brdf_params prm = {alpha_x, alpha_y};
-    return fit_entry_alone(model, prm, theta, phi, sym_of(theta, phi), FAMILY_RANDOM, NULL, lobe_start, NULL, 0, o, out);
+    return fit_entry_alone(model, prm, theta, phi, sym_of(theta, phi), FAMILY_RANDOM, NULL, lobe_start, NULL, 0, 0, o,
+                           out);
 }
 
 mf_status mf_ltcfit_aniso_entry_fit_general(const mf_brdf_model *model, mf_brdf_params prm, double theta, double phi,
@@ -1050,7 +1225,7 @@ mf_status mf_ltcfit_aniso_entry_fit_general(const mf_brdf_model *model, mf_brdf_
         !(magnitude >= 0.0 && magnitude < INFINITY) || !(magnitude_err >= 0.0))
         return MF_ERR_DOMAIN;
     double mag[2] = {magnitude, magnitude_err};
-    return fit_entry_alone(model, prm, theta, phi, 0, FAMILY_SHAPED, mag, lobe_start, NULL, 0, o, out);
+    return fit_entry_alone(model, prm, theta, phi, 0, FAMILY_SHAPED, mag, lobe_start, NULL, 0, 0, o, out);
 }
 
 static mf_status entry_fit_mirrored(const mf_brdf_model *model, mf_brdf_params prm, double theta, int mirrors,
@@ -1063,7 +1238,7 @@ static mf_status entry_fit_mirrored(const mf_brdf_model *model, mf_brdf_params p
         !(magnitude_err >= 0.0) || (mirrors & ~(SYM_X | SYM_Y)) || ((mirrors & SYM_X) && theta != 0.0))
         return MF_ERR_DOMAIN;
     double mag[2] = {magnitude, magnitude_err};
-    return fit_entry_alone(model, prm, theta, 0.0, mirrors, FAMILY_SHAPED, mag, lobe_start, alt_start, two_starts, o,
+    return fit_entry_alone(model, prm, theta, 0.0, mirrors, FAMILY_SHAPED, mag, lobe_start, alt_start, two_starts, 1, o,
                            out);
 }
 

@@ -47,26 +47,74 @@ static mf_vec3 texel_view(const double *r, mf_vec3 wo)
 
 /* Isotropic GGX in closed form (the "ggx" model's formulas, mf_model_ggx.c: f = D G2 / (4 wo.z wi.z),
  * height-correlated G2 [Heitz 2014], density G1(wo) D(h) / (4 wo.z) [Heitz 2018; Walter 2007,
- * Eq. 14]), f cos and density sharing D(h) and Lambda(wo) -- one component of the mixture. */
+ * Eq. 14]), f cos and density sharing D(h) and Lambda(wo) -- one component of the mixture
+ * (evaluated by ggx_fpdf_cached below). */
 static double ggx_lambda_iso(double a2, mf_vec3 w)
 {
     double t = a2 * (w.x * w.x + w.y * w.y) / (w.z * w.z);
     return 0.5 * t / (1.0 + sqrt(1.0 + t));
 }
 
-static void ggx_fpdf(double a2, mf_vec3 vo, double lo, mf_vec3 vi, double *f, double *pdf)
+
+/* Per view, per component, VC_N doubles (view_cache_fill): the texel-frame view vo and Lambda(vo),
+ * then the visible-normal sampler's frame of vo [Heitz 2018, Listing 1]: vh, t1, t2 and
+ * s = (1 + vh.z) / 2, computed with mf_sample_ggx_vndf's operations (so a sample from the cache
+ * has its bits). */
+#define VC_N 17
+static void view_cache_fill(double alpha, mf_vec3 vo, double *c)
+{
+    double a2 = alpha * alpha, lo = ggx_lambda_iso(a2, vo);
+    c[14] = a2 / (4.0 * MF_PI * vo.z), c[15] = 1.0 + 2.0 * lo, c[16] = 1.0 / (1.0 + lo);
+    c[0] = vo.x, c[1] = vo.y, c[2] = vo.z, c[3] = ggx_lambda_iso(alpha * alpha, vo);
+    mf_vec3 vh = mf_vec3_normalize(mf_vec3_make(alpha * vo.x, alpha * vo.y, vo.z));
+    double lensq = vh.x * vh.x + vh.y * vh.y;
+    mf_vec3 t1 = lensq > 0.0 ? mf_vec3_scale(mf_vec3_make(-vh.y, vh.x, 0.0), 1.0 / sqrt(lensq))
+                             : mf_vec3_make(1.0, 0.0, 0.0);
+    mf_vec3 t2 = mf_vec3_cross(vh, t1);
+    c[4] = vh.x, c[5] = vh.y, c[6] = vh.z, c[7] = t1.x, c[8] = t1.y, c[9] = t1.z, c[10] = t2.x, c[11] = t2.y;
+    c[12] = t2.z, c[13] = 0.5 * (1.0 + vh.z);
+}
+
+/* ggx_fpdf at a cached view, rearranged to two divisions and one square root (the model's form: five and
+ * two): with h = vo + vi, s = h.x^2 + h.y^2, z = h.z^2, den = a^2 z + s,
+ *   D / (4 vo.z) = [a^2 / (4 pi vo.z)] (s + z)^2 / den^2,
+ *   1 + Lambda(vo) + Lambda(vi) = (1 + 2 Lambda(vo) + sqrt(1 + t)) / 2 with t = a^2 (vi.x^2 + vi.y^2) / vi.z^2
+ *     (Lambda = (sqrt(1 + t) - 1) / 2; the sum has no cancellation), and
+ *     sqrt(1 + t) = sqrt(vi.z^2 + a^2 (vi.x^2 + vi.y^2)) / vi.z,
+ * so f cos = 2 dq vi.z / ((1 + 2 Lambda(vo)) vi.z + sqrt(vi.z^2 + a^2 (vi.x^2 + vi.y^2))) and
+ * pdf = dq / (1 + Lambda(vo)), dq = D / (4 vo.z) (the model's values to rounding). */
+static void ggx_fpdf_cached(double a2, const double *c, mf_vec3 vi, double *f, double *pdf)
 {
     *f = *pdf = 0.0;
     if (!(vi.z > 0.0))
         return;
-    mf_vec3 h = mf_vec3_add(vo, vi);
-    double s2 = h.x * h.x + h.y * h.y, z2 = h.z * h.z;
+    double hx = c[0] + vi.x, hy = c[1] + vi.y, hz = c[2] + vi.z;
+    double s2 = hx * hx + hy * hy, z2 = hz * hz;
     double den = a2 * z2 + s2, l2 = s2 + z2;
-    double d = a2 * l2 * l2 / (MF_PI * den * den);
-    double q = 1.0 / (4.0 * vo.z);
-    *f = d / (1.0 + lo + ggx_lambda_iso(a2, vi)) * q;
-    if (h.z > 0.0 && mf_vec3_dot(vo, h) > 0.0)
-        *pdf = d / (1.0 + lo) * q;
+    double dq = c[14] * (l2 * l2) / (den * den);
+    *f = 2.0 * dq * vi.z / (c[15] * vi.z + sqrt(vi.z * vi.z + a2 * (vi.x * vi.x + vi.y * vi.y)));
+    if (hz > 0.0 && c[0] * hx + c[1] * hy + c[2] * hz > 0.0)
+        *pdf = dq * c[16];
+}
+
+/* mf_sample_ggx_vndf at the cached view (the same operations), reflected: the texel-frame wi, and
+ * whether the model's sampler would give it a positive density (wi.z > 0, vo.wm > 0, wm.z > 0). */
+static mf_vec3 ggx_sample_cached(double alpha, const double *c, const double u[2], int *ok)
+{
+    double r = sqrt(u[0]);
+    double phi = 2.0 * MF_PI * u[1];
+    double p1 = r * cos(phi), p2 = r * sin(phi);
+    double s = c[13];
+    p2 = (1.0 - s) * sqrt(fmax(0.0, 1.0 - p1 * p1)) + s * p2;
+    double pz = sqrt(fmax(0.0, 1.0 - p1 * p1 - p2 * p2));
+    mf_vec3 nh = mf_vec3_add(mf_vec3_add(mf_vec3_scale(mf_vec3_make(c[7], c[8], c[9]), p1),
+                                         mf_vec3_scale(mf_vec3_make(c[10], c[11], c[12]), p2)),
+                             mf_vec3_scale(mf_vec3_make(c[4], c[5], c[6]), pz));
+    mf_vec3 wm = mf_vec3_normalize(mf_vec3_make(alpha * nh.x, alpha * nh.y, fmax(0.0, nh.z)));
+    mf_vec3 vo = mf_vec3_make(c[0], c[1], c[2]);
+    mf_vec3 wi = mf_vec3_reflect(vo, wm);
+    *ok = wi.z > 0.0 && mf_vec3_dot(vo, wm) > 0.0 && wm.z > 0.0;
+    return wi;
 }
 
 /* Per view, per component: the texel-frame view and Lambda there (mix_set_view). */
@@ -97,9 +145,9 @@ static void mix_eval_pdf(const mf_prefilter_mix *x, const mf_brdf_params *p, mf_
     if (vc) {
         double a2 = p->alpha_x * p->alpha_x;
         for (int j = 0; j < x->n; ++j) {
-            const double *r = x->rot + 9 * j, *c = vc + 4 * j;
+            const double *r = x->rot + 9 * j, *c = vc + VC_N * j;
             double fj, pj;
-            ggx_fpdf(a2, mf_vec3_make(c[0], c[1], c[2]), c[3], rot_t(r, wi), &fj, &pj);
+            ggx_fpdf_cached(a2, c, rot_t(r, wi), &fj, &pj);
             sf += x->w[j] * fj;
             sp += x->w[j] * pj;
         }
@@ -138,7 +186,7 @@ static double mix_pdf(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 w
 /* The texel from u[0] (the first j with u0 < cdf[j]) and u[0] rescaled into [0, 1) inside its
  * interval, then the base sampler at the texel's view, rotated to the geometric frame. */
 static mf_vec3 mix_sample_texel(const mf_prefilter_mix *x, const mf_brdf_params *p, mf_vec3 wo, const double u[2],
-                                double *base_pdf)
+                                double *base_pdf, const double *vc)
 {
     int lo = 0, hi = x->n - 1;
     while (lo < hi) {
@@ -158,6 +206,12 @@ static mf_vec3 mix_sample_texel(const mf_prefilter_mix *x, const mf_brdf_params 
         *base_pdf = z * MF_INV_PI;
         return rot_apply(r, mf_vec3_make(rr * cos(ph), rr * sin(ph), z));
     }
+    if (vc) { /* the cached view (GGX, mix_set_view): only the sign of the density is read */
+        int ok;
+        mf_vec3 wi_t = ggx_sample_cached(p->alpha_x, vc + VC_N * lo, v, &ok);
+        *base_pdf = ok ? 1.0 : 0.0;
+        return rot_apply(r, wi_t);
+    }
     mf_vec3 wi_t = x->base->sample(x->base, p, texel_view(r, wo), v, base_pdf);
     return rot_apply(r, wi_t);
 }
@@ -169,7 +223,7 @@ static mf_vec3 mix_sample(const mf_brdf_model *m, const mf_brdf_params *p, mf_ve
     if (!(wo.z > 0.0))
         return mf_vec3_make(0.0, 0.0, 1.0);
     double bp;
-    mf_vec3 wi = mix_sample_texel(x, p, wo, u, &bp);
+    mf_vec3 wi = mix_sample_texel(x, p, wo, u, &bp, x->kind == MF_PREFILTER_BASE_GGX ? view_cache(x, p, wo) : NULL);
     if (bp > 0.0 && wi.z > 0.0 && mf_vec3_isfinite(wi)) {
         double f;
         mix_eval_pdf(x, p, wo, wi, &f, pdf);
@@ -181,6 +235,7 @@ static void mix_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, 
                                mf_vec3 *wi, double *pdf, double *w)
 {
     const mf_prefilter_mix *x = mix_of(m);
+    const double *vc = x->kind == MF_PREFILTER_BASE_GGX ? view_cache(x, p, wo) : NULL;
     for (int i = 0; i < n; ++i) {
         pdf[i] = 0.0;
         w[i] = 0.0;
@@ -189,7 +244,7 @@ static void mix_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, 
             continue;
         }
         double bp;
-        wi[i] = mix_sample_texel(x, p, wo, u + 2 * i, &bp);
+        wi[i] = mix_sample_texel(x, p, wo, u + 2 * i, &bp, vc);
         if (bp > 0.0 && wi[i].z > 0.0 && mf_vec3_isfinite(wi[i])) {
             double f;
             mix_eval_pdf(x, p, wo, wi[i], &f, &pdf[i]);
@@ -283,14 +338,10 @@ static mf_status mix_set_view(mf_prefilter_mix *m, const mf_brdf_params *p, mf_v
 {
     if (m->kind != MF_PREFILTER_BASE_GGX || p->alpha_x != p->alpha_y)
         return MF_OK;
-    if (!m->cache && !(m->cache = malloc(sizeof(double) * 4 * (size_t)m->n)))
+    if (!m->cache && !(m->cache = malloc(sizeof(double) * VC_N * (size_t)m->n)))
         return MF_ERR_ALLOC;
-    double a2 = p->alpha_x * p->alpha_x;
-    for (int j = 0; j < m->n; ++j) {
-        mf_vec3 vo = texel_view(m->rot + 9 * j, wo);
-        double *c = m->cache + 4 * j;
-        c[0] = vo.x, c[1] = vo.y, c[2] = vo.z, c[3] = ggx_lambda_iso(a2, vo);
-    }
+    for (int j = 0; j < m->n; ++j)
+        view_cache_fill(p->alpha_x, texel_view(m->rot + 9 * j, wo), m->cache + VC_N * j);
     m->cache_wo[0] = wo.x, m->cache_wo[1] = wo.y, m->cache_wo[2] = wo.z;
     m->cache_a = p->alpha_x;
     return MF_OK;
@@ -323,10 +374,9 @@ mf_status mf_prefilter_mix_albedo(const mf_prefilter_mix *m, const mf_brdf_param
         mf_prefilter_mix one = *m; /* the one-texel mixture of component j */
         one.n = 1;
         one.cache = NULL;
-        double c4[4];
+        double c4[VC_N];
         if (m->kind == MF_PREFILTER_BASE_GGX && p->alpha_x == p->alpha_y) { /* the fused evaluation */
-            mf_vec3 vo = texel_view(m->rot + 9 * j, wo);
-            c4[0] = vo.x, c4[1] = vo.y, c4[2] = vo.z, c4[3] = ggx_lambda_iso(p->alpha_x * p->alpha_x, vo);
+            view_cache_fill(p->alpha_x, texel_view(m->rot + 9 * j, wo), c4);
             one.cache = c4;
             one.cache_wo[0] = wo.x, one.cache_wo[1] = wo.y, one.cache_wo[2] = wo.z;
             one.cache_a = p->alpha_x;
@@ -345,6 +395,251 @@ mf_status mf_prefilter_mix_albedo(const mf_prefilter_mix *m, const mf_brdf_param
     out->val = val;
     out->err = err;
     return MF_OK;
+}
+
+/* ---- the one-texel GGX albedo: a fused rule and a table over its three parameters ------------- */
+
+/* The one-texel albedo depends on the texel-frame view v (after the below-horizon clamp of
+ * texel_view) and the geometric normal in the texel frame, g = R^T z = (-n.x, -n.y, n.z), only
+ * through three numbers (it is invariant under a rotation of both about the texel normal, and
+ * even in their relative azimuth): theta_v = acos v.z, the tilt tau = acos n.z and the azimuth
+ * delta in [0, pi] between the horizontal parts of v and g.  albedo_rule integrates exactly what
+ * mf_prefilter_mix_albedo integrates for a one-texel mixture -- mf_model_albedo's product rule
+ * (composite 8-point Gauss-Legendre panels, the first axis graded by u0 = 1 - (1 - t)^3) over the
+ * visible-normal sampler [Heitz 2018, Listing 1], weight f cos / pdf = G2 / G1 =
+ * (1 + Lambda(v)) / (1 + Lambda(v) + Lambda(wi)) where wi is above both horizons (texel:
+ * wi.z > 0, geometric: g.wi > 0), 0 elsewhere -- fused (no model calls, the view's frame
+ * hoisted), at MF_PREFILTER_ALBEDO_N and half of it (the error estimate).  The table holds it at
+ * ALB_NT x ALB_NU x ALB_ND nodes (theta_v uniform on [0, acos MF_PREFILTER_COS_MIN], tau uniform
+ * on [0, pi/2], delta uniform on [0, pi]); a lookup interpolates it by Catmull-Rom splines along
+ * the three axes (ghost nodes: the reflections theta -> -theta, tau -> -tau and delta -> -delta,
+ * 2 pi - delta are exact nodes; beyond theta_max and pi/2 quadratic extrapolation).  Nodes are
+ * computed on first use, one tau slab (all theta x delta nodes of one tau) at a time, and kept for
+ * the process (per alpha): a slab's values are a function of its node coordinates only, so the
+ * results do not depend on the order, the threads or the tiling.  Accuracy: see
+ * MF_PREFILTER_ALBEDO_TABLE in mf_prefilter.h. */
+static const double alb_gl8_x[8] = {-0.9602898564975363, -0.7966664774136267, -0.5255324099163290, -0.1834346424956498,
+                                    0.1834346424956498,  0.5255324099163290,  0.7966664774136267,  0.9602898564975363};
+static const double alb_gl8_w[8] = {0.1012285362903763, 0.2223810344533745, 0.3137066458778873, 0.3626837833783620,
+                                    0.3626837833783620, 0.3137066458778873, 0.2223810344533745, 0.1012285362903763};
+
+static double albedo_rule_panels(double alpha, mf_vec3 v, mf_vec3 g, int panels)
+{
+    double a2 = alpha * alpha;
+    double lo = ggx_lambda_iso(a2, v), num = 1.0 + lo;
+    mf_vec3 vh = mf_vec3_normalize(mf_vec3_make(alpha * v.x, alpha * v.y, v.z));
+    double lensq = vh.x * vh.x + vh.y * vh.y;
+    mf_vec3 t1 = lensq > 0.0 ? mf_vec3_scale(mf_vec3_make(-vh.y, vh.x, 0.0), 1.0 / sqrt(lensq))
+                             : mf_vec3_make(1.0, 0.0, 0.0);
+    mf_vec3 t2 = mf_vec3_cross(vh, t1);
+    double s = 0.5 * (1.0 + vh.z), sum = 0.0;
+    double cph[8 * 64], sph[8 * 64], u1w[8 * 64];
+    int row = 8 * panels;
+    for (int q = 0; q < row; ++q) {
+        int pj = q / 8, jj = q % 8;
+        double u1 = (pj + 0.5 * (alb_gl8_x[jj] + 1.0)) / panels;
+        cph[q] = cos(2.0 * MF_PI * u1), sph[q] = sin(2.0 * MF_PI * u1);
+        u1w[q] = alb_gl8_w[jj];
+    }
+    for (int pi = 0; pi < panels; ++pi)
+        for (int i = 0; i < 8; ++i) {
+            double tt = (pi + 0.5 * (alb_gl8_x[i] + 1.0)) / panels, om = 1.0 - tt;
+            double u0 = 1.0 - om * om * om, rr = sqrt(u0);
+            double wrow = 0.25 * alb_gl8_w[i] / ((double)panels * panels) * 3.0 * om * om, srow = 0.0;
+            for (int q = 0; q < row; ++q) {
+                double p1 = rr * cph[q], p2 = rr * sph[q];
+                p2 = (1.0 - s) * sqrt(fmax(0.0, 1.0 - p1 * p1)) + s * p2;
+                double pz = sqrt(fmax(0.0, 1.0 - p1 * p1 - p2 * p2));
+                mf_vec3 nh = mf_vec3_make(t1.x * p1 + t2.x * p2 + vh.x * pz, t1.y * p1 + t2.y * p2 + vh.y * pz,
+                                          t1.z * p1 + t2.z * p2 + vh.z * pz);
+                mf_vec3 wm = mf_vec3_normalize(mf_vec3_make(alpha * nh.x, alpha * nh.y, fmax(0.0, nh.z)));
+                double vm = mf_vec3_dot(v, wm);
+                if (!(vm > 0.0) || !(wm.z > 0.0))
+                    continue;
+                mf_vec3 wi = mf_vec3_sub(mf_vec3_scale(wm, 2.0 * vm), v);
+                if (!(wi.z > 0.0) || !(mf_vec3_dot(g, wi) > 0.0))
+                    continue;
+                srow += u1w[q] * (num / (num + ggx_lambda_iso(a2, wi)));
+            }
+            sum += wrow * srow;
+        }
+    return sum;
+}
+
+/* The one-texel albedo (value, error estimate |Q(n) - Q(n / 2)|) at texel-frame view v and
+ * texel-frame geometric normal g. */
+static void albedo_rule(double alpha, mf_vec3 v, mf_vec3 g, double *val, double *err)
+{
+    double a1 = albedo_rule_panels(alpha, v, g, MF_PREFILTER_ALBEDO_N / 8);
+    double a2 = albedo_rule_panels(alpha, v, g, MF_PREFILTER_ALBEDO_N / 16);
+    *val = a1;
+    *err = fabs(a1 - a2);
+}
+
+#define ALB_NT 49
+#define ALB_NU 33
+#define ALB_ND 17
+
+typedef struct alb_table {
+    double alpha;
+    double *val, *err;   /* [u][t][d] */
+    int ready[ALB_NU];   /* slab u computed (read and written with atomics) */
+    struct alb_table *next;
+} alb_table;
+
+static pthread_mutex_t g_alb_lock = PTHREAD_MUTEX_INITIALIZER;
+static alb_table *g_alb_tables;
+
+static double alb_theta_max(void) { return acos(MF_PREFILTER_COS_MIN); }
+
+static void alb_fill_slab(alb_table *t, int u)
+{
+    double tau = u * (0.5 * MF_PI) / (ALB_NU - 1);
+    mf_vec3 g = mf_vec3_make(sin(tau), 0.0, cos(tau));
+    for (int it = 0; it < ALB_NT; ++it) {
+        double th = it * alb_theta_max() / (ALB_NT - 1), st = sin(th), ct = cos(th);
+        for (int d = 0; d < ALB_ND; ++d) {
+            double de = d * MF_PI / (ALB_ND - 1);
+            mf_vec3 v = mf_vec3_make(st * cos(de), st * sin(de), ct);
+            size_t k = ((size_t)u * ALB_NT + it) * ALB_ND + d;
+            albedo_rule(t->alpha, v, g, &t->val[k], &t->err[k]);
+        }
+    }
+}
+
+/* The table of alpha, its slabs u0..u1 computed (NULL: out of memory). */
+static alb_table *alb_get(double alpha, int u0, int u1)
+{
+    pthread_mutex_lock(&g_alb_lock);
+    alb_table *t = g_alb_tables;
+    while (t && t->alpha != alpha)
+        t = t->next;
+    if (!t && (t = calloc(1, sizeof *t))) {
+        size_t n = (size_t)ALB_NU * ALB_NT * ALB_ND;
+        t->val = malloc(sizeof(double) * n);
+        t->err = malloc(sizeof(double) * n);
+        if (!t->val || !t->err) {
+            free(t->val), free(t->err), free(t);
+            t = NULL;
+        } else {
+            t->alpha = alpha;
+            t->next = g_alb_tables;
+            g_alb_tables = t;
+        }
+    }
+    pthread_mutex_unlock(&g_alb_lock);
+    if (!t)
+        return NULL;
+    for (int u = u0; u <= u1; ++u)
+        if (!__atomic_load_n(&t->ready[u], __ATOMIC_ACQUIRE)) {
+            pthread_mutex_lock(&g_alb_lock);
+            if (!t->ready[u]) {
+                alb_fill_slab(t, u);
+                __atomic_store_n(&t->ready[u], 1, __ATOMIC_RELEASE);
+            }
+            pthread_mutex_unlock(&g_alb_lock);
+        }
+    return t;
+}
+
+/* Catmull-Rom weights at fraction f. */
+static void cr_weights(double f, double w[4])
+{
+    double f2 = f * f, f3 = f2 * f;
+    w[0] = 0.5 * (-f3 + 2.0 * f2 - f);
+    w[1] = 0.5 * (3.0 * f3 - 5.0 * f2 + 2.0);
+    w[2] = 0.5 * (-3.0 * f3 + 4.0 * f2 + f);
+    w[3] = 0.5 * (f3 - f2);
+}
+
+/* Node (u, t, d) with the ghost rules (u, t in -1..N, d in -1..ND). */
+static double alb_node(const double *a, int u, int t, int d)
+{
+    if (d < 0)
+        d = -d;
+    if (d > ALB_ND - 1)
+        d = 2 * (ALB_ND - 1) - d;
+    if (u < 0) /* tau -> -tau: g turned by pi, delta -> pi - delta */
+        return alb_node(a, -u, t, ALB_ND - 1 - d);
+    if (t < 0) /* theta -> -theta: v turned by pi */
+        return alb_node(a, u, -t, ALB_ND - 1 - d);
+    if (u > ALB_NU - 1)
+        return 3.0 * alb_node(a, ALB_NU - 1, t, d) - 3.0 * alb_node(a, ALB_NU - 2, t, d) + alb_node(a, ALB_NU - 3, t, d);
+    if (t > ALB_NT - 1)
+        return 3.0 * alb_node(a, u, ALB_NT - 1, d) - 3.0 * alb_node(a, u, ALB_NT - 2, d) + alb_node(a, u, ALB_NT - 3, d);
+    return a[((size_t)u * ALB_NT + t) * ALB_ND + d];
+}
+
+static void alb_cell(double x, double h, int n, int *i, double *f)
+{
+    double q = x / h;
+    int k = (int)floor(q);
+    if (k < 0)
+        k = 0;
+    if (k > n - 2)
+        k = n - 2;
+    *i = k;
+    *f = fmin(fmax(q - k, 0.0), 1.0);
+}
+
+/* The one-texel albedo of the unit normal n (n.z > 0) at the geometric view wo (wo.z > 0) through
+ * the table: value and error (the rule's estimate at the nodes, the largest of the 8 about the
+ * point, plus |tricubic - trilinear| as the interpolation's). */
+static mf_status texel_albedo_table(double alpha, const double *n, const double *r, mf_vec3 wo, double *val,
+                                    double *err)
+{
+    mf_vec3 v = texel_view(r, wo);
+    double gx = -n[0], gy = -n[1], gh = sqrt(gx * gx + gy * gy), vh = sqrt(v.x * v.x + v.y * v.y);
+    double tau = atan2(gh, n[2]), th = atan2(vh, v.z);
+    double de = gh > 0.0 && vh > 0.0 ? atan2(fabs(v.x * gy - v.y * gx), v.x * gx + v.y * gy) : 0.0;
+    int iu, it, id;
+    double fu, ft, fd;
+    alb_cell(tau, 0.5 * MF_PI / (ALB_NU - 1), ALB_NU, &iu, &fu);
+    alb_cell(th, alb_theta_max() / (ALB_NT - 1), ALB_NT, &it, &ft);
+    alb_cell(de, MF_PI / (ALB_ND - 1), ALB_ND, &id, &fd);
+    int u0 = iu - 1 < 0 ? 0 : iu - 1, u1 = iu + 2 > ALB_NU - 1 ? ALB_NU - 1 : iu + 2;
+    if (iu == 0) /* the ghost u = -1 reads slab 1 */
+        u1 = u1 > 1 ? u1 : 1;
+    if (iu + 2 > ALB_NU - 1) /* the extrapolated ghost reads the last three */
+        u0 = ALB_NU - 3 < u0 ? ALB_NU - 3 : u0;
+    alb_table *t = alb_get(alpha, u0, u1);
+    if (!t)
+        return MF_ERR_ALLOC;
+    double wu[4], wt[4], wd[4];
+    cr_weights(fu, wu), cr_weights(ft, wt), cr_weights(fd, wd);
+    double s = 0.0;
+    for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b) {
+            double sd = 0.0;
+            for (int c = 0; c < 4; ++c)
+                sd += wd[c] * alb_node(t->val, iu - 1 + a, it - 1 + b, id - 1 + c);
+            s += wu[a] * wt[b] * sd;
+        }
+    double lin = 0.0, e = 0.0;
+    for (int a = 0; a < 2; ++a)
+        for (int b = 0; b < 2; ++b)
+            for (int c = 0; c < 2; ++c) {
+                double w = (a ? fu : 1.0 - fu) * (b ? ft : 1.0 - ft) * (c ? fd : 1.0 - fd);
+                lin += w * alb_node(t->val, iu + a, it + b, id + c);
+                e = fmax(e, alb_node(t->err, iu + a, it + b, id + c));
+            }
+    *val = s;
+    *err = e + fabs(s - lin);
+    return MF_OK;
+}
+
+mf_status mf_prefilter_texel_albedo(double alpha, const double n[3], mf_vec3 wo, int direct, mf_result *out)
+{
+    if (!n || !out || !(alpha > 0.0 && alpha <= 1.0) || !(wo.z > 0.0) || !(n[2] > 0.0))
+        return MF_ERR_DOMAIN;
+    double r[9];
+    min_rotation(n, r);
+    if (direct) {
+        mf_vec3 v = texel_view(r, wo);
+        albedo_rule(alpha, v, mf_vec3_make(-n[0], -n[1], n[2]), &out->val, &out->err);
+        return MF_OK;
+    }
+    return texel_albedo_table(alpha, n, r, wo, &out->val, &out->err);
 }
 
 /* ---- the levels ------------------------------------------------------------------------------- */
@@ -430,6 +725,20 @@ static mf_status albedo_texel(pjob *j, int t)
     int nv = o->n_theta * o->n_phi;
     if (j->uniq[t] != t) /* a copy of an earlier texel's: filled after the pass */
         return MF_OK;
+    if (o->base == MF_PREFILTER_BASE_GGX) { /* the table of the one-texel rule (revision 3) */
+        const double *n = j->normals + 3 * (size_t)t;
+        double r[9];
+        min_rotation(n, r);
+        for (int a = 0; a < o->n_theta; ++a)
+            for (int b = 0; b < o->n_phi; ++b) {
+                size_t k = (size_t)t * nv + a * o->n_phi + b;
+                mf_status st = texel_albedo_table(o->alpha, n, r, view_dir(mf_prefilter_theta(o, a), mf_prefilter_phi(o, b)),
+                                                  &j->alb[k], &j->alb_err[k]);
+                if (st != MF_OK)
+                    return st;
+            }
+        return MF_OK;
+    }
     mf_prefilter_mix one;
     mf_status st = mf_prefilter_mix_init(&one, j->base, j->normals + 3 * (size_t)t, 1);
     if (st != MF_OK)

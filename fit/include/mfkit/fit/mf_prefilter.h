@@ -69,8 +69,11 @@
  * the stored error estimate |Q(n) - Q(n/2)|; measured against n = 512 for 40 normals of slope
  * up to 0.5 and 48 views: worst 2.3e-3 at n = 128, 4.8e-3 at n = 64; on the 512 (texel, view)
  * pairs of `bench_prefilter --size 32 --albedo-check 3`: n = 128 worst 1.3e-3, mean 5.9e-5;
- * n = 64 worst 2.6e-3, mean 1.6e-4, at a quarter of the cost: n = 64 since revision 2).  Optionally divided by the
- * lobe's mass above the horizon (options.keep_albedo).  Lambert: (1 + n.z) / 2 per texel, exact.
+ * n = 64 worst 2.6e-3, mean 1.6e-4, at a quarter of the cost: n = 64 since revision 2).  Since
+ * revision 3 the GGX texels' albedos are read from a table of that rule over the three numbers the
+ * one-texel albedo depends on (mf_prefilter_texel_albedo, MF_PREFILTER_ALBEDO_TABLE).  Optionally
+ * divided by the lobe's mass above the horizon (options.keep_albedo).  Lambert: (1 + n.z) / 2 per
+ * texel, exact.
  */
 #ifndef MF_PREFILTER_H
 #define MF_PREFILTER_H
@@ -88,7 +91,7 @@ extern "C" {
 #define MF_PREFILTER_COS_MIN 0.001
 /* Names the fitted values: bump it whenever they change (objective, starts, constants), so that a
  * resumed `mfkit prefilter` refuses tiles of another revision. */
-#define MF_PREFILTER_REVISION 2
+#define MF_PREFILTER_REVISION 3
 #define MF_PREFILTER_ALBEDO_N 64
 #define MF_PREFILTER_THETA_MAX (0.999 * 0.5 * MF_PI)
 /* Footprints of at least MF_PREFILTER_CLUSTER_MIN texels are fitted to a clustered mixture: cells
@@ -139,6 +142,24 @@ void mf_prefilter_mix_free(mf_prefilter_mix *m);
  * of the components' error estimates. */
 mf_status mf_prefilter_mix_albedo(const mf_prefilter_mix *m, const mf_brdf_params *p, mf_vec3 wo,
                                   mf_result *out) MF_WARN_UNUSED;
+
+/* MF_PREFILTER_ALBEDO_TABLE: the table's accuracy, measured by `bench_prefilter --size 32
+ * --albedo-check 16` (2048 (texel, view) pairs of the synthetic bump map, slopes up to 0.8, the
+ * default 8 x 16 views, alpha 0.1) against mf_model_albedo at n = 512: table worst 2.7e-3, mean
+ * 1.36e-4; the rule it tabulates (mf_prefilter_mix_albedo, n = 64, revision 2) worst 3.4e-3, mean
+ * 1.51e-4; table vs that rule worst 4.3e-3.  A lookup costs about 0.01 ms of CPU against the
+ * rule's 0.67 ms (fused: 0.17 ms); the nodes cost 0.17 ms each, 833 per tilt slab, once per
+ * process and alpha, only for the slabs the map's tilts touch. */
+
+/* The one-texel GGX albedo of the fits' magnitudes (revision 3): the texel of unit normal n
+ * (n.z > 0) at the geometric view wo (wo.z > 0), roughness alpha; the integral of
+ * mf_prefilter_mix_albedo for a one-texel mixture, by the same rule fused (direct = 1), or
+ * through the process-wide table of that rule over (texel-frame view elevation, tilt, relative
+ * azimuth) with tricubic interpolation (direct = 0, what the fits use; see mf_prefilter.c and
+ * MF_PREFILTER_ALBEDO_TABLE).  err: the rule's estimate |Q(n) - Q(n / 2)| (table: the largest at
+ * the 8 nodes about the point, plus |tricubic - trilinear|).  MF_ERR_DOMAIN, MF_ERR_ALLOC. */
+mf_status mf_prefilter_texel_albedo(double alpha, const double n[3], mf_vec3 wo, int direct,
+                                    mf_result *out) MF_WARN_UNUSED;
 
 typedef struct mf_prefilter_options {
     int base;            /* MF_PREFILTER_BASE_GGX (default) or MF_PREFILTER_BASE_LAMBERT */
