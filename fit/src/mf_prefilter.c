@@ -462,20 +462,22 @@ static int qkey_cmp(const void *a, const void *b)
 }
 
 /* Whether the weighted normals (nrm, w) are, as a multiset, invariant under the mirror of
- * coordinate `axis` (0: x -> -x, 1: y -> -y) to MF_PREFILTER_MIRROR_TOL (normals and weights
- * compared on that grid: a tie at a grid boundary can only miss a symmetry, never invent one);
- * if so, they are replaced by an exactly symmetric multiset of the same size (those with a
- * positive coordinate and their exact mirrors; those on the plane with the coordinate set to 0,
- * renormalised), moving no normal by more than the tolerance.  key: 2 n scratch keys. */
-static int mirror_snap(double *nrm, double *w, int n, int axis, qkey *key)
+ * coordinate `axis` (0: x -> -x, 1: y -> -y): the normals' components compared on a grid of side
+ * tol (MF_PREFILTER_MIRROR_TOL_NORMAL: the precision of an 8-bit map), the weights on the
+ * MF_PREFILTER_MIRROR_TOL grid (a tie at a grid boundary can only miss a symmetry); if so, they are
+ * replaced by an exactly symmetric multiset of the same size (those with a positive coordinate and
+ * their exact mirrors; those on the plane with the coordinate set to 0, renormalised), moving no
+ * normal by more than the tolerance.  key: 2 n scratch keys. */
+static int mirror_snap(double *nrm, double *w, int n, int axis, double tol, qkey *key)
 {
-    const double q = 1.0 / MF_PREFILTER_MIRROR_TOL;
+    const double q = 1.0 / tol;
+    const double qw = 1.0 / MF_PREFILTER_MIRROR_TOL;
     for (int i = 0; i < n; ++i)
         for (int m = 0; m < 2; ++m) {
             qkey *k = &key[m * n + i];
             for (int c = 0; c < 3; ++c)
                 k->k[c] = llround(nrm[3 * i + c] * q * (m && c == axis ? -1.0 : 1.0));
-            k->k[3] = llround(w[i] * q);
+            k->k[3] = llround(w[i] * qw);
         }
     qsort(key, (size_t)n, sizeof *key, qkey_cmp);
     qsort(key + n, (size_t)n, sizeof *key, qkey_cmp);
@@ -600,6 +602,26 @@ static void canonical_order(double *nrm, double *w, int n, wnormal *tmp)
     }
 }
 
+/* Whether the weighted normals (nrm, w) are, as a multiset, invariant under the half-turn about z
+ * ((x, y) -> (-x, -y)), compared on the MF_PREFILTER_MIRROR_TOL grid as mirror_snap does: then the
+ * view at phi + pi sees, in its aligned frame, the footprint of phi (a V-groove, any footprint with a
+ * centre of symmetry).  key: 2 n scratch keys. */
+static int halfturn_symmetric(const double *nrm, const double *w, int n, qkey *key)
+{
+    const double q = 1.0 / MF_PREFILTER_MIRROR_TOL_NORMAL;
+    const double qw = 1.0 / MF_PREFILTER_MIRROR_TOL;
+    for (int i = 0; i < n; ++i)
+        for (int m = 0; m < 2; ++m) {
+            qkey *k = &key[m * n + i];
+            for (int c = 0; c < 3; ++c)
+                k->k[c] = llround(nrm[3 * i + c] * q * (m && c < 2 ? -1.0 : 1.0));
+            k->k[3] = llround(w[i] * qw);
+        }
+    qsort(key, (size_t)n, sizeof *key, qkey_cmp);
+    qsort(key + n, (size_t)n, sizeof *key, qkey_cmp);
+    return memcmp(key, key + n, sizeof *key * (size_t)n) == 0;
+}
+
 /* ---- one footprint ---------------------------------------------------------------------------- */
 
 /* The mass of the LTC M above the horizon: the clamped cosine over the half-space (M^T z).w > 0,
@@ -700,9 +722,9 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
         memcpy(rn, cn, sizeof(double) * 3 * (size_t)nc);
         memcpy(rw, cw, sizeof(double) * (size_t)nc);
         int mir = 0;
-        if (mirror_snap(rn, rw, nc, 1, key))
+        if (mirror_snap(rn, rw, nc, 1, MF_PREFILTER_MIRROR_TOL_NORMAL, key))
             mir |= MF_LTCFIT_ANISO_MIRROR_Y;
-        if (mirror_snap(rn, rw, nc, 0, key))
+        if (mirror_snap(rn, rw, nc, 0, MF_PREFILTER_MIRROR_TOL_NORMAL, key))
             mir |= MF_LTCFIT_ANISO_MIRROR_X;
         canonical_order(rn, rw, nc, (wnormal *)(void *)key);
         mf_prefilter_mix mix;
@@ -737,7 +759,23 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
             mf_prefilter_mix_free(&mix);
         }
     }
+    /* a footprint with a centre of symmetry: the rows phi + pi are the rows phi (fitted once) */
+    int half = st == MF_OK && o->n_phi % 2 == 0 && halfturn_symmetric(cn, cw, nc, key) ? o->n_phi / 2 : 0;
     for (int b = 0; b < o->n_phi && st == MF_OK; ++b) {
+        if (half && b >= half) {
+            mf_ltcfit_aniso_entry e0;
+            memset(&e0, 0, sizeof e0);
+            e0.converged = 1;
+            for (int a = 1; a < o->n_theta; ++a) {
+                size_t v = (size_t)a * o->n_phi + b, u = v - (size_t)half;
+                double m[9];
+                for (int i = 0; i < 9; ++i)
+                    m[i] = lv->m[9 * (base_idx + u) + i];
+                store(j, lv, base_idx + v, m, j->lobes[level - 1] + MF_LTCFIT_ANISO_NPARAMS * (base_idx + u),
+                      alb[2 * v], alb[2 * v + 1], &e0, 1);
+            }
+            continue;
+        }
         double phi = mf_prefilter_phi(o, b), c = cos(phi), s = sin(phi);
         for (int i = 0; i < nc; ++i) { /* rotated by -phi about z */
             rn[3 * i] = c * cn[3 * i] + s * cn[3 * i + 1];
@@ -745,7 +783,7 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
             rn[3 * i + 2] = cn[3 * i + 2];
             rw[i] = cw[i];
         }
-        int mir = mirror_snap(rn, rw, nc, 1, key) ? MF_LTCFIT_ANISO_MIRROR_Y : 0;
+        int mir = mirror_snap(rn, rw, nc, 1, MF_PREFILTER_MIRROR_TOL_NORMAL, key) ? MF_LTCFIT_ANISO_MIRROR_Y : 0;
         canonical_order(rn, rw, nc, (wnormal *)(void *)key);
         mf_prefilter_mix mix;
         if ((st = mix_build(&mix, j->base, rn, rw, nc)) != MF_OK)
@@ -758,7 +796,31 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
                 break;
             mf_ltcfit_aniso_entry e;
             const double *alt = parent ? parent + MF_LTCFIT_ANISO_NPARAMS * (pidx + v) : NULL;
-            if (cos(th) < MF_PREFILTER_MULTISTART_COS) /* grazing rows: a second solve from the closed-form
+            if (b > 0 && !alt) {
+                /* the continuity rule: solves from the previous elevation's lobe, from the previous
+                 * azimuth's lobe at this elevation (and, on grazing rows, from the closed-form start);
+                 * the previous azimuth's is kept unless its residual exceeds the best one's by more
+                 * than MF_PREFILTER_CONTINUITY_MARGIN (relative), so that where a footprint's mixture
+                 * has several single-lobe fits of similar cost (the facets of a groove) neighbouring
+                 * azimuths keep the same one */
+                const double *starts[3] = {prev, j->lobes[level - 1] + MF_LTCFIT_ANISO_NPARAMS * (base_idx + v - 1), NULL};
+                int ns = cos(th) < MF_PREFILTER_MULTISTART_COS ? 3 : 2;
+                mf_ltcfit_aniso_entry ee[3];
+                st = mf_ltcfit_aniso_entry_fit_mirrored_multi(&mix.model, p, th, mir, alb[2 * v], alb[2 * v + 1], starts,
+                                                              ns, &fo, ee);
+                if (st == MF_OK) {
+                    int best = 0, it = 0;
+                    for (int k = 0; k < ns; ++k) {
+                        it += ee[k].iterations;
+                        if (ee[k].residual < ee[best].residual)
+                            best = k;
+                    }
+                    if (ee[1].residual <= ee[best].residual * (1.0 + MF_PREFILTER_CONTINUITY_MARGIN))
+                        best = 1;
+                    e = ee[best];
+                    e.iterations = it;
+                }
+            } else if (cos(th) < MF_PREFILTER_MULTISTART_COS) /* grazing rows: a second solve from the closed-form
                                                          start on the same directions, the lower residual kept */
                 st = mf_ltcfit_aniso_entry_fit_mirrored_two(&mix.model, p, th, mir, alb[2 * v], alb[2 * v + 1], prev, alt,
                                                             &fo, &e);
