@@ -43,7 +43,8 @@
  *     instead of 4096 samples per fit at the same time) mean 0.003, worst 0.021.
  *   - mirror symmetry: a footprint whose normals (aligned frame) are, as a weighted set, invariant
  *     under y -> -y (normals checked on a MF_PREFILTER_MIRROR_TOL_NORMAL grid, the precision of an
- *     8-bit map, weights on a MF_PREFILTER_MIRROR_TOL grid) is snapped to an exactly
+ *     8-bit map, weights on a MF_PREFILTER_MIRROR_TOL grid; at theta = 0 both on the fine
+ *     MF_PREFILTER_MIRROR_TOL grid, see fit_footprint) is snapped to an exactly
  *     symmetric set and fitted with the phi = 0 zero pattern held exactly (as the anisotropic
  *     fitter does for plain GGX): the V-groove's lobes are symmetric, and a flat map gives the
  *     plain-GGX fit at every elevation, 89.9 deg included.
