@@ -1260,6 +1260,36 @@ mf_status mf_ltcfit_aniso_entry_fit_mirrored_two(const mf_brdf_model *model, mf_
     return entry_fit_mirrored(model, prm, theta, mirrors, magnitude, magnitude_err, lobe_start, alt_start, 1, o, out);
 }
 
+/* Several solves of one entry of mf_ltcfit_aniso_entry_fit_mirrored on one preparation: solve i from
+ * starts[i] (NULL: the closed-form start), out[i] its result; each solve_entry as in a separate call
+ * (bit for bit), the directions, lights and targets prepared once. */
+mf_status mf_ltcfit_aniso_entry_fit_mirrored_multi(const mf_brdf_model *model, mf_brdf_params prm, double theta,
+                                                   int mirrors, double magnitude, double magnitude_err,
+                                                   const double *const *starts, int nstarts,
+                                                   const mf_ltcfit_aniso_options *o, mf_ltcfit_aniso_entry *out)
+{
+    if (!model || !model->eval_cos || !check_options(o) || !(prm.alpha_x > 0.0) || !(prm.alpha_y > 0.0) ||
+        !(theta >= 0.0 && theta < 0.5 * MF_PI) || !out || !starts || nstarts < 1 || nstarts > 8 ||
+        !(magnitude >= 0.0 && magnitude < INFINITY) || !(magnitude_err >= 0.0) || (mirrors & ~(SYM_X | SYM_Y)) ||
+        ((mirrors & SYM_X) && theta != 0.0))
+        return MF_ERR_DOMAIN;
+    double mag[2] = {magnitude, magnitude_err};
+    workspace ws;
+    if (!ws_init(&ws, o->samples)) {
+        ws_free(&ws);
+        return MF_ERR_ALLOC;
+    }
+    uint32_t scr[2];
+    sobol_scramble(o->seed, scr);
+    atexel *t = malloc(sizeof *t);
+    mf_status st = t ? atexel_prepare(model, prm, theta, 0.0, mirrors, FAMILY_SHAPED, mag, scr, &ws, t) : MF_ERR_ALLOC;
+    for (int i = 0; i < nstarts && st == MF_OK; ++i)
+        st = solve_entry(t, &ws, starts[i], NULL, o, &out[i]);
+    free(t);
+    ws_free(&ws);
+    return st;
+}
+
 /* ---- the table: (alpha_x, alpha_y) jobs over threads ------------------------------------------ */
 
 typedef struct {

@@ -234,6 +234,16 @@ mf_status mf_ltcfit_aniso_entry_fit_mirrored_two(const mf_brdf_model *model, mf_
                                                  const mf_ltcfit_aniso_options *o,
                                                  mf_ltcfit_aniso_entry *out) MF_WARN_UNUSED;
 
+/* nstarts (1..8) solves of one entry of mf_ltcfit_aniso_entry_fit_mirrored on one preparation:
+ * out[i] is the solve from starts[i] (NULL: the closed-form start), bit for bit the separate call's
+ * (lobe_start starts[i], no alt_start).  The caller chooses among them (e.g. mf_prefilter's
+ * continuity rule). */
+mf_status mf_ltcfit_aniso_entry_fit_mirrored_multi(const mf_brdf_model *model, mf_brdf_params p, double theta,
+                                                   int mirrors, double magnitude, double magnitude_err,
+                                                   const double *const *starts, int nstarts,
+                                                   const mf_ltcfit_aniso_options *o,
+                                                   mf_ltcfit_aniso_entry *out) MF_WARN_UNUSED;
+
 /* Writes the published layout: a little-endian float32 .npy of shape (n0, n1, n2, n3, 3, 3),
  * C order (the LAST table axis fastest, unlike mf_table's storage), the forward M of each entry
  * divided by the norm of its last column.  Atomic.  MF_ERR_DOMAIN (not an anisotropic LTC

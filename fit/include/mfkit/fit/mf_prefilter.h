@@ -51,11 +51,28 @@
  *     V-groove agree to 1e-5; a permutation of unclustered texels gives the same mixture).
  *   - theta = 0 is fitted once: M_phi = R_z(-phi) M_0 R_z(phi) (the view along z does not depend
  *     on phi; the conjugation keeps the polar gauge and the last column's norm).
+ *   - a footprint whose normals are invariant under the half-turn about z (normals on the
+ *     MF_PREFILTER_MIRROR_TOL_NORMAL grid below, weights on the fine one) sees at
+ *     phi + pi what it sees at phi: those rows are copies of the rows phi (a V-groove's).
  *   - each (phi) row is a chain along theta: the previous elevation's lobe is the warm start
- *     (with the fitter's proximal residuals), the parent level's lobe at the same view is offered
- *     as a second start (taken where its cost is lower); rows with cos theta <
- *     MF_PREFILTER_MULTISTART_COS get a second solve from the closed-form start, the lower
- *     residual kept.
+ *     (with the fitter's proximal residuals); rows with cos theta < MF_PREFILTER_MULTISTART_COS
+ *     get a second solve from the closed-form start, the lower residual kept.  From the second
+ *     azimuth on, every entry also gets a solve from the previous azimuth's lobe at the same
+ *     elevation (one preparation, mf_ltcfit_aniso_entry_fit_mirrored_multi), and that one is kept
+ *     unless its residual exceeds the best solve's by more than MF_PREFILTER_CONTINUITY_MARGIN:
+ *     where a single lobe has several fits of similar cost (the two facets of a groove), the
+ *     neighbouring azimuths keep the same one instead of flipping between them (a lobe on one
+ *     facet next to a lobe on the other is blended by the bilinear view filter into a lobe
+ *     between them).
+ *   - symmetric to the map's precision only: a row (theta > 0) whose normals are y-mirror symmetric
+ *     on the MF_PREFILTER_MIRROR_TOL_NORMAL grid (3/255: an 8-bit map cannot encode 0) but not on
+ *     the fine one is fitted twice, to the snapped symmetric set (zero pattern held) and to the
+ *     map's own set, each by the rule above; the symmetric lobe is kept unless its residual exceeds
+ *     the free one's by more than MF_PREFILTER_SYMMETRY_MARGIN.  So a groove's lobe passes
+ *     through the symmetric (centred) lobe where the view runs along the groove, and the facet
+ *     choice is continuous around the circle: on the demo map (vgroove_16.png, 4 x 8 views) 0
+ *     facet flips between neighbouring azimuths at levels 2-4, 84 of 504 before (docs/prefilter.md,
+ *     test_prefilter_gate).
  * The stored M is in the fitter's canonical gauge (one representation per lobe, the polar gauge
  * of the upper-left block), so neighbouring texels, views and levels whose lobes are close have
  * close matrices, which is what trilinear MIP filtering and bilinear view interpolation of M
@@ -107,6 +124,18 @@ extern "C" {
 #define MF_PREFILTER_MULTISTART_COS 0.2
 /* Mirror symmetry of a footprint's normals is detected on this grid (mf_prefilter_run). */
 #define MF_PREFILTER_MIRROR_TOL 1e-9
+/* ... and the normals' components on this grid (3/255): an 8-bit unorm map cannot encode 0 (128
+ * decodes to 1/255), so the mirror partner of a normal differs from the decoded one by up to 2/255
+ * in the mirrored component; a snap moves no normal by more than this. */
+#define MF_PREFILTER_MIRROR_TOL_NORMAL (3.0 / 255.0)
+/* The continuity rule along phi (mf_prefilter_run): the previous azimuth's solution is kept unless
+ * its residual exceeds the best start's by more than this fraction. */
+#define MF_PREFILTER_CONTINUITY_MARGIN 0.1
+/* ... and the symmetric lobe of a footprint symmetric only to the map's 8-bit precision is kept unless
+ * its residual exceeds the free lobe's by more than this fraction (mf_prefilter_run).  Demo map
+ * (vgroove_16.png, 4 x 8 views): with 0.1 the symmetric lobes are refused where the facet flips are
+ * (a one-facet lobe 13 % better at 30 deg) and 84 of 504 azimuth pairs flip; with 0.2, 0. */
+#define MF_PREFILTER_SYMMETRY_MARGIN 0.2
 #define MF_PREFILTER_HORIZON_MIN 0.5
 
 /* The effective BRDF of a footprint as an mf_brdf_model: `model` is the first member, so the
