@@ -1274,19 +1274,21 @@ mf_status mf_ltcfit_aniso_entry_fit_mirrored_multi(const mf_brdf_model *model, m
         ((mirrors & SYM_X) && theta != 0.0))
         return MF_ERR_DOMAIN;
     double mag[2] = {magnitude, magnitude_err};
-    workspace ws;
-    if (!ws_init(&ws, o->samples)) {
-        ws_free(&ws);
+    /* the prefilter's fits: the thread's workspace and the inside sets, as entry_fit_mirrored */
+    pf_workspace *w = pf_workspace_get(o->samples);
+    if (!w)
         return MF_ERR_ALLOC;
-    }
     uint32_t scr[2];
     sobol_scramble(o->seed, scr);
     atexel *t = malloc(sizeof *t);
-    mf_status st = t ? atexel_prepare(model, prm, theta, 0.0, mirrors, FAMILY_SHAPED, mag, scr, &ws, t) : MF_ERR_ALLOC;
+    mf_status st = t ? atexel_prepare(model, prm, theta, 0.0, mirrors, FAMILY_SHAPED, mag, scr, &w->ws, t) : MF_ERR_ALLOC;
+    if (t) {
+        t->mask = w->mask;
+        t->mask_ok = 0;
+    }
     for (int i = 0; i < nstarts && st == MF_OK; ++i)
-        st = solve_entry(t, &ws, starts[i], NULL, o, &out[i]);
+        st = solve_entry(t, &w->ws, starts[i], NULL, o, &out[i]);
     free(t);
-    ws_free(&ws);
     return st;
 }
 
