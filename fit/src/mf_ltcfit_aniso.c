@@ -1252,7 +1252,8 @@ static mf_status anchor_entries(ajob *j, mf_brdf_params own, int i0, int i1, con
 }
 
 /* One (alpha_x, alpha_y) pair: theta = 0 once (copied to every phi), then one chain along theta
- * per phi, warm-started from the previous theta.  nb (or NULL): the pair's fitted neighbour along
+ * per phi, warm-started from the previous theta (anchor pairs: one chain along phi per theta, see
+ * below).  nb (or NULL): the pair's fitted neighbour along
  * an alpha axis (table order); its entry at the same (theta, phi) is a second start (see
  * mf_ltcfit_aniso_table). */
 static mf_status fit_pair(ajob *j, workspace *ws, int i0, int i1, const int nb[2], mf_ltcfit_aniso_entry *buf,
@@ -1279,20 +1280,51 @@ static mf_status fit_pair(ajob *j, workspace *ws, int i0, int i1, const int nb[2
     for (int l = 1; l < n[3]; ++l)
         buf[(size_t)n[2] * l] = buf[0];
     progress(j, n[3]);
-    for (int l = 0; l < n[3]; ++l) {
+    /* Anchor pairs: for every theta one chain along phi (each entry warm-started from the previous
+     * phi's, with its proximal residuals; the first from the previous theta's at phi = 0).  At the
+     * grazing row the midpoint fits have a flat direction (m21 of the thin column): solves of one
+     * entry from two starts (the previous theta's, the neighbour's) ended 0.5 .. 6 % apart in
+     * residual but up to 0.23 apart in m21 ((2/7, 1/14) and (3/7, 1/14), 89.99 deg, phi 0 .. 60
+     * deg), and chains along theta landed on either side from one phi to the next; the
+     * extrapolation 2 s M_mid - M_nb doubles such differences.  Measured on `--size 8x8x8x32` (phi step 2.9 deg,
+     * the gate's spike bound 80 h^2 = 0.083): chains along theta: ltca_smooth_spike 2.26 (m21 at
+     * (2/7, 1e-4), 89.99 deg: -0.10, 0.41, 0.23 at phi 2.9, 5.8, 8.7 deg), FAIL; chains along
+     * phi: 0.87, and ltca_smooth_jump 0.94, pass.  Also tried: a second solve from the
+     * neighbour's entry, kept when its residual is within 5 % / 10 % / always: spike 2.09 / 1.96 /
+     * 1.84 (zig-zags along phi elsewhere).  Non-anchor pairs keep their chains along theta. */
+    if (nb) {
         for (int k = 1; k < n[2]; ++k) {
-            if (j->o->cancel && *j->o->cancel)
-                return MF_OK;
-            idx[2] = k;
-            idx[3] = l;
-            mf_ltc_aniso_entry_values(t, idx, &ax, &ay, &th, &ph);
-            int sym = l == 0 ? SYM_Y : (l == n[3] - 1 ? SYM_X : 0);
-            st = fit_entry(j->model, prm, th, ph, sym, FAMILY_RANDOM, NULL, buf[(size_t)n[2] * l + k - 1].lobe, NB_LOBE(k, l), j->o,
-                           j->scr, ws, &buf[(size_t)n[2] * l + k]);
-            if (st != MF_OK)
-                return st;
+            for (int l = 0; l < n[3]; ++l) {
+                if (j->o->cancel && *j->o->cancel)
+                    return MF_OK;
+                idx[2] = k;
+                idx[3] = l;
+                mf_ltc_aniso_entry_values(t, idx, &ax, &ay, &th, &ph);
+                int sym = l == 0 ? SYM_Y : (l == n[3] - 1 ? SYM_X : 0);
+                const double *start = l > 0 ? buf[(size_t)n[2] * (l - 1) + k].lobe : buf[k - 1].lobe;
+                st = fit_entry(j->model, prm, th, ph, sym, FAMILY_RANDOM, NULL, start, NB_LOBE(k, l), j->o, j->scr, ws,
+                               &buf[(size_t)n[2] * l + k]);
+                if (st != MF_OK)
+                    return st;
+            }
+            progress(j, n[3]);
         }
-        progress(j, n[2] - 1);
+    } else {
+        for (int l = 0; l < n[3]; ++l) {
+            for (int k = 1; k < n[2]; ++k) {
+                if (j->o->cancel && *j->o->cancel)
+                    return MF_OK;
+                idx[2] = k;
+                idx[3] = l;
+                mf_ltc_aniso_entry_values(t, idx, &ax, &ay, &th, &ph);
+                int sym = l == 0 ? SYM_Y : (l == n[3] - 1 ? SYM_X : 0);
+                st = fit_entry(j->model, prm, th, ph, sym, FAMILY_RANDOM, NULL, buf[(size_t)n[2] * l + k - 1].lobe, NB_LOBE(k, l), j->o,
+                               j->scr, ws, &buf[(size_t)n[2] * l + k]);
+                if (st != MF_OK)
+                    return st;
+            }
+            progress(j, n[2] - 1);
+        }
     }
 #undef NB_LOBE
     if (nb)
@@ -1305,7 +1337,7 @@ static mf_status fit_pair(ajob *j, workspace *ws, int i0, int i1, const int nb[2
 /* The checkpoint's magic names the fitter revision: bump its digit whenever the fitted values
  * change (objective, lights, constants, anchors), so that a resume refuses a file of another
  * revision instead of mixing entries of two fitters. */
-#define CKPT_MAGIC "MFLTCAK3"
+#define CKPT_MAGIC "MFLTCAK4"
 #define CKPT_ENTRY_DOUBLES 26
 
 typedef struct {
