@@ -1281,7 +1281,10 @@ static mf_status fit_pair(ajob *j, workspace *ws, int i0, int i1, const int nb[2
         buf[(size_t)n[2] * l] = buf[0];
     progress(j, n[3]);
     /* Anchor pairs: for every theta one chain along phi (each entry warm-started from the previous
-     * phi's, with its proximal residuals; the first from the previous theta's at phi = 0).  At the
+     * phi's, with its proximal residuals); the two mirror-symmetric rows, phi = 0 and pi/2, keep
+     * their chains along theta (their zero patterns differ from the interior's: at 16^4 the
+     * pi/2 entry of (1e-4, 1/15), 89.99 deg, started from the previous phi's, stopped at twice
+     * its neighbours' residual, m11 -0.05 against 0.62: ltca_smooth_spike 1.87).  At the
      * grazing row the midpoint fits have a flat direction (m21 of the thin column): solves of one
      * entry from two starts (the previous theta's, the neighbour's) ended 0.5 .. 6 % apart in
      * residual but up to 0.23 apart in m21 ((2/7, 1/14) and (3/7, 1/14), 89.99 deg, phi 0 .. 60
@@ -1301,7 +1304,8 @@ static mf_status fit_pair(ajob *j, workspace *ws, int i0, int i1, const int nb[2
                 idx[3] = l;
                 mf_ltc_aniso_entry_values(t, idx, &ax, &ay, &th, &ph);
                 int sym = l == 0 ? SYM_Y : (l == n[3] - 1 ? SYM_X : 0);
-                const double *start = l > 0 ? buf[(size_t)n[2] * (l - 1) + k].lobe : buf[k - 1].lobe;
+                const double *start = l > 0 && l < n[3] - 1 ? buf[(size_t)n[2] * (l - 1) + k].lobe
+                                                            : buf[(size_t)n[2] * l + k - 1].lobe;
                 st = fit_entry(j->model, prm, th, ph, sym, FAMILY_RANDOM, NULL, start, NB_LOBE(k, l), j->o, j->scr, ws,
                                &buf[(size_t)n[2] * l + k]);
                 if (st != MF_OK)
@@ -1337,7 +1341,7 @@ static mf_status fit_pair(ajob *j, workspace *ws, int i0, int i1, const int nb[2
 /* The checkpoint's magic names the fitter revision: bump its digit whenever the fitted values
  * change (objective, lights, constants, anchors), so that a resume refuses a file of another
  * revision instead of mixing entries of two fitters. */
-#define CKPT_MAGIC "MFLTCAK4"
+#define CKPT_MAGIC "MFLTCAK5"
 #define CKPT_ENTRY_DOUBLES 26
 
 typedef struct {
