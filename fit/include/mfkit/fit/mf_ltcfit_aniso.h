@@ -66,9 +66,9 @@
  * best cosine scaled by (s_x, s_y), log grids), then for every phi a chain along theta, each
  * entry starting from the previous entry's lobe-frame parameters (when their cost is not above
  * the closed-form start's); the anchor pairs (below) instead run, for every theta, a chain along
- * phi, which keeps the grazing rows' weakly determined thin column continuous along phi (at
- * 8x8x8x32 the chains along theta failed the gate's spike check, 2.26x its bound; along phi
- * 0.87x; docs/validation.md).  Jobs are handed to `threads` pthreads in two phases (the second
+ * phi (the mirror rows phi = 0 and pi/2 keep their chains along theta), which keeps the grazing
+ * rows' weakly determined thin column continuous along phi (at 8x8x8x32 the chains along theta
+ * failed the gate's spike check, 2.26x its bound; along phi 0.87x; docs/validation.md).  Jobs are handed to `threads` pthreads in two phases (the second
  * reads only results of the first): the result does not depend on the thread count, bit for
  * bit.
  *
