@@ -3,11 +3,17 @@
  * (issue 12); a benchmark, not a test.
  *
  *   build-dir/analysis/bench_ltc_aniso [--points N] [--samples M] [--threads T]
- *                                      [--objective default|relative] PUBLISHED.npy
+ *                                      [--objective default|relative] [--table FILE]
+ *                                      [--point-seed S] [--lights quads|triangles|small|large]
+ *                                      PUBLISHED.npy
  *
  * 1. Fits the default 8^4 table (mf_ltcfit_aniso_table) with T threads (default 2) and reports
  *    the wall time; --objective relative: with mf_ltcfit_aniso_options.objective =
- *    MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE (mf_ltcfit_aniso.h).
+ *    MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE (mf_ltcfit_aniso.h).  --table FILE: reads an 8^4 table
+ *    (e.g. the .npy of `mfkit fit ltc-aniso --out DIR`) instead of fitting one.
+ *    The checks that a change is not tuned to the benchmark's own cases: --point-seed S draws
+ *    another set of points (default 12, the benchmark's), --lights another light distribution
+ *    (default quads, the benchmark's; bench_ltc_aniso_common.h, ABENCH_LIGHTS_*).
  * 2. At N random off-grid (alpha_x, alpha_y, theta, phi) (alpha in [0.02, 1], theta in
  *    [0, 0.9999 pi/2], phi in [0, pi/2]; fixed seed), for 12 random quads per point
  *    (mf_ltc_gate_random_polygons_params, even indices), compares magnitude * E_LTC against a
@@ -29,6 +35,7 @@
 #include "mfkit/mf_ltc_aniso_table.h"
 #include "mfkit/mf_ltc_gate.h"
 #include "mfkit/fit/mf_ltcfit_aniso.h"
+#include "mfkit/io/mf_table_io.h"
 
 #include "bench_ltc_aniso_common.h"
 
@@ -72,14 +79,36 @@ static void report(const char *name, errs *e)
     qsort(e->abs, (size_t)e->n, sizeof(double), cmpd);
     qsort(e->rel, (size_t)e->n, sizeof(double), cmpd);
     int p = (int)(0.95 * (e->n - 1));
-    printf("%-28s abs mean %.6f p95 %.6f   rel mean %.5f p95 %.5f   (%d quads)\n", name, sa / e->n, e->abs[p],
+    printf("%-28s abs mean %.6f p95 %.6f   rel mean %.5f p95 %.5f   (%d lights)\n", name, sa / e->n, e->abs[p],
            sr / e->n, e->rel[p], e->n);
+}
+
+/* Mean and 95th percentile of a's abs and rel errors over b's (b: the published table's). */
+static void ratios(const char *name, const errs *a, const errs *b)
+{
+    double s[4] = {0.0, 0.0, 0.0, 0.0};
+    for (int i = 0; i < a->n; ++i)
+        s[0] += a->abs[i], s[1] += a->rel[i];
+    for (int i = 0; i < b->n; ++i)
+        s[2] += b->abs[i], s[3] += b->rel[i];
+    double *sa = malloc(sizeof(double) * (size_t)(a->n + b->n) * 2);
+    double *sr = sa + a->n, *pa = sr + a->n, *pr = pa + b->n;
+    memcpy(sa, a->abs, sizeof(double) * a->n), memcpy(sr, a->rel, sizeof(double) * a->n);
+    memcpy(pa, b->abs, sizeof(double) * b->n), memcpy(pr, b->rel, sizeof(double) * b->n);
+    qsort(sa, (size_t)a->n, sizeof(double), cmpd), qsort(sr, (size_t)a->n, sizeof(double), cmpd);
+    qsort(pa, (size_t)b->n, sizeof(double), cmpd), qsort(pr, (size_t)b->n, sizeof(double), cmpd);
+    int qa = (int)(0.95 * (a->n - 1)), qb = (int)(0.95 * (b->n - 1));
+    printf("%-28s x published: abs mean %.3f p95 %.3f   rel mean %.3f p95 %.3f\n", name, (s[0] / a->n) / (s[2] / b->n),
+           sa[qa] / pa[qb], (s[1] / a->n) / (s[3] / b->n), sr[qa] / pr[qb]);
+    free(sa);
 }
 
 int main(int argc, char **argv)
 {
     int points = 100, samples = 1 << 18, threads = 2, objective = MF_LTCFIT_ANISO_OBJECTIVE_DEFAULT;
-    const char *kt = NULL;
+    int lights = ABENCH_LIGHTS_QUADS;
+    uint64_t point_seed = ABENCH_POINT_SEED;
+    const char *kt = NULL, *table_path = NULL;
     for (int i = 1; i < argc; ++i) {
         if (!strcmp(argv[i], "--points") && i + 1 < argc)
             points = atoi(argv[++i]);
@@ -87,7 +116,21 @@ int main(int argc, char **argv)
             samples = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--threads") && i + 1 < argc)
             threads = atoi(argv[++i]);
-        else if (!strcmp(argv[i], "--objective") && i + 1 < argc) {
+        else if (!strcmp(argv[i], "--table") && i + 1 < argc)
+            table_path = argv[++i];
+        else if (!strcmp(argv[i], "--point-seed") && i + 1 < argc)
+            point_seed = strtoull(argv[++i], NULL, 10);
+        else if (!strcmp(argv[i], "--lights") && i + 1 < argc) {
+            ++i;
+            lights = -1;
+            for (int k = 0; k < 4; ++k)
+                if (!strcmp(argv[i], abench_lights_name(k)))
+                    lights = k;
+            if (lights < 0) {
+                fprintf(stderr, "bench_ltc_aniso: --lights %s: expected quads, triangles, small or large\n", argv[i]);
+                return 2;
+            }
+        } else if (!strcmp(argv[i], "--objective") && i + 1 < argc) {
             ++i;
             if (!strcmp(argv[i], "relative"))
                 objective = MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE;
@@ -113,15 +156,24 @@ int main(int argc, char **argv)
     mf_ltcfit_aniso_result r;
     char msg[256];
     double t0 = now();
-    if (mf_ltcfit_aniso_table(ggx, &o, &t, &r, msg, sizeof msg) != MF_OK) {
-        fprintf(stderr, "bench_ltc_aniso: fit failed: %s\n", msg);
-        return 1;
+    memset(&r, 0, sizeof r);
+    if (table_path) {
+        if (mf_table_read(table_path, &t, NULL, msg, sizeof msg) != MF_OK) {
+            fprintf(stderr, "bench_ltc_aniso: %s: %s\n", table_path, msg);
+            return 1;
+        }
+        printf("mfkit table read from %s\n", table_path);
+    } else {
+        if (mf_ltcfit_aniso_table(ggx, &o, &t, &r, msg, sizeof msg) != MF_OK) {
+            fprintf(stderr, "bench_ltc_aniso: fit failed: %s\n", msg);
+            return 1;
+        }
+        double t1 = now();
+        printf("fit 8^4, %d threads: %.2f s wall; worst residual %.4g, not converged %d of %zu, max iterations %d, "
+               "anchor fallbacks %d\n",
+               threads, t1 - t0, r.worst_residual, r.not_converged, mf_table_texels(&t), r.max_iterations,
+               r.anchor_fallbacks);
     }
-    double t1 = now();
-    printf("fit 8^4, %d threads: %.2f s wall; worst residual %.4g, not converged %d of %zu, max iterations %d, "
-           "anchor fallbacks %d\n",
-           threads, t1 - t0, r.worst_residual, r.not_converged, mf_table_texels(&t), r.max_iterations,
-           r.anchor_fallbacks);
     /* the full gate on the fitted table (the smoothness checks are reported here, not in ctest) */
     mf_check ch[MF_LTC_ANISO_GATE_MAX_CHECKS];
     int nch = 0;
@@ -143,14 +195,14 @@ int main(int argc, char **argv)
         gp[g] = (errs){malloc(sizeof(double) * points * Q), malloc(sizeof(double) * points * Q), 0};
     }
     abench_points pts;
-    abench_points_init(&pts);
+    abench_points_init_seed(&pts, point_seed);
     int flipped = 0;
     double se_sum = 0.0;
     for (int i = 0; i < points; ++i) {
         double p[4];
         abench_next_point(&pts, p);
         abench_case cs;
-        if (!abench_case_make(ggx, p, i, samples, &cs))
+        if (!abench_case_make_lights(ggx, p, i, samples, lights, &cs))
             continue;
         const mf_polygon *quads = cs.quads;
         const double *mc = cs.mc, *se = cs.se;
@@ -175,9 +227,11 @@ int main(int argc, char **argv)
             se_sum += se[k];
         }
     }
-    printf("%d points x %d quads, Monte Carlo %d samples (mean standard error %.2g); published matrices "
-           "interpolated to det < 0: %d\n",
-           points, Q, samples, se_sum / em.n, flipped);
+    printf("%d points (seed %llu) x %d lights (%s), Monte Carlo %d samples (mean standard error %.2g); published "
+           "matrices interpolated to det < 0: %d\n",
+           points, (unsigned long long)point_seed, Q, abench_lights_name(lights), samples, se_sum / em.n, flipped);
+    ratios("mfkit 8^4 shape", &em, &ep);
+    ratios("mfkit fit at the point", &ef, &ep);
     report("mfkit 8^4 shape", &em);
     report("published 8^4 shape", &ep);
     report("mfkit 8^4 total", &et);

@@ -110,9 +110,18 @@ typedef struct {
     mf_pcg32 rng;
 } abench_points;
 
+/* The benchmark's points: seed 12.  Another seed gives a second, independent set of points from
+ * the same distribution (the check that a change is not tuned to the first set). */
+enum { ABENCH_POINT_SEED = 12 };
+
+static inline void abench_points_init_seed(abench_points *s, uint64_t seed)
+{
+    mf_pcg32_seed(&s->rng, seed, 0x62656e6368ull);
+}
+
 static inline void abench_points_init(abench_points *s)
 {
-    mf_pcg32_seed(&s->rng, 12, 0x62656e6368ull);
+    abench_points_init_seed(s, ABENCH_POINT_SEED);
 }
 
 /* The next point (alpha_x, alpha_y, theta, phi). */
@@ -131,17 +140,43 @@ typedef struct {
     double albedo;                     /* exact albedo (mf_model_albedo) */
 } abench_case;
 
-/* Case i at point p: its quads, Monte Carlo truth and albedo.  0 if either computation failed
- * (the benchmark then skips the point). */
-static inline int abench_case_make(const mf_brdf_model *ggx, const double p[4], int i, int samples, abench_case *c)
+/* The light distributions.  ABENCH_LIGHTS_QUADS is the benchmark's (the even indices of
+ * mf_ltc_gate_random_polygons_params: quads with half-extents log-uniform in [0.03, 1.2] at
+ * distance 1, a third towards the lobe, a third across the horizon, a third anywhere).  The others
+ * are second distributions, to check that a fitter whose lights follow the benchmark's
+ * distribution is not tuned to it: the odd indices of the same stream (the generator's
+ * triangles, same centres and sizes), and the quads scaled about their centres by 1/4 (small:
+ * half-extents 0.0075 .. 0.3) or by 2.5 (large: 0.075 .. 3, many of them across the horizon). */
+enum { ABENCH_LIGHTS_QUADS = 0, ABENCH_LIGHTS_TRIANGLES, ABENCH_LIGHTS_SMALL, ABENCH_LIGHTS_LARGE };
+
+static inline const char *abench_lights_name(int kind)
+{
+    static const char *names[4] = {"quads", "triangles", "small", "large"};
+    return kind >= 0 && kind < 4 ? names[kind] : "?";
+}
+
+/* Case i at point p with the lights of `kind`: its lights, Monte Carlo truth and albedo.  0 if
+ * either computation failed (the benchmark then skips the point). */
+static inline int abench_case_make_lights(const mf_brdf_model *ggx, const double p[4], int i, int samples, int kind,
+                                          abench_case *c)
 {
     memcpy(c->p, p, sizeof c->p);
     mf_brdf_params prm = {p[0], p[1]};
     mf_vec3 wo = mf_vec3_make(sin(p[2]) * cos(p[3]), sin(p[2]) * sin(p[3]), cos(p[2]));
     mf_polygon polys[2 * ABENCH_Q];
     mf_ltc_gate_random_polygons_params(ggx, &prm, wo, 5, (uint64_t)i, 2 * ABENCH_Q, polys);
-    for (int k = 0; k < ABENCH_Q; ++k)
-        c->quads[k] = polys[2 * k];
+    for (int k = 0; k < ABENCH_Q; ++k) {
+        c->quads[k] = polys[2 * k + (kind == ABENCH_LIGHTS_TRIANGLES)];
+        if (kind == ABENCH_LIGHTS_SMALL || kind == ABENCH_LIGHTS_LARGE) {
+            double f = kind == ABENCH_LIGHTS_SMALL ? 0.25 : 2.5;
+            mf_polygon *q = &c->quads[k];
+            mf_vec3 m = mf_vec3_make(0.0, 0.0, 0.0);
+            for (int v = 0; v < q->n; ++v)
+                m = mf_vec3_add(m, mf_vec3_scale(q->v[v], 1.0 / q->n));
+            for (int v = 0; v < q->n; ++v)
+                q->v[v] = mf_vec3_add(m, mf_vec3_scale(mf_vec3_sub(q->v[v], m), f));
+        }
+    }
     mf_result alb;
     if (mf_ltc_gate_polygon_mc_params(ggx, &prm, wo, c->quads, ABENCH_Q, samples, 9, (uint64_t)i, c->mc, c->se, NULL) !=
             MF_OK ||
@@ -149,6 +184,12 @@ static inline int abench_case_make(const mf_brdf_model *ggx, const double p[4], 
         return 0;
     c->albedo = alb.val;
     return 1;
+}
+
+/* Case i at point p with the benchmark's quads. */
+static inline int abench_case_make(const mf_brdf_model *ggx, const double p[4], int i, int samples, abench_case *c)
+{
+    return abench_case_make_lights(ggx, p, i, samples, ABENCH_LIGHTS_QUADS, c);
 }
 
 /* The benchmark's per-quad errors of a shaded value v against the truth mc. */

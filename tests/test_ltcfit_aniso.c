@@ -371,7 +371,8 @@ static void test_anchor_matrix(void)
  * and the fits at the cell's midpoint alpha_y = (1e-4 + 1/15) / 2 (one-entry fits from the
  * closed-form start; 30 fits, well under a second).  At this step the exact extrapolation's width
  * across y is close to 0 and its determinant falls below 0 at several thetas.  Asserted: such
- * entries occur here (>= 3: the case is exercised); det M_0 >= 0.01 det M_mid (the floor, 1e-9
+ * entries occur here (>= 2: the case is exercised; 3 of 15 with the fit's lights of revision 2, 2 of 15
+ * with revision 3's quads); det M_0 >= 0.01 det M_mid (the floor, 1e-9
  * relative); the lobe a shader interpolates at the midpoint, (M_0 + M_nb) / 2, is the midpoint
  * fit's lobe to 0.02 mean polygon difference (test_anchor_rows' tolerance) at every theta; and the
  * anchor row has no spike along theta beyond the gate's 80 h^2.  The first rule (keep M_mid where
@@ -408,7 +409,7 @@ static void test_anchor_fine_step(void)
         CHECK(d <= 0.02);
     }
     CHECK(floor_ok);
-    CHECK(shrunk >= 3);
+    CHECK(shrunk >= 2);
     double h = 1.0 / (N - 1), spike = 0.0;
     for (int k = 2; k < N - 1; ++k)
         for (int a = 0; a < 9; ++a) {
