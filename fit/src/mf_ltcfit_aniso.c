@@ -1458,6 +1458,20 @@ static mf_status anchor_entries(ajob *j, mf_brdf_params own, int i0, int i1, con
     return MF_OK;
 }
 
+/* Entry (k, l) (theta, phi indices) of fit_pair's pair at the fitting alphas prm, from start, with
+ * second (or NULL) as the second start; the mirror rows phi = 0 and pi/2 keep their zero patterns. */
+static mf_status fit_pair_entry(ajob *j, workspace *ws, mf_brdf_params prm, int idx[4], int k, int l,
+                                const double *start, const double *second, mf_ltcfit_aniso_entry *out)
+{
+    const int *n = j->o->n;
+    double ax, ay, th, ph;
+    idx[2] = k;
+    idx[3] = l;
+    mf_ltc_aniso_entry_values(j->table, idx, &ax, &ay, &th, &ph);
+    int sym = l == 0 ? SYM_Y : (l == n[3] - 1 ? SYM_X : 0);
+    return fit_entry(j->model, prm, th, ph, sym, FAMILY_RANDOM, NULL, start, second, j->o, j->scr, ws, out);
+}
+
 /* One (alpha_x, alpha_y) pair: theta = 0 once (copied to every phi), then one chain along theta
  * per phi, warm-started from the previous theta (anchor pairs: one chain along phi per theta, see
  * below).  nb (or NULL): the pair's fitted neighbour along
@@ -1507,14 +1521,9 @@ static mf_status fit_pair(ajob *j, workspace *ws, int i0, int i1, const int nb[2
             for (int l = 0; l < n[3]; ++l) {
                 if (j->o->cancel && *j->o->cancel)
                     return MF_OK;
-                idx[2] = k;
-                idx[3] = l;
-                mf_ltc_aniso_entry_values(t, idx, &ax, &ay, &th, &ph);
-                int sym = l == 0 ? SYM_Y : (l == n[3] - 1 ? SYM_X : 0);
                 const double *start = l > 0 && l < n[3] - 1 ? buf[(size_t)n[2] * (l - 1) + k].lobe
                                                             : buf[(size_t)n[2] * l + k - 1].lobe;
-                st = fit_entry(j->model, prm, th, ph, sym, FAMILY_RANDOM, NULL, start, NB_LOBE(k, l), j->o, j->scr, ws,
-                               &buf[(size_t)n[2] * l + k]);
+                st = fit_pair_entry(j, ws, prm, idx, k, l, start, NB_LOBE(k, l), &buf[(size_t)n[2] * l + k]);
                 if (st != MF_OK)
                     return st;
             }
@@ -1525,12 +1534,8 @@ static mf_status fit_pair(ajob *j, workspace *ws, int i0, int i1, const int nb[2
             for (int k = 1; k < n[2]; ++k) {
                 if (j->o->cancel && *j->o->cancel)
                     return MF_OK;
-                idx[2] = k;
-                idx[3] = l;
-                mf_ltc_aniso_entry_values(t, idx, &ax, &ay, &th, &ph);
-                int sym = l == 0 ? SYM_Y : (l == n[3] - 1 ? SYM_X : 0);
-                st = fit_entry(j->model, prm, th, ph, sym, FAMILY_RANDOM, NULL, buf[(size_t)n[2] * l + k - 1].lobe, NB_LOBE(k, l), j->o,
-                               j->scr, ws, &buf[(size_t)n[2] * l + k]);
+                st = fit_pair_entry(j, ws, prm, idx, k, l, buf[(size_t)n[2] * l + k - 1].lobe, NB_LOBE(k, l),
+                                    &buf[(size_t)n[2] * l + k]);
                 if (st != MF_OK)
                     return st;
             }

@@ -770,6 +770,21 @@ static int qkey_cmp(const void *a, const void *b)
     return 0;
 }
 
+/* The keys of n weighted normals (key[0 .. n)) and of their images (key[n .. 2 n)) under the
+ * reflection that negates the coordinates of the bits of flip (bit c: coordinate c): normals on
+ * a grid of step 1 / q, weights on the MF_PREFILTER_MIRROR_TOL grid. */
+static void mirror_keys(const double *nrm, const double *w, int n, double q, int flip, qkey *key)
+{
+    const double qw = 1.0 / MF_PREFILTER_MIRROR_TOL;
+    for (int i = 0; i < n; ++i)
+        for (int m = 0; m < 2; ++m) {
+            qkey *k = &key[m * n + i];
+            for (int c = 0; c < 3; ++c)
+                k->k[c] = llround(nrm[3 * i + c] * q * (m && (flip >> c & 1) ? -1.0 : 1.0));
+            k->k[3] = llround(w[i] * qw);
+        }
+}
+
 /* Whether the weighted normals (nrm, w) are, as a multiset, invariant under the mirror of
  * coordinate `axis` (0: x -> -x, 1: y -> -y): the normals' components compared on a grid of side
  * tol (MF_PREFILTER_MIRROR_TOL_NORMAL: the precision of an 8-bit map), the weights on the
@@ -780,14 +795,7 @@ static int qkey_cmp(const void *a, const void *b)
 static int mirror_snap(double *nrm, double *w, int n, int axis, double tol, qkey *key)
 {
     const double q = 1.0 / tol;
-    const double qw = 1.0 / MF_PREFILTER_MIRROR_TOL;
-    for (int i = 0; i < n; ++i)
-        for (int m = 0; m < 2; ++m) {
-            qkey *k = &key[m * n + i];
-            for (int c = 0; c < 3; ++c)
-                k->k[c] = llround(nrm[3 * i + c] * q * (m && c == axis ? -1.0 : 1.0));
-            k->k[3] = llround(w[i] * qw);
-        }
+    mirror_keys(nrm, w, n, q, 1 << axis, key);
     qsort(key, (size_t)n, sizeof *key, qkey_cmp);
     qsort(key + n, (size_t)n, sizeof *key, qkey_cmp);
     if (memcmp(key, key + n, sizeof *key * (size_t)n) != 0)
@@ -917,15 +925,7 @@ static void canonical_order(double *nrm, double *w, int n, wnormal *tmp)
  * centre of symmetry).  key: 2 n scratch keys. */
 static int halfturn_symmetric(const double *nrm, const double *w, int n, qkey *key)
 {
-    const double q = 1.0 / MF_PREFILTER_MIRROR_TOL_NORMAL;
-    const double qw = 1.0 / MF_PREFILTER_MIRROR_TOL;
-    for (int i = 0; i < n; ++i)
-        for (int m = 0; m < 2; ++m) {
-            qkey *k = &key[m * n + i];
-            for (int c = 0; c < 3; ++c)
-                k->k[c] = llround(nrm[3 * i + c] * q * (m && c < 2 ? -1.0 : 1.0));
-            k->k[3] = llround(w[i] * qw);
-        }
+    mirror_keys(nrm, w, n, 1.0 / MF_PREFILTER_MIRROR_TOL_NORMAL, 3, key);
     qsort(key, (size_t)n, sizeof *key, qkey_cmp);
     qsort(key + n, (size_t)n, sizeof *key, qkey_cmp);
     return memcmp(key, key + n, sizeof *key * (size_t)n) == 0;
