@@ -154,20 +154,12 @@ int main(int argc, char **argv)
     o.objective = objective;
     mf_table t;
     mf_ltcfit_aniso_result r;
-    char msg[256];
     double t0 = now();
     memset(&r, 0, sizeof r);
-    if (table_path) {
-        if (mf_table_read(table_path, &t, NULL, msg, sizeof msg) != MF_OK) {
-            fprintf(stderr, "bench_ltc_aniso: %s: %s\n", table_path, msg);
-            return 1;
-        }
-        printf("mfkit table read from %s\n", table_path);
-    } else {
-        if (mf_ltcfit_aniso_table(ggx, &o, &t, &r, msg, sizeof msg) != MF_OK) {
-            fprintf(stderr, "bench_ltc_aniso: fit failed: %s\n", msg);
-            return 1;
-        }
+    int fitted = abench_table_get("bench_ltc_aniso", table_path, &o, &t, &r);
+    if (fitted < 0)
+        return 1;
+    if (fitted) {
         double t1 = now();
         printf("fit 8^4, %d threads: %.2f s wall; worst residual %.4g, not converged %d of %zu, max iterations %d, "
                "anchor fallbacks %d\n",

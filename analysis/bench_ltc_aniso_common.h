@@ -20,11 +20,34 @@
 
 #include "mfkit/mfkit.h"
 #include "mfkit/mf_ltc_gate.h"
+#include "mfkit/fit/mf_ltcfit_aniso.h"
+#include "mfkit/io/mf_table_io.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+/* The table a program measures: read from table_path, or (NULL) fitted with o.  1: fitted (r holds
+ * the fit's result), 0: read, -1: an error (printed, prefixed with prog). */
+static inline int abench_table_get(const char *prog, const char *table_path, const mf_ltcfit_aniso_options *o,
+                                   mf_table *t, mf_ltcfit_aniso_result *r)
+{
+    char msg[256];
+    if (table_path) {
+        if (mf_table_read(table_path, t, NULL, msg, sizeof msg) != MF_OK) {
+            fprintf(stderr, "%s: %s\n", prog, msg); /* msg names the file */
+            return -1;
+        }
+        printf("mfkit table read from %s\n", table_path);
+        return 0;
+    }
+    if (mf_ltcfit_aniso_table(mf_brdf_model_find("ggx"), o, t, r, msg, sizeof msg) != MF_OK) {
+        fprintf(stderr, "%s: fit failed: %s\n", prog, msg);
+        return -1;
+    }
+    return 1;
+}
 
 enum { ABENCH_Q = 12 };
 

@@ -608,18 +608,10 @@ int main(int argc, char **argv)
     o.objective = objective_kind;
     mf_table t;
     mf_ltcfit_aniso_result fr;
-    char msg[256];
-    if (table_path) {
-        if (mf_table_read(table_path, &t, NULL, msg, sizeof msg) != MF_OK) {
-            fprintf(stderr, "study_aniso_oracle: %s: %s\n", table_path, msg);
-            return 1;
-        }
-        printf("mfkit table read from %s\n", table_path);
-    } else {
-        if (mf_ltcfit_aniso_table(ggx, &o, &t, &fr, msg, sizeof msg) != MF_OK) {
-            fprintf(stderr, "study_aniso_oracle: fit failed: %s\n", msg);
-            return 1;
-        }
+    int fitted = abench_table_get("study_aniso_oracle", table_path, &o, &t, &fr);
+    if (fitted < 0)
+        return 1;
+    if (fitted) {
         printf("mfkit 8^4 table fitted (objective %s): %.1f s wall; worst residual %.4g, not converged %d\n",
                objective_kind == MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE ? "relative" : "default", now() - w0,
                fr.worst_residual, fr.not_converged);
