@@ -18,7 +18,8 @@
  *     (GGX's sampler against the pdf of a 10 % larger alpha) must be rejected, so the test can fail.
  *     Every sample's returned density must equal pdf(wo, wi) (relative 1e-12: the same formula,
  *     evaluated from wi rather than from the micro-normal, differs by a few roundings).
- *  3. sample_weights bit for bit the single calls (sample, then eval_cos / pdf), including
+ *  3. sample_weights bit for bit the single calls (sample, then eval_cos / pdf), and
+ *     mf_model_sample_weights_polar bit for bit sample_weights, including
  *     invalid views (wo.z <= 0) and u at the corners of [0, 1)^2.
  *  4. Zero below and at the horizon: eval_cos and pdf are exactly 0 for wo.z <= 0 or wi.z <= 0.
  *  5. Reciprocity where claimed: eval_cos(wo, wi) / wi.z = eval_cos(wi, wo) / wo.z within 1e-12
@@ -337,6 +338,17 @@ static void test_batched(void)
                     u[2 * (256 + k) + 1] = corners[k][1];
                 }
                 m->sample_weights(m, &prm[a], wo, 260, u, wi, pdf, w);
+                /* the precomputed disk points (mf_model_sample_weights_polar): the same bits */
+                double pp[2 * 260], pdf2[260], w2[260];
+                mf_vec3 wi2[260];
+                mf_model_polar_points(260, u, pp);
+                mf_model_sample_weights_polar(m, &prm[a], wo, 260, u, pp, wi2, pdf2, w2);
+                if (memcmp(wi, wi2, sizeof wi) || memcmp(pdf, pdf2, sizeof pdf) || memcmp(w, w2, sizeof w)) {
+                    if (mismatches++ < 3)
+                        MF_FAIL_AT("%s alpha (%g, %g) wo.z %g: mf_model_sample_weights_polar differs from "
+                                   "sample_weights (w[0] %.17g vs %.17g)",
+                                   m->name, prm[a].alpha_x, prm[a].alpha_y, wo.z, w2[0], w[0]);
+                }
                 for (int k = 0; k < 260; ++k) {
                     double p1;
                     mf_vec3 v = m->sample(m, &prm[a], wo, u + 2 * k, &p1);

@@ -173,15 +173,6 @@ typedef struct {
                      * (where the view-frame M22 -> 0 and b -> infinity) */
 } texel;
 
-/* wi, pdf and weight f cos / pdf of n points u for the isotropic roughness alpha
- * (mf_model_sample_weights: weight 0 unless pdf > 0 and wi is finite with wi.z > 0). */
-static void model_sample_weights(const mf_brdf_model *m, double alpha, mf_vec3 wo, int n, const double *u,
-                                 mf_vec3 *wi, double *pdf, double *w)
-{
-    mf_brdf_params p = mf_brdf_params_iso(alpha);
-    mf_model_sample_weights(m, &p, wo, n, u, wi, pdf, w);
-}
-
 /* The magnitude (albedo) and Fresnel fields: mf_model_albedo_fresnel with the default rule
  * (MF_MODEL_ALBEDO_N = QUAD_PANELS 8-point panels per axis). */
 static mf_status texel_magnitude(const mf_brdf_model *m, double alpha, mf_vec3 wo, workspace *ws, texel *t)
@@ -252,15 +243,17 @@ static mf_status texel_prepare(const mf_brdf_model *m, double alpha, double cos_
     } else if ((st = texel_magnitude(m, alpha, wo, ws, t)) != MF_OK)
         return st;
     /* the points depend on the index and the scramble only: every texel of a worker uses the same
-     * prefix, computed once (u_n points of u_scr kept in the workspace) */
+     * prefix, computed once (u_n points of u_scr kept in the workspace, with their disk points) */
     if (ws->u_n < ws->n || ws->u_scr[0] != scr[0] || ws->u_scr[1] != scr[1]) {
         for (int j = 0; j < ws->n; ++j)
             mf_sobol2((uint32_t)j, scr[0], scr[1], ws->u + 2 * j);
+        mf_model_polar_points(ws->n, ws->u, ws->pp);
         ws->u_n = ws->n;
         ws->u_scr[0] = scr[0];
         ws->u_scr[1] = scr[1];
     }
-    model_sample_weights(m, alpha, wo, ws->n, ws->u, ws->dir, ws->pdf, ws->w);
+    mf_brdf_params prm = mf_brdf_params_iso(alpha);
+    mf_model_sample_weights_polar(m, &prm, wo, ws->n, ws->u, ws->pp, ws->dir, ws->pdf, ws->w);
     double sum;
     mf_vec3 mean;
     if ((st = ws_weight_sums(ws, &sum, &mean)) != MF_OK)

@@ -333,6 +333,7 @@ typedef struct {
     double *pdf;       /* the sampler's density of dir */
     double *cw;        /* control-variate weights D_LTC / pdf */
     double *u;         /* sample points, 2 per direction */
+    double *pp;        /* their disk points (mf_model_polar_points; the isotropic fitter's) */
     double *x, *y, *z; /* the live directions, component arrays (the cap pre-test) */
     int *cand;         /* indices passing a light's cap test */
     int n;             /* directions of this texel: base, or GRAZING_FACTOR base at grazing views */
@@ -349,6 +350,7 @@ static inline int ws_init(workspace *ws, int base)
 {
     int n = GRAZING_FACTOR * base;
     ws->u = malloc(sizeof *ws->u * (size_t)n * 2);
+    ws->pp = malloc(sizeof *ws->pp * (size_t)n * 2);
     ws->dir = malloc(sizeof *ws->dir * (size_t)n);
     ws->w = malloc(sizeof *ws->w * (size_t)n);
     ws->pdf = malloc(sizeof *ws->pdf * (size_t)n);
@@ -360,11 +362,12 @@ static inline int ws_init(workspace *ws, int base)
     ws->n = ws->base = base;
     ws->u_n = 0;
     ws->u_scr[0] = ws->u_scr[1] = 0;
-    return ws->dir && ws->w && ws->pdf && ws->cw && ws->x && ws->cand && ws->u;
+    return ws->dir && ws->w && ws->pdf && ws->cw && ws->x && ws->cand && ws->u && ws->pp;
 }
 static inline void ws_free(workspace *ws)
 {
     free(ws->u);
+    free(ws->pp);
     free(ws->dir);
     free(ws->w);
     free(ws->pdf);

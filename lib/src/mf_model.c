@@ -63,6 +63,18 @@ void mf_model_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, mf
     }
 }
 
+void mf_model_ggx_sample_weights_polar(const mf_brdf_params *p, mf_vec3 wo, int n, const double *pp, mf_vec3 *wi,
+                                       double *pdf, double *w); /* mf_model_ggx.c */
+
+void mf_model_sample_weights_polar(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, int n, const double *u,
+                                   const double *pp, mf_vec3 *wi, double *pdf, double *w)
+{
+    if (m == &mf_model_ggx)
+        mf_model_ggx_sample_weights_polar(p, wo, n, pp, wi, pdf, w);
+    else
+        mf_model_sample_weights(m, p, wo, n, u, wi, pdf, w);
+}
+
 mf_vec3 mf_model_sample_cosine_polar(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, const double u[2],
                                      double *pdf)
 {

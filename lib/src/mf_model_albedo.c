@@ -29,30 +29,41 @@ static const double gl8_x[8] = {-0.9602898564975363, -0.7966664774136267, -0.525
 static const double gl8_w[8] = {0.1012285362903763, 0.2223810344533745, 0.3137066458778873, 0.3626837833783620,
                                 0.3626837833783620, 0.3137066458778873, 0.2223810344533745, 0.1012285362903763};
 
-#define CHUNK 64 /* points per batch of mf_model_sample_weights (stack buffers) */
+#define CHUNK 64 /* points per batch of mf_model_sample_weights_polar (stack buffers) */
 
 /* Q(panels): the albedo and (fres not NULL) the Schlick moment, summed in the order (panel i,
  * node i, panel j, node j) with one accumulator each.  0 on success, -1 for a non-finite sum.
  * Without fres the moment is not computed (the albedo's bits are the same either way). */
 static int rule(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, int panels, double *alb, double *fres)
 {
-    double u[2 * CHUNK], qw[CHUNK], pdf[CHUNK], w[CHUNK];
+    double u[2 * CHUNK], pp[2 * CHUNK], qw[CHUNK], pdf[CHUNK], w[CHUNK];
     mf_vec3 dir[CHUNK];
     double sa = 0.0, sf = 0.0;
     const int row = 8 * panels;
+    /* the columns' (cos, sin)(2 pi u1), the same in every row: the disk points of
+     * mf_model_polar_points (sqrt(u0) times these, the same expressions) for
+     * mf_model_sample_weights_polar */
+    double csn[2 * 1024];
+    for (int c = 0; c < row; ++c) {
+        double phi = 2.0 * MF_PI * ((c / 8 + 0.5 * (gl8_x[c % 8] + 1.0)) / panels);
+        csn[2 * c] = cos(phi);
+        csn[2 * c + 1] = sin(phi);
+    }
     for (int pi = 0; pi < panels; ++pi)
         for (int i = 0; i < 8; ++i) {
             double tt = (pi + 0.5 * (gl8_x[i] + 1.0)) / panels, om = 1.0 - tt;
-            double u0 = 1.0 - om * om * om;
+            double u0 = 1.0 - om * om * om, rr = sqrt(u0);
             for (int start = 0; start < row; start += CHUNK) {
                 int k = row - start < CHUNK ? row - start : CHUNK;
                 for (int q = 0; q < k; ++q) {
                     int pj = (start + q) / 8, j = (start + q) % 8;
                     u[2 * q] = u0;
                     u[2 * q + 1] = (pj + 0.5 * (gl8_x[j] + 1.0)) / panels;
+                    pp[2 * q] = rr * csn[2 * (start + q)];
+                    pp[2 * q + 1] = rr * csn[2 * (start + q) + 1];
                     qw[q] = 0.25 * gl8_w[i] * gl8_w[j] / ((double)panels * panels) * 3.0 * om * om;
                 }
-                mf_model_sample_weights(m, p, wo, k, u, dir, pdf, w);
+                mf_model_sample_weights_polar(m, p, wo, k, u, pp, dir, pdf, w);
                 for (int q = 0; q < k; ++q) {
                     if (!(pdf[q] > 0.0) || !(dir[q].z > 0.0))
                         continue;

@@ -109,11 +109,13 @@ static double ggx_pdf(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 w
 
 /* ggx_sample + ggx_eval_cos for n points, with the same operations in the same order (so the same
  * bits), the view-dependent parts hoisted: the visible-normal frame of mf_sample_ggx_vndf
- * [Heitz 2018, Listing 1] and Lambda(wo).  tests/test_models.c compares them bit for bit. */
-static void ggx_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, int n, const double *u,
-                               mf_vec3 *wi, double *pdf, double *w)
+ * [Heitz 2018, Listing 1] and Lambda(wo).  The disk point (p1, p2) = sqrt(u0) (cos, sin)(2 pi u1)
+ * of point i comes from u, or (pp not NULL) is given in pp[2i], pp[2i+1] by a caller that reuses
+ * one point set (mf_model_polar_points: the same expressions, so the same bits).  tests/test_models.c
+ * compares them bit for bit. */
+static void ggx_weights(const mf_brdf_params *p, mf_vec3 wo, int n, const double *u, const double *pp, mf_vec3 *wi,
+                        double *pdf, double *w)
 {
-    (void)m;
     ggx_rough r = ggx_rough_make(p);
     if (!ggx_rough_valid(&r) || !(wo.z > 0.0) || !mf_vec3_isfinite(wo)) {
         for (int i = 0; i < n; ++i) {
@@ -130,9 +132,16 @@ static void ggx_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, 
     mf_vec3 t2 = mf_vec3_cross(vh, t1);
     double s = 0.5 * (1.0 + vh.z);
     for (int i = 0; i < n; ++i) {
-        double rr = sqrt(u[2 * i]);
-        double phi = 2.0 * MF_PI * u[2 * i + 1];
-        double p1 = rr * cos(phi), p2 = rr * sin(phi);
+        double p1, p2;
+        if (pp) {
+            p1 = pp[2 * i];
+            p2 = pp[2 * i + 1];
+        } else {
+            double rr = sqrt(u[2 * i]);
+            double phi = 2.0 * MF_PI * u[2 * i + 1];
+            p1 = rr * cos(phi);
+            p2 = rr * sin(phi);
+        }
         p2 = (1.0 - s) * sqrt(fmax(0.0, 1.0 - p1 * p1)) + s * p2;
         double pz = sqrt(fmax(0.0, 1.0 - p1 * p1 - p2 * p2));
         mf_vec3 nh = mf_vec3_add(mf_vec3_add(mf_vec3_scale(t1, p1), mf_vec3_scale(t2, p2)), mf_vec3_scale(vh, pz));
@@ -150,6 +159,33 @@ static void ggx_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, 
         wi[i] = v;
         pdf[i] = pd;
         w[i] = wt;
+    }
+}
+
+static void ggx_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, int n, const double *u,
+                               mf_vec3 *wi, double *pdf, double *w)
+{
+    (void)m;
+    ggx_weights(p, wo, n, u, NULL, wi, pdf, w);
+}
+
+/* mf_model_sample_weights_polar's GGX branch (mf_model.c); the disk points of
+ * mf_model_polar_points. */
+void mf_model_ggx_sample_weights_polar(const mf_brdf_params *p, mf_vec3 wo, int n, const double *pp, mf_vec3 *wi,
+                                       double *pdf, double *w);
+void mf_model_ggx_sample_weights_polar(const mf_brdf_params *p, mf_vec3 wo, int n, const double *pp, mf_vec3 *wi,
+                                       double *pdf, double *w)
+{
+    ggx_weights(p, wo, n, NULL, pp, wi, pdf, w);
+}
+
+void mf_model_polar_points(int n, const double *u, double *pp)
+{
+    for (int i = 0; i < n; ++i) {
+        double rr = sqrt(u[2 * i]);
+        double phi = 2.0 * MF_PI * u[2 * i + 1];
+        pp[2 * i] = rr * cos(phi);
+        pp[2 * i + 1] = rr * sin(phi);
     }
 }
 

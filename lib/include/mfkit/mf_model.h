@@ -128,6 +128,16 @@ double mf_model_pdf(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo,
 void mf_model_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, int n, const double *u,
                              mf_vec3 *wi, double *pdf, double *w);
 
+/* mf_model_sample_weights for a point set reused across calls (the LTC fitter's Sobol prefix, the
+ * albedo rule's rows): mf_model_polar_points maps n points u to the disk points pp[2i], pp[2i+1] =
+ * sqrt(u0) (cos, sin)(2 pi u1) of GGX's visible-normal sampler [Heitz 2018, Listing 1] once, and
+ * mf_model_sample_weights_polar, given both u and those pp, is bit for bit
+ * mf_model_sample_weights(m, p, wo, n, u, ...): the "ggx" model reads pp (no square root, sine and
+ * cosine per point), every other model reads u. */
+void mf_model_polar_points(int n, const double *u, double *pp);
+void mf_model_sample_weights_polar(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, int n, const double *u,
+                                   const double *pp, mf_vec3 *wi, double *pdf, double *w);
+
 /* The diffuse models' sampler (their `sample` and `pdf`): the cosine hemisphere by the polar map
  * (mf_sample_cosine_hemisphere_polar), density wi.z / pi (0 for wo.z <= 0 or wi.z <= 0).  Unlike
  * the fallback's concentric map, it is smooth in u and puts the horizon at u0 -> 1, where
