@@ -3,6 +3,7 @@
 #include "mfkit/mf_model.h"
 
 #include "mfkit/mf_sample.h"
+#include "mf_model_internal.h"
 
 #include <stddef.h>
 #include <string.h>
@@ -62,9 +63,6 @@ void mf_model_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, mf
         w[i] = pdf[i] > 0.0 && wi[i].z > 0.0 && mf_vec3_isfinite(wi[i]) ? m->eval_cos(m, p, wo, wi[i]) / pdf[i] : 0.0;
     }
 }
-
-void mf_model_ggx_sample_weights_polar(const mf_brdf_params *p, mf_vec3 wo, int n, const double *pp, mf_vec3 *wi,
-                                       double *pdf, double *w); /* mf_model_ggx.c */
 
 void mf_model_sample_weights_polar(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, int n, const double *u,
                                    const double *pp, mf_vec3 *wi, double *pdf, double *w)

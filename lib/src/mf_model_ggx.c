@@ -29,6 +29,7 @@
 #include "mfkit/mf_brdf.h"
 #include "mfkit/mf_model.h"
 #include "mfkit/mf_sample.h"
+#include "mf_model_internal.h"
 
 typedef struct ggx_rough {
     double ax, ay, a2; /* a2 = ax^2, used by the isotropic branch */
@@ -169,10 +170,7 @@ static void ggx_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, 
     ggx_weights(p, wo, n, u, NULL, wi, pdf, w);
 }
 
-/* mf_model_sample_weights_polar's GGX branch (mf_model.c); the disk points of
- * mf_model_polar_points. */
-void mf_model_ggx_sample_weights_polar(const mf_brdf_params *p, mf_vec3 wo, int n, const double *pp, mf_vec3 *wi,
-                                       double *pdf, double *w);
+/* mf_model_internal.h */
 void mf_model_ggx_sample_weights_polar(const mf_brdf_params *p, mf_vec3 wo, int n, const double *pp, mf_vec3 *wi,
                                        double *pdf, double *w)
 {
