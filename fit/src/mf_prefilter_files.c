@@ -2,48 +2,20 @@
  * and its float32 .npy levels (for `mfkit prefilter-eval` and the analysis programs). */
 #define _POSIX_C_SOURCE 200809L
 #include "mfkit/fit/mf_prefilter.h"
+#include "mfkit/io/mf_io.h"
 
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-/* Reads a whole small file; NULL with msg on failure. */
+/* Reads a whole file (mf_io_read_file: NUL-terminated, its messages); NULL with msg on failure. */
 char *mf_prefilter_read_file(const char *path, size_t *len, char *msg, size_t msz)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        snprintf(msg, msz, "%s: cannot open: %s", path, strerror(errno));
+    unsigned char *b = NULL;
+    if (mf_io_read_file(path, NULL, &b, len, NULL, msg, msz) != MF_OK)
         return NULL;
-    }
-    char *b = NULL;
-    size_t n = 0, cap = 0;
-    for (;;) {
-        if (n + 65536 > cap) {
-            cap = 2 * cap + 65536;
-            char *nb = realloc(b, cap + 1);
-            if (!nb) {
-                free(b), fclose(f);
-                snprintf(msg, msz, "out of memory");
-                return NULL;
-            }
-            b = nb;
-        }
-        size_t r = fread(b + n, 1, cap - n, f);
-        n += r;
-        if (r == 0)
-            break;
-    }
-    int bad = ferror(f);
-    fclose(f);
-    if (bad) {
-        free(b);
-        snprintf(msg, msz, "%s: read error", path);
-        return NULL;
-    }
-    b[n] = 0;
-    *len = n;
-    return b;
+    return (char *)b;
 }
 
 /* A float32 little-endian C-order .npy of the expected rank; shape in dims. */
