@@ -12,7 +12,9 @@
  *
  * Usage: test_prefilter_gate                       (the CTest run: small maps, few views, asserted)
  *        test_prefilter_gate measure W NT NP NCORR [SCALE [MAP [lambert]]]
- *                                   (the figures of docs/prefilter.md; not asserted; MAP 0, 1, 2, -1 all) */
+ *                                   (the figures of docs/prefilter.md; not asserted; MAP 0, 1, 2, -1 all)
+ *        test_prefilter_gate dump W H NT NP NCORR [lambert]
+ *                                   (every field of the gate's results, exactly, for comparing builds) */
 #include "mf_test.h"
 
 #define CHECKF(cond, ...)                                                                                       \
@@ -150,6 +152,74 @@ static void corrupt_runs(mf_prefilter_level *lv, int nl, const double *n, int w,
 /* Fits the map, gates the good run, then the corruptions.  Returns the good gate in *good. */
 static int g_lambert = 0; /* measure mode: the diffuse table */
 
+/* Every field of a gate result, exactly (dump mode: the streamed gate must give the same as before). */
+static void dump_gate(const char *tag, const mf_prefilter_gate *g)
+{
+    printf("%s: pass %d (%d %d %d %d %d) nan %ld energy %.17g [%s] level %.17g [%s] view %.17g [%s] texel %.17g [%s]\n", tag,
+           g->pass, g->pass_energy, g->pass_nan, g->pass_level, g->pass_view, g->pass_texel, g->nan_entries,
+           g->worst_energy, g->where_energy, g->worst_level, g->where_level, g->worst_view_spike, g->where_view,
+           g->worst_texel_spike, g->where_texel);
+    if (g->has_ref)
+        printf("%s: ref gated %d (%d %d %d) texel %.17g [%s] view %.17g [%s] grazing %.17g [%s] jump %.17g %.17g "
+               "error %.17g\n",
+               tag, g->cont_gated, g->pass_cont_texel, g->pass_cont_view, g->pass_cont_grazing, g->worst_cont_texel,
+               g->where_cont_texel, g->worst_cont_view, g->where_cont_view, g->worst_cont_grazing, g->where_cont_grazing,
+               g->worst_jump_texel, g->worst_jump_view, g->worst_ref_error);
+}
+
+/* dump mode: maps 0..2 (w x h, the top h rows of the w x w map), the good run and ncorr corruptions
+ * of each kind, both gate entry points, every field printed. */
+static void dump_map(int kind, int w, int h, int nt, int np, int ncorr)
+{
+    if (h > w) {
+        printf("dump: h <= w only (the top h rows of the w x w map)\n");
+        return;
+    }
+    double *n = malloc(sizeof(double) * 3 * (size_t)w * w);
+    CHECK(n != NULL);
+    make_map(kind, w, n);
+    mf_prefilter_options o;
+    if (g_lambert)
+        mf_prefilter_options_default_diffuse(&o);
+    else
+        mf_prefilter_options_default(&o);
+    o.n_theta = nt, o.n_phi = np, o.threads = 2, o.keep_albedo = 1;
+    mf_prefilter_level *lv;
+    int nl;
+    char msg[256], tag[128];
+    CHECK(mf_prefilter_run(n, w, h, &o, &lv, &nl, msg, sizeof msg) == MF_OK);
+    uint64_t seed = 777;
+    for (int c = -1; c < 2 * ncorr; ++c) {
+        int l = 0;
+        size_t e = 0, f = 0;
+        float save_e[9], save_f[9];
+        if (c >= 0) {
+            l = (int)(lcg(&seed) % (uint64_t)nl);
+            size_t ne = (size_t)lv[l].width * lv[l].height * nt * np;
+            e = lcg(&seed) % ne;
+            f = e - e % (size_t)np + (e % (size_t)np + 1) % (size_t)np;
+            memcpy(save_e, lv[l].m + 9 * e, 36), memcpy(save_f, lv[l].m + 9 * f, 36);
+            if (c % 2)
+                memcpy(lv[l].m + 9 * e, save_f, 36), memcpy(lv[l].m + 9 * f, save_e, 36);
+            else
+                lv[l].m[9 * e + lcg(&seed) % 9] *= 1.5f;
+        }
+        mf_prefilter_gate g;
+        mf_prefilter_gate_bounds_default(&g);
+        CHECK(mf_prefilter_gate_run(lv, nl, &g) == MF_OK);
+        snprintf(tag, sizeof tag, "%s %dx%d run %d plain", k_names[kind], w, h, c);
+        dump_gate(tag, &g);
+        mf_prefilter_gate_bounds_default(&g);
+        CHECK(mf_prefilter_gate_run_ref(lv, nl, n, w, h, &o, &g) == MF_OK);
+        snprintf(tag, sizeof tag, "%s %dx%d run %d ref", k_names[kind], w, h, c);
+        dump_gate(tag, &g);
+        if (c >= 0)
+            memcpy(lv[l].m + 9 * e, save_e, 36), memcpy(lv[l].m + 9 * f, save_f, 36);
+    }
+    mf_prefilter_levels_free(lv, nl);
+    free(n);
+}
+
 static void run_map(int kind, int w, int nt, int np, int ncorr, double scale, mf_prefilter_gate *good, power *ps,
                     power *pv)
 {
@@ -277,6 +347,12 @@ static void test_facet_continuity(void)
 
 int main(int argc, char **argv)
 {
+    if (argc >= 7 && !strcmp(argv[1], "dump")) { /* dump W H NT NP NCORR [lambert] */
+        g_lambert = argc >= 8 && !strcmp(argv[7], "lambert");
+        for (int k = 0; k < 3; ++k)
+            dump_map(k, atoi(argv[2]), atoi(argv[3]), atoi(argv[4]), atoi(argv[5]), atoi(argv[6]));
+        return mf_test_failures ? 1 : 0;
+    }
     if (argc >= 6 && !strcmp(argv[1], "measure")) {
         int w = atoi(argv[2]), nt = atoi(argv[3]), np = atoi(argv[4]), nc = atoi(argv[5]);
         double scale = argc >= 7 ? atof(argv[6]) : 0.5;
