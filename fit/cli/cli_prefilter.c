@@ -720,8 +720,9 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
         else
             fprintf(stderr,
                     "mfkit prefilter: reported only, error against the reference: texel spike %.4g, view spike %.4g, "
-                    "grazing views %.4g, largest error %.4g of the albedo\n",
-                    g.worst_cont_texel, g.worst_cont_view, g.worst_cont_grazing, g.worst_ref_error);
+                    "grazing views %.4g, largest error %.4g of the albedo; extreme along every axis %.4g (bound %.3g%s)\n",
+                    g.worst_cont_texel, g.worst_cont_view, g.worst_cont_grazing, g.worst_ref_error, g.worst_cont_cross,
+                    g.max_cont_cross, g.pass_cont_cross ? "" : ", above it");
         if (g.cont_gated && !(g.pass_cont_texel && g.pass_cont_view && g.pass_cont_grazing))
             fprintf(stderr, "mfkit prefilter: worst continuity at %s\n",
                     !g.pass_cont_texel ? g.where_cont_texel : !g.pass_cont_view ? g.where_cont_view : g.where_cont_grazing);
@@ -834,6 +835,11 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
         mf_json_string(&b, g.where_cont_view);
         mf_buf_printf(&b, "}, \"grazing\": {\"worst\": %.6g, \"where\": ", g.worst_cont_grazing);
         mf_json_string(&b, g.where_cont_grazing);
+        mf_buf_printf(&b, "}, \"cross\": {\"reported_only\": true, \"within\": %s, \"worst\": %.6g, \"bound\": %.6g, "
+                          "\"texel_axes\": %.6g, \"measures\": \"the smallest of the lone extremes of e / albedo along the "
+                          "axes an entry has (texels x, y; theta; phi), entries with a texel axis\", \"where\": ",
+                      g.pass_cont_cross ? "true" : "false", g.worst_cont_cross, g.max_cont_cross, g.worst_cont_cross_texel);
+        mf_json_string(&b, g.where_cont_cross);
         mf_buf_printf(&b, "}, \"largest_jump\": {\"texel\": %.6g, \"view\": %.6g}, \"largest_error\": %.6g},\n"
                           "    \"worst_albedo_quadrature_err\": %.6g,\n"
                           "    \"not_checked\": \"%s\"}\n}\n",

@@ -30,6 +30,7 @@ void mf_prefilter_gate_bounds_default(mf_prefilter_gate *g)
     g->max_cont_view = MF_PREFILTER_GATE_CONT_VIEW;
     g->max_cont_grazing = MF_PREFILTER_GATE_CONT_GRAZING;
     g->max_cont_lambert = MF_PREFILTER_GATE_CONT_LAMBERT;
+    g->max_cont_cross = MF_PREFILTER_GATE_CONT_CROSS;
 }
 
 /* The gate's lights, in the view-azimuth-aligned frame of view theta: quads of half-width
@@ -203,7 +204,7 @@ struct mf_prefilter_gate_stream {
     gs_level *L;
     mf_polygon *lights;
     gate_iso *iso;
-    uint64_t k_energy, k_level, k_view, k_texel, k_cont_texel, k_cont_view, k_cont_grazing;
+    uint64_t k_energy, k_level, k_view, k_texel, k_cont_texel, k_cont_view, k_cont_grazing, k_cont_cross;
 };
 
 static int gs_slot(int r) { return r < 2 ? r : 2 + r % 3; }
@@ -268,7 +269,7 @@ mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int n
         s->o = *o;
     s->lambert = s->ref && o->base == MF_PREFILTER_BASE_LAMBERT;
     s->k_energy = s->k_level = s->k_view = s->k_texel = UINT64_MAX;
-    s->k_cont_texel = s->k_cont_view = s->k_cont_grazing = UINT64_MAX;
+    s->k_cont_texel = s->k_cont_view = s->k_cont_grazing = s->k_cont_cross = UINT64_MAX;
     /* the results this run sets (as mf_prefilter_gate_run and _run_ref cleared them) */
     g->nan_entries = 0;
     g->worst_energy = g->worst_level = g->worst_view_spike = g->worst_texel_spike = 0.0;
@@ -279,6 +280,8 @@ mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int n
         g->where_cont_grazing[0] = '\0';
         g->worst_cont_texel = g->worst_cont_view = g->worst_jump_texel = g->worst_jump_view = g->worst_ref_error = 0.0;
         g->where_cont_texel[0] = g->where_cont_view[0] = '\0';
+        g->worst_cont_cross = g->worst_cont_cross_texel = 0.0;
+        g->where_cont_cross[0] = '\0';
     }
     s->L = calloc((size_t)nlevels, sizeof *s->L);
     s->lights = malloc(sizeof *s->lights * GATE_NLIGHTS * (size_t)nt);
@@ -369,6 +372,34 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r)
             double ex = x - R[GATE_NLIGHTS * i + k];
             if (!isfinite(ex))
                 continue; /* counted by the nan check */
+            /* cross: the error's lone extreme along every axis at once, the smallest of its lone
+             * extremes along the axes the entry has (texels x, y; theta; phi), for the entries with a
+             * texel axis; cross_texel: the same over the texel axes alone */
+            {
+                double lt = INFINITY, lv = INFINITY;
+                for (int ax = 0; ax < 2; ++ax) {
+                    int n_ax = ax ? L->h : L->w;
+                    if (n_ax < 2)
+                        continue;
+                    int r1 = (r + (ax == 1)) % L->h, c1 = (col + (ax == 0)) % L->w;
+                    int r0 = (r - (ax == 1) + L->h) % L->h, c0 = (col - (ax == 0) + L->w) % L->w;
+                    size_t i1 = ((size_t)c1 * nt + a) * np + b, i0 = ((size_t)c0 * nt + a) * np + b;
+                    int s1 = gs_slot(r1), s0 = gs_slot(r0);
+                    lt = fmin(lt, gate_lone(ex, L->S[s0][GATE_NLIGHTS * i0 + k] - L->R[s0][GATE_NLIGHTS * i0 + k],
+                                            L->S[s1][GATE_NLIGHTS * i1 + k] - L->R[s1][GATE_NLIGHTS * i1 + k]) / alb);
+                }
+                size_t vq[2][2] = {{i - np, i + np}, {i - b + (b + np - 1) % np, i - b + (b + 1) % np}};
+                for (int ax = 0; ax < 2; ++ax)
+                    if (ax == 0 ? a > 0 && a + 1 < nt : np >= 3 && a > 0)
+                        lv = fmin(lv, gate_lone(ex, S[GATE_NLIGHTS * vq[ax][0] + k] - R[GATE_NLIGHTS * vq[ax][0] + k],
+                                                S[GATE_NLIGHTS * vq[ax][1] + k] - R[GATE_NLIGHTS * vq[ax][1] + k]) / alb);
+                if (isfinite(lt)) {
+                    gs_worst(fmin(lt, lv), &g->worst_cont_cross, &s->k_cont_cross, gs_key(li, e, k, 0),
+                             g->where_cont_cross, sizeof g->where_cont_cross, "error extreme along every axis", L->level,
+                             r, col, a, b);
+                    gs_max(lt, &g->worst_cont_cross_texel);
+                }
+            }
             /* the error's lone texel (periodic neighbours: normal maps tile) */
             for (int ax = 0; ax < 2; ++ax) {
                 int n_ax = ax ? L->h : L->w;
@@ -559,6 +590,7 @@ mf_status mf_prefilter_gate_stream_end(mf_prefilter_gate_stream *s)
         g->pass_cont_texel = g->worst_cont_texel <= (g->cont_gated ? g->max_cont_lambert : g->max_cont_texel);
         g->pass_cont_view = g->worst_cont_view <= (g->cont_gated ? g->max_cont_lambert : g->max_cont_view);
         g->pass_cont_grazing = g->worst_cont_grazing <= (g->cont_gated ? g->max_cont_lambert : g->max_cont_grazing);
+        g->pass_cont_cross = g->worst_cont_cross <= g->max_cont_cross;
         if (g->cont_gated)
             g->pass = g->pass && g->pass_cont_texel && g->pass_cont_view && g->pass_cont_grazing;
     }

@@ -287,6 +287,19 @@ typedef struct mf_prefilter_gate {
     char where_cont_grazing[128];
     double max_cont_lambert; /* the Lambert table's bound for all three spikes (input) */
     int cont_gated;          /* 1: the continuity spikes are part of pass (the Lambert table) */
+    /* (mf_prefilter_gate_run_ref; REPORTED, not part of pass, for both tables) cross: the error's lone
+     * extreme along every axis at once -- the smallest, over the axes an entry has (texels x and y,
+     * periodic; theta, interior rows; phi, rows theta > 0), of the lone extreme of e along that axis,
+     * / albedo, over the entries with at least one texel axis (levels larger than 1 x 1); a map's
+     * own variation is rarely an extreme along all of them (the V-groove's texels are the same along
+     * y), one wrong lobe is.  cross_texel: the same over the texel axes alone.  pass_cont_cross
+     * compares it with max_cont_cross (MF_PREFILTER_GATE_CONT_CROSS).  Measured (docs/prefilter.md,
+     * "Gate"): 0 on good runs of the constant and V-groove maps, but 0.08-0.15 on the bump map's, at
+     * single lobes that are wrong by that much against a brute-force integral of the effective BRDF
+     * (so a bound would fail those runs: reported only). */
+    double max_cont_cross, worst_cont_cross, worst_cont_cross_texel;
+    int pass_cont_cross;
+    char where_cont_cross[128];
 } mf_prefilter_gate;
 
 /* Sets the default bounds and clears the results. */
@@ -334,6 +347,9 @@ mf_status mf_prefilter_gate_run(const mf_prefilter_level *levels, int nlevels, m
 #define MF_PREFILTER_GATE_CONT_VIEW 0.3
 #define MF_PREFILTER_GATE_CONT_GRAZING 0.3
 #define MF_PREFILTER_GATE_CONT_LAMBERT 0.03
+/* cross's reported bound: above the V-groove's and the constant map's good runs (0), below the
+ * bump map's outlier lobes (0.08-0.15) */
+#define MF_PREFILTER_GATE_CONT_CROSS 0.05
 mf_status mf_prefilter_gate_run_ref(const mf_prefilter_level *levels, int nlevels, const double *normals, int width,
                                     int height, const mf_prefilter_options *o, mf_prefilter_gate *g) MF_WARN_UNUSED;
 
