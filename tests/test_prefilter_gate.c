@@ -12,7 +12,9 @@
  *
  * Usage: test_prefilter_gate                       (the CTest run: small maps, few views, asserted)
  *        test_prefilter_gate measure W NT NP NCORR [SCALE [MAP [lambert]]]
- *                                   (the figures of docs/prefilter.md; not asserted; MAP 0, 1, 2, -1 all) */
+ *                                   (the figures of docs/prefilter.md; not asserted; MAP 0, 1, 2, -1 all)
+ *        test_prefilter_gate dump W H NT NP NCORR [lambert]
+ *                                   (every field of the gate's results, exactly, for comparing builds) */
 #include "mf_test.h"
 
 #define CHECKF(cond, ...)                                                                                       \
@@ -28,6 +30,8 @@
 #include <string.h>
 
 #include "mfkit/fit/mf_prefilter.h"
+#include "mfkit/mf_ltc.h"
+#include "mfkit/mf_polygon.h"
 
 static double q8(double x) /* unorm 8-bit round trip, as the PNG decoder sees it */
 {
@@ -72,6 +76,13 @@ typedef struct {
     double good_t, good_v, good_g;
     double min_cont; /* the smallest continuity measure of a corrupted run (max of texel, view) */
     double cont[256]; /* the corrupted runs' measures (max of texel, view), for the quantiles */
+    double good_c, good_ct;         /* the good run's cross measures (every axis; texel axes alone) */
+    int sep_c, sep_ct, bound_c;     /* corrupted runs above the good run's (x 1.05); above the default bound */
+    int vis, vis_old, vis_c, vis_bound, vis_either; /* visible corruptions (see corrupt_runs); of them caught
+                                           by the gated checks, cross above good, cross above its bound, the
+                                           gated checks or cross above its bound */
+    int either;                     /* all corruptions: the gated checks or cross above its bound */
+    double cross[256];              /* the corrupted runs' cross measure */
 } power;
 
 static int dbl_cmp(const void *a, const void *b)
@@ -84,6 +95,36 @@ static uint64_t lcg(uint64_t *s)
 {
     *s = *s * 6364136223846793005ull + 1442695040888963407ull;
     return *s >> 33;
+}
+
+/* The largest change, over the gate's six lights (quads of half-width 0.05, 0.2, 0.8 about the mirror
+ * direction and the normal, as mf_prefilter_gate.c places them), of the shading magnitude * LTC
+ * integral of lobe e of level L (now corrupted) against its saved matrix and magnitude, / albedo. */
+static double lobe_change(const mf_prefilter_level *L, size_t e, const float *saved, const mf_prefilter_options *o)
+{
+    int a = (int)(e / (size_t)o->n_phi % (size_t)o->n_theta);
+    double th = mf_prefilter_theta(o, a), worst = 0.0;
+    for (int k = 0; k < 6; ++k) {
+        double h = 0.05 * pow(4.0, k % 3), tl = k < 3 ? th : 0.0;
+        mf_vec3 c = mf_vec3_make(-sin(tl), 0.0, cos(tl)), t1 = mf_vec3_make(cos(tl), 0.0, sin(tl));
+        mf_vec3 t2 = mf_vec3_make(0.0, 1.0, 0.0), v[4];
+        static const double sx[4] = {-1, 1, 1, -1}, sy[4] = {-1, -1, 1, 1};
+        for (int i = 0; i < 4; ++i)
+            v[i] = mf_vec3_add(c, mf_vec3_add(mf_vec3_scale(t1, h * sx[i]), mf_vec3_scale(t2, h * sy[i])));
+        mf_polygon p = mf_polygon_make(4, v);
+        double s[2];
+        for (int t = 0; t < 2; ++t) {
+            const float *m9 = t ? saved : L->m + 9 * e;
+            float mag = t ? saved[9] : L->magnitude[e];
+            mf_mat3 m;
+            for (int i = 0; i < 9; ++i)
+                m.m[i / 3][i % 3] = m9[i];
+            mf_ltc ltc;
+            s[t] = mf_ltc_init(&ltc, m) == MF_OK ? mag * mf_ltc_integrate_polygon(&ltc, &p, MF_POLYGON_ONE_SIDED) : INFINITY;
+        }
+        worst = fmax(worst, fabs(s[0] - s[1]) / fmax(L->albedo[e], 1e-6));
+    }
+    return worst;
 }
 
 /* Corrupts one lobe of a copy of the levels, runs the gate, restores. */
@@ -139,6 +180,24 @@ static void corrupt_runs(mf_prefilter_level *lv, int nl, const double *n, int w,
                               g.worst_cont_grazing > 1.05 * pw->good_g;
             if (cm < pw->min_cont)
                 pw->min_cont = cm;
+            pw->sep_c += g.worst_cont_cross > 1.05 * pw->good_c;
+            pw->sep_ct += g.worst_cont_cross_texel > 1.05 * pw->good_ct;
+            pw->bound_c += !g.pass_cont_cross;
+            pw->either += !(g.pass_energy && g.pass_nan && g.pass_level) || !g.pass_cont_cross;
+            /* visible: the corrupted lobe(s) change the shading of a gate light by more than 0.1 of the
+             * albedo (lobe_change) */
+            double ch = lobe_change(L, e, save_e, o);
+            if (swap)
+                ch = fmax(ch, lobe_change(L, f, save_f, o));
+            if (ch > 0.1) {
+                pw->vis++;
+                pw->vis_old += !(g.pass_energy && g.pass_nan && g.pass_level);
+                pw->vis_c += g.worst_cont_cross > 1.05 * pw->good_c;
+                pw->vis_bound += !g.pass_cont_cross;
+                pw->vis_either += !(g.pass_energy && g.pass_nan && g.pass_level) || !g.pass_cont_cross;
+            }
+            if (pw->total <= 256)
+                pw->cross[pw->total - 1] = g.worst_cont_cross;
             if (pw->total <= 256)
                 pw->cont[pw->total - 1] = cm;
         }
@@ -149,6 +208,74 @@ static void corrupt_runs(mf_prefilter_level *lv, int nl, const double *n, int w,
 
 /* Fits the map, gates the good run, then the corruptions.  Returns the good gate in *good. */
 static int g_lambert = 0; /* measure mode: the diffuse table */
+
+/* Every field of a gate result, exactly (dump mode: the streamed gate must give the same as before). */
+static void dump_gate(const char *tag, const mf_prefilter_gate *g)
+{
+    printf("%s: pass %d (%d %d %d %d %d) nan %ld energy %.17g [%s] level %.17g [%s] view %.17g [%s] texel %.17g [%s]\n", tag,
+           g->pass, g->pass_energy, g->pass_nan, g->pass_level, g->pass_view, g->pass_texel, g->nan_entries,
+           g->worst_energy, g->where_energy, g->worst_level, g->where_level, g->worst_view_spike, g->where_view,
+           g->worst_texel_spike, g->where_texel);
+    if (g->has_ref)
+        printf("%s: ref gated %d (%d %d %d) texel %.17g [%s] view %.17g [%s] grazing %.17g [%s] jump %.17g %.17g "
+               "error %.17g\n",
+               tag, g->cont_gated, g->pass_cont_texel, g->pass_cont_view, g->pass_cont_grazing, g->worst_cont_texel,
+               g->where_cont_texel, g->worst_cont_view, g->where_cont_view, g->worst_cont_grazing, g->where_cont_grazing,
+               g->worst_jump_texel, g->worst_jump_view, g->worst_ref_error);
+}
+
+/* dump mode: maps 0..2 (w x h, the top h rows of the w x w map), the good run and ncorr corruptions
+ * of each kind, both gate entry points, every field printed. */
+static void dump_map(int kind, int w, int h, int nt, int np, int ncorr)
+{
+    if (h > w) {
+        printf("dump: h <= w only (the top h rows of the w x w map)\n");
+        return;
+    }
+    double *n = malloc(sizeof(double) * 3 * (size_t)w * w);
+    CHECK(n != NULL);
+    make_map(kind, w, n);
+    mf_prefilter_options o;
+    if (g_lambert)
+        mf_prefilter_options_default_diffuse(&o);
+    else
+        mf_prefilter_options_default(&o);
+    o.n_theta = nt, o.n_phi = np, o.threads = 2, o.keep_albedo = 1;
+    mf_prefilter_level *lv;
+    int nl;
+    char msg[256], tag[128];
+    CHECK(mf_prefilter_run(n, w, h, &o, &lv, &nl, msg, sizeof msg) == MF_OK);
+    uint64_t seed = 777;
+    for (int c = -1; c < 2 * ncorr; ++c) {
+        int l = 0;
+        size_t e = 0, f = 0;
+        float save_e[9], save_f[9];
+        if (c >= 0) {
+            l = (int)(lcg(&seed) % (uint64_t)nl);
+            size_t ne = (size_t)lv[l].width * lv[l].height * nt * np;
+            e = lcg(&seed) % ne;
+            f = e - e % (size_t)np + (e % (size_t)np + 1) % (size_t)np;
+            memcpy(save_e, lv[l].m + 9 * e, 36), memcpy(save_f, lv[l].m + 9 * f, 36);
+            if (c % 2)
+                memcpy(lv[l].m + 9 * e, save_f, 36), memcpy(lv[l].m + 9 * f, save_e, 36);
+            else
+                lv[l].m[9 * e + lcg(&seed) % 9] *= 1.5f;
+        }
+        mf_prefilter_gate g;
+        mf_prefilter_gate_bounds_default(&g);
+        CHECK(mf_prefilter_gate_run(lv, nl, &g) == MF_OK);
+        snprintf(tag, sizeof tag, "%s %dx%d run %d plain", k_names[kind], w, h, c);
+        dump_gate(tag, &g);
+        mf_prefilter_gate_bounds_default(&g);
+        CHECK(mf_prefilter_gate_run_ref(lv, nl, n, w, h, &o, &g) == MF_OK);
+        snprintf(tag, sizeof tag, "%s %dx%d run %d ref", k_names[kind], w, h, c);
+        dump_gate(tag, &g);
+        if (c >= 0)
+            memcpy(lv[l].m + 9 * e, save_e, 36), memcpy(lv[l].m + 9 * f, save_f, 36);
+    }
+    mf_prefilter_levels_free(lv, nl);
+    free(n);
+}
 
 static void run_map(int kind, int w, int nt, int np, int ncorr, double scale, mf_prefilter_gate *good, power *ps,
                     power *pv)
@@ -177,6 +304,9 @@ static void run_map(int kind, int w, int nt, int np, int ncorr, double scale, mf
     ps->min_cont = pv->min_cont = INFINITY;
     ps->good_t = pv->good_t = good->worst_cont_texel, ps->good_v = pv->good_v = good->worst_cont_view;
     ps->good_g = pv->good_g = good->worst_cont_grazing;
+    ps->good_c = pv->good_c = good->worst_cont_cross, ps->good_ct = pv->good_ct = good->worst_cont_cross_texel;
+    printf("%-8s good: cross %.4f (%s) texel axes %.4f\n", k_names[kind], good->worst_cont_cross,
+           good->where_cont_cross, good->worst_cont_cross_texel);
     corrupt_runs(lv, nl, n, w, &o, ncorr, scale, ps, pv);
     printf("%-8s corrupted: scale entry by %.2f: caught %d / %d (energy/nan/level %d, cont at default bounds %d, cont above this good run's %d), no-ops %d; "
            "phi swap: caught %d / %d (energy/nan/level %d, cont %d, above good %d), no-ops %d\n",
@@ -189,6 +319,14 @@ static void run_map(int kind, int w, int nt, int np, int ncorr, double scale, mf
         printf("%-8s %s: corrupted cont quantiles 0, .1, .25, .5:", k_names[kind], t ? "phi swap" : "scaled entry");
         for (int q = 0; q < 4 && m > 0; ++q)
             printf(" %.4f", pw->cont[(int)((q == 0 ? 0 : q == 1 ? 0.1 : q == 2 ? 0.25 : 0.5) * (m - 1))]);
+        qsort(pw->cross, (size_t)m, sizeof(double), dbl_cmp);
+        printf("; cross above good: every axis %d, texel axes %d, above bound %d / %d, gated checks or cross above "
+               "bound %d; visible %d: gated checks %d, cross above good %d, above bound %d, either %d; cross quantiles "
+               "0, .1, .25, .5:",
+               pw->sep_c, pw->sep_ct, pw->bound_c, pw->total, pw->either, pw->vis, pw->vis_old, pw->vis_c, pw->vis_bound,
+               pw->vis_either);
+        for (int q = 0; q < 4 && m > 0; ++q)
+            printf(" %.4f", pw->cross[(int)((q == 0 ? 0 : q == 1 ? 0.1 : q == 2 ? 0.25 : 0.5) * (m - 1))]);
         printf("\n");
     }
     fflush(stdout);
@@ -275,8 +413,59 @@ static void test_facet_continuity(void)
     free(n);
 }
 
+/* The streamed gate (mf_prefilter_gate_stream_*): the row order (level l's row r right after rows 2r,
+ * 2r + 1 of level l - 1), rows out of order and a stream ended early refused, and rows fed by hand
+ * giving mf_prefilter_gate_run_ref's result byte for byte (bump map 8 x 8, 2 x 2 views). */
+static void test_stream(void)
+{
+    const int w = 8;
+    double n[3 * 64];
+    make_map(2, w, n);
+    mf_prefilter_options o;
+    mf_prefilter_options_default(&o);
+    o.n_theta = 2, o.n_phi = 2, o.threads = 2, o.keep_albedo = 1;
+    mf_prefilter_level *lv;
+    int nl;
+    char msg[256];
+    CHECK(mf_prefilter_run(n, w, w, &o, &lv, &nl, msg, sizeof msg) == MF_OK && nl == 3);
+    mf_prefilter_gate ga, gb;
+    mf_prefilter_gate_bounds_default(&ga);
+    mf_prefilter_gate_bounds_default(&gb);
+    CHECK(mf_prefilter_gate_run_ref(lv, nl, n, w, w, &o, &ga) == MF_OK);
+    mf_prefilter_gate_stream *s;
+    CHECK(mf_prefilter_gate_stream_begin(lv, nl, n, w, w, &o, &gb, &s) == MF_OK);
+    /* level 1 is 4 x 4, level 2 2 x 2, level 3 1 x 1: the order, as (level index, row) */
+    static const int want[][2] = {{0, 0}, {0, 1}, {1, 0}, {0, 2}, {0, 3}, {1, 1}, {2, 0}};
+    int li, r, k = 0, bad_order = 0;
+    while (mf_prefilter_gate_stream_next(s, &li, &r)) {
+        const mf_prefilter_level *L = &lv[li];
+        size_t off = (size_t)r * L->width * o.n_theta * o.n_phi;
+        bad_order += k >= 7 || li != want[k][0] || r != want[k][1];
+        if (k == 1) /* a row out of order is refused and changes nothing */
+            CHECK(mf_prefilter_gate_stream_row(s, 0, 2, L->m, L->magnitude, L->albedo) == MF_ERR_DOMAIN);
+        CHECK(mf_prefilter_gate_stream_row(s, li, r, L->m + 9 * off, L->magnitude + off, L->albedo + off) == MF_OK);
+        ++k;
+    }
+    CHECKF(k == 7 && bad_order == 0, "stream: %d rows, %d out of the documented order", k, bad_order);
+    CHECK(mf_prefilter_gate_stream_end(s) == MF_OK);
+    CHECKF(memcmp(&ga, &gb, sizeof ga) == 0, "stream: rows fed by hand differ from mf_prefilter_gate_run_ref "
+           "(energy %.17g / %.17g, cross %.17g / %.17g)", ga.worst_energy, gb.worst_energy, ga.worst_cont_cross,
+           gb.worst_cont_cross);
+    /* ended before its last row: refused (and freed) */
+    CHECK(mf_prefilter_gate_stream_begin(lv, nl, n, w, w, &o, &gb, &s) == MF_OK);
+    CHECK(mf_prefilter_gate_stream_row(s, 0, 0, lv[0].m, lv[0].magnitude, lv[0].albedo) == MF_OK);
+    CHECK(mf_prefilter_gate_stream_end(s) == MF_ERR_DOMAIN);
+    mf_prefilter_levels_free(lv, nl);
+}
+
 int main(int argc, char **argv)
 {
+    if (argc >= 7 && !strcmp(argv[1], "dump")) { /* dump W H NT NP NCORR [lambert] */
+        g_lambert = argc >= 8 && !strcmp(argv[7], "lambert");
+        for (int k = 0; k < 3; ++k)
+            dump_map(k, atoi(argv[2]), atoi(argv[3]), atoi(argv[4]), atoi(argv[5]), atoi(argv[6]));
+        return mf_test_failures ? 1 : 0;
+    }
     if (argc >= 6 && !strcmp(argv[1], "measure")) {
         int w = atoi(argv[2]), nt = atoi(argv[3]), np = atoi(argv[4]), nc = atoi(argv[5]);
         double scale = argc >= 7 ? atof(argv[6]) : 0.5;
@@ -314,6 +503,13 @@ int main(int argc, char **argv)
                ps.caught_sep, ps.total);
         CHECKF(pv.total == 10 && pv.caught_sep == pv.total, "constant: phi swaps above the good run: %d / %d",
                pv.caught_sep, pv.total);
+        /* the lone extreme of e along every axis (cross, reported): exactly 0 on the good run (every
+         * texel's e is the same, so no entry is a lone extreme along x and y); with it, the gated checks
+         * catch every phi swap (measured 10 / 10 together, 8 / 10 without it; the fits are bitwise
+         * reproducible, so the counts are exact) and it sees scaled entries (measured 3 / 10 above 0) */
+        CHECKF(g.worst_cont_cross == 0.0 && pv.either == 10 && pv.caught_old < pv.either && ps.sep_c >= 3,
+               "constant: cross %.4g on the good run; phi swaps caught with it %d / 10 (without %d); scaled entries "
+               "above 0: %d / 10", g.worst_cont_cross, pv.either, pv.caught_old, ps.sep_c);
         run_map(2, 4, 3, 8, 10, 0.5, &g, &ps, &pv);
         CHECKF(g.pass && isfinite(g.worst_cont_texel) && isfinite(g.worst_cont_view) && isfinite(g.worst_ref_error),
                "bump: good run: pass %d, cont texel %.4g view %.4g, ref error %.4g", g.pass, g.worst_cont_texel,
@@ -325,12 +521,14 @@ int main(int argc, char **argv)
         g_lambert = 1;
         run_map(1, 8, 2, 4, 10, 0.5, &g, &ps, &pv);
         g_lambert = 0;
-        CHECKF(g.pass && g.cont_gated && g.worst_cont_grazing <= 0.03, "lambert vgroove: good run: pass %d, grazing %.4g",
-               g.pass, g.worst_cont_grazing);
+        CHECKF(g.pass && g.cont_gated && g.worst_cont_grazing <= 0.03 && g.worst_cont_cross == 0.0,
+               "lambert vgroove: good run: pass %d, grazing %.4g, cross %.4g (the groove's texels along y are the same)",
+               g.pass, g.worst_cont_grazing, g.worst_cont_cross);
         CHECKF(ps.total == 10 && ps.caught_cont >= 4 && ps.caught > ps.caught_old,
                "lambert vgroove: scaled entries caught by the continuity checks %d / %d (all checks %d, without them %d)",
                ps.caught_cont, ps.total, ps.caught, ps.caught_old);
     }
     test_facet_continuity();
+    test_stream();
     MF_TEST_MAIN_END();
 }

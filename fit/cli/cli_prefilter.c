@@ -21,8 +21,9 @@
  *           them all together (mf_io_atomic_commit_all); then removes the work directory.
  * Memory: the map's normals, the fits of the tiles in flight (--threads N fits N tiles at once
  * when there are enough: each its footprints' albedo cache and lobes) and one row of a level.
- * Gate: rank 0 keeps the assembled levels (44 bytes per lobe, 96 more during the gate) and runs
- * mf_prefilter_gate_run_ref over them before committing; its result goes into prefilter.json.
+ * Gate: rank 0 streams the levels row by row from the tiles into the output files and the gate
+ * (mf_prefilter_gate_stream_*: mf_prefilter_gate_run_ref's result, holding a few rows per level)
+ * before committing; its result goes into prefilter.json.
  * Tables: --base both (the default) runs the pipeline twice, the specular GGX table into DIR, then the
  * diffuse Lambert table into DIR/diffuse; the specular checkpoint is kept until the diffuse table is
  * written, so a rerun after a stop in either table resumes it.
@@ -507,7 +508,18 @@ static int begin_file(mf_io_atomic *files, int *nf, const char *dir, const char 
 
 static int put_file(FILE *f, const mf_buf *b) { return !b->failed && fwrite(b->data, 1, b->len, f) == b->len; }
 
-/* Streams the levels from the tile files, writes the manifest and snippets, commits all. */
+/* One level being assembled: its files, its band of tile files, its row buffers. */
+typedef struct {
+    int f0;           /* its first file in files[]: ltc, magnitude, albedo .npy, then the 3 EXR */
+    int64_t exr_data; /* the EXR files' first chunk */
+    FILE **tf;        /* the open tiles of the current band */
+    pf_rec *recs;
+    float *rm, *ra, *rb; /* one row: matrices, magnitudes, albedos */
+} pf_lvasm;
+
+/* Streams the levels from the tile files row by row, in the gate's order (level l's row r right after
+ * rows 2r, 2r + 1 of level l - 1: mf_prefilter_gate_stream_next), into the output files and the
+ * gate, which holds a few rows per level; writes the manifest and snippets, commits all. */
 static int pf_assemble(const pf_assembly *A, double secs, long resumed)
 {
     const mf_prefilter_options *o = A->o;
@@ -517,19 +529,20 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
     int nfiles_max = 6 * nl + 3, nf = 0, ok = 1;
     mf_io_atomic *files = calloc((size_t)nfiles_max, sizeof *files);
     pf_stats *stats = calloc((size_t)nl, sizeof *stats);
-    /* the levels, kept whole for the gate (44 bytes per lobe: the assembly's memory peak) */
-    mf_prefilter_level *gl = calloc((size_t)nl, sizeof *gl);
-    FILE **tf = NULL;
-    float *rm = NULL, *ra = NULL, *rb = NULL;
+    mf_prefilter_level *gl = calloc((size_t)nl, sizeof *gl); /* the levels' shapes, for the gate */
+    pf_lvasm *LA = calloc((size_t)nl, sizeof *LA);
+    mf_prefilter_gate_stream *gs = NULL;
     mf_buf b = {0};
-    if (!files || !stats || !gl)
+    if (!files || !stats || !gl || !LA)
         ok = 0, snprintf(msg, sizeof msg, "out of memory");
+    /* every level's files and headers */
     for (int li = 0; li < nl && ok; ++li) {
         const pf_plan *P = &A->plans[li];
         pf_stats *S = &stats[li];
+        pf_lvasm *V = &LA[li];
         S->mag_min = INFINITY, S->mag_max = -INFINITY;
         char name[64], shape[128];
-        int f0 = nf;
+        int f0 = V->f0 = nf;
         snprintf(name, sizeof name, "ltc_mip%d.npy", P->level);
         ok = begin_file(files, &nf, dir, name, msg, sizeof msg);
         snprintf(name, sizeof name, "magnitude_mip%d.npy", P->level);
@@ -542,7 +555,6 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
         }
         if (!ok)
             break;
-        int64_t exr_data = 0;
         const int aw = P->w * o->n_phi, ah = P->h * o->n_theta;
         b.len = 0;
         snprintf(shape, sizeof shape, "(%d, %d, %d, %d, 3, 3)", P->h, P->w, o->n_theta, o->n_phi);
@@ -553,7 +565,7 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
         npy_header(&b, shape);
         ok = ok && put_file(files[f0 + 1].file, &b) && put_file(files[f0 + 2].file, &b);
         b.len = 0;
-        exr_header(&b, aw, ah, &exr_data);
+        exr_header(&b, aw, ah, &V->exr_data);
         for (int t = 0; t < 3 && ok; ++t)
             ok = put_file(files[f0 + 3 + t].file, &b);
         if (!ok) {
@@ -561,121 +573,136 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
             break;
         }
         size_t row = (size_t)P->w * nv;
-        free(rm), free(ra), free(rb), free(tf);
-        rm = malloc(sizeof(float) * 9 * row);
-        ra = malloc(sizeof(float) * row);
-        rb = malloc(sizeof(float) * row);
-        tf = calloc((size_t)P->nx, sizeof *tf);
-        mf_prefilter_level *G = &gl[li];
-        *G = (mf_prefilter_level){.level = P->level, .width = P->w, .height = P->h, .n_theta = o->n_theta,
-                                  .n_phi = o->n_phi};
-        G->m = malloc(sizeof(float) * 9 * row * (size_t)P->h);
-        G->magnitude = malloc(sizeof(float) * row * (size_t)P->h);
-        G->albedo = malloc(sizeof(float) * row * (size_t)P->h);
-        if (!rm || !ra || !rb || !tf || !G->m || !G->magnitude || !G->albedo) {
+        V->rm = malloc(sizeof(float) * 9 * row);
+        V->ra = malloc(sizeof(float) * row);
+        V->rb = malloc(sizeof(float) * row);
+        V->tf = calloc((size_t)P->nx, sizeof *V->tf);
+        V->recs = malloc(sizeof(pf_rec) * (size_t)P->nx);
+        if (!V->rm || !V->ra || !V->rb || !V->tf || !V->recs) {
             ok = 0, snprintf(msg, sizeof msg, "out of memory");
             break;
         }
-        pf_rec *recs = malloc(sizeof(pf_rec) * (size_t)P->nx);
-        if (!recs) {
-            ok = 0, snprintf(msg, sizeof msg, "out of memory");
-            break;
-        }
-        for (int r = 0; r < P->h && ok; ++r) {
-            int gy = r / P->th, rr = r % P->th;
-            if (rr == 0) { /* the next band of tiles */
-                for (int gx = 0; gx < P->nx; ++gx)
-                    if (tf[gx])
-                        fclose(tf[gx]), tf[gx] = NULL;
-                for (int gx = 0; gx < P->nx && ok; ++gx) {
-                    long k = P->base + (long)gy * P->nx + gx;
-                    ok = pf_open_tile(dir, k, P->rec, &tf[gx], &recs[gx], msg, sizeof msg);
-                    if (ok && (recs[gx].level != P->level || recs[gx].w != P->tw || recs[gx].h != P->th))
-                        ok = 0, snprintf(msg, sizeof msg, "%s/" PF_WORK ": tile %ld does not hold level %d", dir, k, P->level);
-                    if (ok) {
-                        S->lobes += recs[gx].lobes, S->iterations += recs[gx].iterations;
-                        S->not_converged += recs[gx].not_converged;
-                        S->worst_residual = fmax(S->worst_residual, recs[gx].worst_residual);
-                        S->worst_albedo_err = fmax(S->worst_albedo_err, recs[gx].worst_albedo_err);
-                    }
-                }
-            }
-            size_t seg = (size_t)P->tw * nv;
-            for (int gx = 0; gx < P->nx && ok; ++gx) {
-                FILE *f = tf[gx];
-                ok = fseek(f, (long)(recs[gx].off_m + (int64_t)(rr * seg * 9 * sizeof(float))), SEEK_SET) == 0 &&
-                     fread(rm + gx * seg * 9, sizeof(float), 9 * seg, f) == 9 * seg &&
-                     fseek(f, (long)(recs[gx].off_mag + (int64_t)(rr * seg * sizeof(float))), SEEK_SET) == 0 &&
-                     fread(ra + gx * seg, sizeof(float), seg, f) == seg &&
-                     fseek(f, (long)(recs[gx].off_alb + (int64_t)(rr * seg * sizeof(float))), SEEK_SET) == 0 &&
-                     fread(rb + gx * seg, sizeof(float), seg, f) == seg;
-                if (!ok)
-                    snprintf(msg, sizeof msg, "%s/" PF_WORK ": tile %ld truncated", dir, P->base + (long)gy * P->nx + gx);
-            }
-            if (!ok)
-                break;
-            /* the level for the gate, counts, then the rows */
-            memcpy(G->m + 9 * row * (size_t)r, rm, sizeof(float) * 9 * row);
-            memcpy(G->magnitude + row * (size_t)r, ra, sizeof(float) * row);
-            memcpy(G->albedo + row * (size_t)r, rb, sizeof(float) * row);
-            for (size_t i = 0; i < 9 * row; ++i)
-                S->nonfinite += !isfinite(rm[i]);
-            for (size_t i = 0; i < row; ++i) {
-                S->nonfinite += !isfinite(ra[i]) + !isfinite(rb[i]);
-                S->magnitude_neg += !(ra[i] >= 0.0f && rb[i] >= 0.0f);
-                S->mag_min = fmin(S->mag_min, ra[i]), S->mag_max = fmax(S->mag_max, ra[i]);
-            }
-            b.len = 0;
-            for (size_t i = 0; i < 9 * row; ++i)
-                mf_buf_f32le(&b, rm[i]);
-            ok = put_file(files[f0].file, &b);
-            b.len = 0;
-            for (size_t i = 0; i < row; ++i)
-                mf_buf_f32le(&b, ra[i]);
-            ok = ok && put_file(files[f0 + 1].file, &b);
-            b.len = 0;
-            for (size_t i = 0; i < row; ++i)
-                mf_buf_f32le(&b, rb[i]);
-            ok = ok && put_file(files[f0 + 2].file, &b);
-            /* EXR rows y = i_theta * h + r: x = i_phi * w + column; channels A, B, G, R planes */
-            for (int t = 0; t < 3 && ok; ++t) {
-                FILE *f = files[f0 + 3 + t].file;
-                for (int a = 0; a < o->n_theta && ok; ++a) {
-                    int y = a * P->h + r;
-                    b.len = 0;
-                    put_i32(&b, y);
-                    put_i32(&b, 16 * aw);
-                    for (int ch = 3; ch >= 0; --ch) { /* A B G R */
-                        int q = 4 * t + ch;
-                        for (int p = 0; p < o->n_phi; ++p)
-                            for (int c = 0; c < P->w; ++c) {
-                                size_t idx = ((size_t)c * o->n_theta + a) * o->n_phi + p;
-                                float v = q < 9 ? rm[9 * idx + q] : q == 9 ? ra[idx] : 0.0f;
-                                mf_buf_f32le(&b, v);
-                            }
-                    }
-                    ok = fseek(f, (long)(exr_data + (int64_t)y * (8 + 16 * (int64_t)aw)), SEEK_SET) == 0 && put_file(f, &b);
-                }
-            }
-            if (!ok && !msg[0])
-                snprintf(msg, sizeof msg, "%.900s: write failed", files[f0].path);
-        }
-        free(recs);
-        for (int gx = 0; gx < P->nx; ++gx)
-            if (tf[gx])
-                fclose(tf[gx]), tf[gx] = NULL;
+        gl[li] = (mf_prefilter_level){.level = P->level, .width = P->w, .height = P->h, .n_theta = o->n_theta,
+                                      .n_phi = o->n_phi};
     }
+    /* the library's gate, with the reference (mf_prefilter_gate_run_ref's result, streamed) */
+    mf_prefilter_gate g;
+    mf_prefilter_gate_bounds_default(&g);
+    if (ok && mf_prefilter_gate_stream_begin(gl, nl, A->normals, A->W, A->H, o, &g, &gs) != MF_OK)
+        ok = 0, snprintf(msg, sizeof msg, "the gate could not run (out of memory, or its reference fit failed)");
+    int lvi, r;
+    while (ok && mf_prefilter_gate_stream_next(gs, &lvi, &r)) {
+        const pf_plan *P = &A->plans[lvi];
+        pf_stats *S = &stats[lvi];
+        pf_lvasm *V = &LA[lvi];
+        const int f0 = V->f0, aw = P->w * o->n_phi;
+        const size_t row = (size_t)P->w * nv;
+        float *rm = V->rm, *ra = V->ra, *rb = V->rb;
+        FILE **tf = V->tf;
+        pf_rec *recs = V->recs;
+        int gy = r / P->th, rr = r % P->th;
+        if (rr == 0) { /* the next band of tiles */
+            for (int gx = 0; gx < P->nx; ++gx)
+                if (tf[gx])
+                    fclose(tf[gx]), tf[gx] = NULL;
+            for (int gx = 0; gx < P->nx && ok; ++gx) {
+                long k = P->base + (long)gy * P->nx + gx;
+                ok = pf_open_tile(dir, k, P->rec, &tf[gx], &recs[gx], msg, sizeof msg);
+                if (ok && (recs[gx].level != P->level || recs[gx].w != P->tw || recs[gx].h != P->th))
+                    ok = 0, snprintf(msg, sizeof msg, "%s/" PF_WORK ": tile %ld does not hold level %d", dir, k, P->level);
+                if (ok) {
+                    S->lobes += recs[gx].lobes, S->iterations += recs[gx].iterations;
+                    S->not_converged += recs[gx].not_converged;
+                    S->worst_residual = fmax(S->worst_residual, recs[gx].worst_residual);
+                    S->worst_albedo_err = fmax(S->worst_albedo_err, recs[gx].worst_albedo_err);
+                }
+            }
+        }
+        size_t seg = (size_t)P->tw * nv;
+        for (int gx = 0; gx < P->nx && ok; ++gx) {
+            FILE *f = tf[gx];
+            ok = fseek(f, (long)(recs[gx].off_m + (int64_t)(rr * seg * 9 * sizeof(float))), SEEK_SET) == 0 &&
+                 fread(rm + gx * seg * 9, sizeof(float), 9 * seg, f) == 9 * seg &&
+                 fseek(f, (long)(recs[gx].off_mag + (int64_t)(rr * seg * sizeof(float))), SEEK_SET) == 0 &&
+                 fread(ra + gx * seg, sizeof(float), seg, f) == seg &&
+                 fseek(f, (long)(recs[gx].off_alb + (int64_t)(rr * seg * sizeof(float))), SEEK_SET) == 0 &&
+                 fread(rb + gx * seg, sizeof(float), seg, f) == seg;
+            if (!ok)
+                snprintf(msg, sizeof msg, "%s/" PF_WORK ": tile %ld truncated", dir, P->base + (long)gy * P->nx + gx);
+        }
+        if (!ok)
+            break;
+        /* the row to the gate, counts, then to the files */
+        if (mf_prefilter_gate_stream_row(gs, lvi, r, rm, ra, rb) != MF_OK) {
+            ok = 0, snprintf(msg, sizeof msg, "the gate could not run (rows out of order)");
+            break;
+        }
+        for (size_t i = 0; i < 9 * row; ++i)
+            S->nonfinite += !isfinite(rm[i]);
+        for (size_t i = 0; i < row; ++i) {
+            S->nonfinite += !isfinite(ra[i]) + !isfinite(rb[i]);
+            S->magnitude_neg += !(ra[i] >= 0.0f && rb[i] >= 0.0f);
+            S->mag_min = fmin(S->mag_min, ra[i]), S->mag_max = fmax(S->mag_max, ra[i]);
+        }
+        b.len = 0;
+        for (size_t i = 0; i < 9 * row; ++i)
+            mf_buf_f32le(&b, rm[i]);
+        ok = put_file(files[f0].file, &b);
+        b.len = 0;
+        for (size_t i = 0; i < row; ++i)
+            mf_buf_f32le(&b, ra[i]);
+        ok = ok && put_file(files[f0 + 1].file, &b);
+        b.len = 0;
+        for (size_t i = 0; i < row; ++i)
+            mf_buf_f32le(&b, rb[i]);
+        ok = ok && put_file(files[f0 + 2].file, &b);
+        /* EXR rows y = i_theta * h + r: x = i_phi * w + column; channels A, B, G, R planes */
+        for (int t = 0; t < 3 && ok; ++t) {
+            FILE *f = files[f0 + 3 + t].file;
+            for (int a = 0; a < o->n_theta && ok; ++a) {
+                int y = a * P->h + r;
+                b.len = 0;
+                put_i32(&b, y);
+                put_i32(&b, 16 * aw);
+                for (int ch = 3; ch >= 0; --ch) { /* A B G R */
+                    int q = 4 * t + ch;
+                    for (int p = 0; p < o->n_phi; ++p)
+                        for (int c = 0; c < P->w; ++c) {
+                            size_t idx = ((size_t)c * o->n_theta + a) * o->n_phi + p;
+                            float v = q < 9 ? rm[9 * idx + q] : q == 9 ? ra[idx] : 0.0f;
+                            mf_buf_f32le(&b, v);
+                        }
+                }
+                ok = fseek(f, (long)(V->exr_data + (int64_t)y * (8 + 16 * (int64_t)aw)), SEEK_SET) == 0 && put_file(f, &b);
+            }
+        }
+        if (!ok && !msg[0])
+            snprintf(msg, sizeof msg, "%.900s: write failed", files[f0].path);
+        if (r == P->h - 1) /* the level's last row: its buffers and tiles go */
+            for (int gx = 0; gx < P->nx; ++gx)
+                if (tf[gx])
+                    fclose(tf[gx]), tf[gx] = NULL;
+    }
+    if (ok) {
+        mf_status gst = mf_prefilter_gate_stream_end(gs);
+        gs = NULL;
+        if (gst != MF_OK)
+            ok = 0, snprintf(msg, sizeof msg, "the gate could not run (rows missing)");
+    }
+    mf_prefilter_gate_stream_free(gs);
+    for (int l = 0; LA && l < nl; ++l) {
+        for (int gx = 0; LA[l].tf && gx < A->plans[l].nx; ++gx)
+            if (LA[l].tf[gx])
+                fclose(LA[l].tf[gx]);
+        free(LA[l].tf), free(LA[l].recs), free(LA[l].rm), free(LA[l].ra), free(LA[l].rb);
+    }
+    free(LA);
     /* the snippets and the manifest */
     long lobes = 0, nonfinite = 0, magneg = 0;
     double worst_alb = 0.0;
-    for (int li = 0; li < nl; ++li)
-        lobes += stats[li].lobes, nonfinite += stats[li].nonfinite, magneg += stats[li].magnitude_neg,
-            worst_alb = fmax(worst_alb, stats[li].worst_albedo_err);
-    /* the library's gate over the assembled levels, with the reference (mf_prefilter_gate_run_ref) */
-    mf_prefilter_gate g;
-    mf_prefilter_gate_bounds_default(&g);
-    if (ok && mf_prefilter_gate_run_ref(gl, nl, A->normals, A->W, A->H, o, &g) != MF_OK)
-        ok = 0, snprintf(msg, sizeof msg, "the gate could not run (out of memory, or its reference fit failed)");
+    for (int l = 0; l < nl; ++l)
+        lobes += stats[l].lobes, nonfinite += stats[l].nonfinite, magneg += stats[l].magnitude_neg,
+            worst_alb = fmax(worst_alb, stats[l].worst_albedo_err);
     int gate_ok = nonfinite == 0 && magneg == 0 && g.pass;
     if (ok) {
         fprintf(stderr,
@@ -693,8 +720,9 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
         else
             fprintf(stderr,
                     "mfkit prefilter: reported only, error against the reference: texel spike %.4g, view spike %.4g, "
-                    "grazing views %.4g, largest error %.4g of the albedo\n",
-                    g.worst_cont_texel, g.worst_cont_view, g.worst_cont_grazing, g.worst_ref_error);
+                    "grazing views %.4g, largest error %.4g of the albedo; extreme along every axis %.4g (bound %.3g%s)\n",
+                    g.worst_cont_texel, g.worst_cont_view, g.worst_cont_grazing, g.worst_ref_error, g.worst_cont_cross,
+                    g.max_cont_cross, g.pass_cont_cross ? "" : ", above it");
         if (g.cont_gated && !(g.pass_cont_texel && g.pass_cont_view && g.pass_cont_grazing))
             fprintf(stderr, "mfkit prefilter: worst continuity at %s\n",
                     !g.pass_cont_texel ? g.where_cont_texel : !g.pass_cont_view ? g.where_cont_view : g.where_cont_grazing);
@@ -807,6 +835,11 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
         mf_json_string(&b, g.where_cont_view);
         mf_buf_printf(&b, "}, \"grazing\": {\"worst\": %.6g, \"where\": ", g.worst_cont_grazing);
         mf_json_string(&b, g.where_cont_grazing);
+        mf_buf_printf(&b, "}, \"cross\": {\"reported_only\": true, \"within\": %s, \"worst\": %.6g, \"bound\": %.6g, "
+                          "\"texel_axes\": %.6g, \"measures\": \"the smallest of the lone extremes of e / albedo along the "
+                          "axes an entry has (texels x, y; theta; phi), entries with a texel axis\", \"where\": ",
+                      g.pass_cont_cross ? "true" : "false", g.worst_cont_cross, g.max_cont_cross, g.worst_cont_cross_texel);
+        mf_json_string(&b, g.where_cont_cross);
         mf_buf_printf(&b, "}, \"largest_jump\": {\"texel\": %.6g, \"view\": %.6g}, \"largest_error\": %.6g},\n"
                           "    \"worst_albedo_quadrature_err\": %.6g,\n"
                           "    \"not_checked\": \"%s\"}\n}\n",
@@ -835,9 +868,8 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
                 lobes ? 1e3 * secs / lobes : 0.0);
     }
     mf_buf_free(&b);
-    if (gl)
-        mf_prefilter_levels_free(gl, nl);
-    free(files), free(stats), free(rm), free(ra), free(rb), free(tf);
+    free(gl); /* shapes only: no arrays */
+    free(files), free(stats);
     return rc;
 }
 

@@ -287,6 +287,19 @@ typedef struct mf_prefilter_gate {
     char where_cont_grazing[128];
     double max_cont_lambert; /* the Lambert table's bound for all three spikes (input) */
     int cont_gated;          /* 1: the continuity spikes are part of pass (the Lambert table) */
+    /* (mf_prefilter_gate_run_ref; REPORTED, not part of pass, for both tables) cross: the error's lone
+     * extreme along every axis at once -- the smallest, over the axes an entry has (texels x and y,
+     * periodic; theta, interior rows; phi, rows theta > 0), of the lone extreme of e along that axis,
+     * / albedo, over the entries with at least one texel axis (levels larger than 1 x 1); a map's
+     * own variation is rarely an extreme along all of them (the V-groove's texels are the same along
+     * y), one wrong lobe is.  cross_texel: the same over the texel axes alone.  pass_cont_cross
+     * compares it with max_cont_cross (MF_PREFILTER_GATE_CONT_CROSS).  Measured (docs/prefilter.md,
+     * "Gate"): 0 on good runs of the constant and V-groove maps, but 0.08-0.15 on the bump map's, at
+     * single lobes that are wrong by that much against a brute-force integral of the effective BRDF
+     * (so a bound would fail those runs: reported only). */
+    double max_cont_cross, worst_cont_cross, worst_cont_cross_texel;
+    int pass_cont_cross;
+    char where_cont_cross[128];
 } mf_prefilter_gate;
 
 /* Sets the default bounds and clears the results. */
@@ -334,8 +347,36 @@ mf_status mf_prefilter_gate_run(const mf_prefilter_level *levels, int nlevels, m
 #define MF_PREFILTER_GATE_CONT_VIEW 0.3
 #define MF_PREFILTER_GATE_CONT_GRAZING 0.3
 #define MF_PREFILTER_GATE_CONT_LAMBERT 0.03
+/* cross's reported bound: above the V-groove's and the constant map's good runs (0), below the
+ * bump map's outlier lobes (0.08-0.15) */
+#define MF_PREFILTER_GATE_CONT_CROSS 0.05
 mf_status mf_prefilter_gate_run_ref(const mf_prefilter_level *levels, int nlevels, const double *normals, int width,
                                     int height, const mf_prefilter_options *o, mf_prefilter_gate *g) MF_WARN_UNUSED;
+
+/* The gate streamed row by row, for levels not held whole (`mfkit prefilter`'s assembly): the same
+ * result as mf_prefilter_gate_run (normals NULL) or mf_prefilter_gate_run_ref (normals, width,
+ * height, o as there), bit for bit, places included (ties go to the first place of a whole-level
+ * pass).  shapes: the levels' level, width, height, n_theta, n_phi (their arrays are not read).
+ * Rows must come in the order mf_prefilter_gate_stream_next gives (each level's rows in order,
+ * level l's row r right after rows 2r and 2r + 1 of level l - 1); the stream holds five rows of
+ * each level (S and R: 2 x GATE_NLIGHTS doubles per lobe, plus a float), so its memory is
+ * about 5 x 100 bytes x the lobes of one row of each level, independent of the map's height.
+ *   begin: checks the shapes (as the entry points do), clears g's results, fits the reference's
+ *     base lobes (GGX: MF_PREFILTER_GATE_REF_N small fits); MF_ERR_DOMAIN, MF_ERR_ALLOC;
+ *   next: 1 and the level index (0 for level 1) and row wanted next, 0 when all were fed;
+ *   row: the row's m (9 floats per lobe), magnitude and albedo (NULL: the magnitude) arrays,
+ *     width * n_theta * n_phi lobes in C order; MF_ERR_DOMAIN if it is not the row next wants;
+ *   end: sets g's pass flags and frees the stream; MF_ERR_DOMAIN (and frees) if rows are missing;
+ *   free: frees a stream without finishing it (after an error). */
+typedef struct mf_prefilter_gate_stream mf_prefilter_gate_stream;
+mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int nlevels, const double *normals,
+                                         int width, int height, const mf_prefilter_options *o, mf_prefilter_gate *g,
+                                         mf_prefilter_gate_stream **out) MF_WARN_UNUSED;
+int mf_prefilter_gate_stream_next(const mf_prefilter_gate_stream *s, int *level_index, int *row);
+mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_index, int row, const float *m,
+                                       const float *magnitude, const float *albedo) MF_WARN_UNUSED;
+mf_status mf_prefilter_gate_stream_end(mf_prefilter_gate_stream *s) MF_WARN_UNUSED;
+void mf_prefilter_gate_stream_free(mf_prefilter_gate_stream *s);
 
 /* The view of table index (i_theta, i_phi). */
 double mf_prefilter_theta(const mf_prefilter_options *o, int i);

@@ -1,0 +1,637 @@
+/* mf_prefilter_gate.c -- the prefilter's gate before export (mf_prefilter.h: mf_prefilter_gate_*):
+ * energy, NaN, parent vs children, view and texel spikes of the lobes' shading, and (with the
+ * normal map) the continuity of the lobes' error against the per-texel reference shading
+ * [Nahmias 2022, Ch. 3; docs/prefilter.md, "Gate"].  Moved from mf_prefilter.c unchanged. */
+#define _POSIX_C_SOURCE 200809L
+#include "mfkit/fit/mf_prefilter.h"
+
+#include "mf_prefilter_internal.h"
+
+#include "mfkit/fit/mf_ltcfit.h"
+#include "mfkit/mf_ltc.h"
+#include "mfkit/mf_polygon.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---- the gate ---------------------------------------------------------------------------------- */
+
+void mf_prefilter_gate_bounds_default(mf_prefilter_gate *g)
+{
+    memset(g, 0, sizeof *g);
+    g->max_energy = MF_PREFILTER_GATE_ENERGY;
+    g->max_level = MF_PREFILTER_GATE_LEVEL;
+    g->max_view_spike = MF_PREFILTER_GATE_VIEW_SPIKE;
+    g->max_texel_spike = MF_PREFILTER_GATE_TEXEL_SPIKE;
+    g->max_cont_texel = MF_PREFILTER_GATE_CONT_TEXEL;
+    g->max_cont_view = MF_PREFILTER_GATE_CONT_VIEW;
+    g->max_cont_grazing = MF_PREFILTER_GATE_CONT_GRAZING;
+    g->max_cont_lambert = MF_PREFILTER_GATE_CONT_LAMBERT;
+    g->max_cont_cross = MF_PREFILTER_GATE_CONT_CROSS;
+}
+
+/* The gate's lights, in the view-azimuth-aligned frame of view theta: quads of half-width
+ * 0.05, 0.2, 0.8 (tangent-plane units) about the mirror direction (-sin theta, 0, cos theta) and
+ * about the normal. */
+#define GATE_NLIGHTS 6
+
+static void gate_lights(double theta, mf_polygon *out)
+{
+    for (int k = 0; k < GATE_NLIGHTS; ++k) {
+        double h = 0.05 * pow(4.0, k % 3), tl = k < 3 ? theta : 0.0;
+        mf_vec3 c = mf_vec3_make(-sin(tl), 0.0, cos(tl));
+        mf_vec3 t1 = mf_vec3_make(cos(tl), 0.0, sin(tl)), t2 = mf_vec3_make(0.0, 1.0, 0.0);
+        static const double sx[4] = {-1, 1, 1, -1}, sy[4] = {-1, -1, 1, 1};
+        mf_vec3 v[4];
+        for (int i = 0; i < 4; ++i)
+            v[i] = mf_vec3_add(c, mf_vec3_add(mf_vec3_scale(t1, h * sx[i]), mf_vec3_scale(t2, h * sy[i])));
+        out[k] = mf_polygon_make(4, v);
+    }
+}
+
+/* magnitude * the LTC integral of each gate light; NAN where the matrix is not invertible. */
+static void gate_shade(const float *m9, float mag, const mf_polygon *lights, double *s)
+{
+    mf_mat3 m;
+    for (int i = 0; i < 9; ++i)
+        m.m[i / 3][i % 3] = m9[i];
+    mf_ltc ltc;
+    int ok = mf_ltc_init(&ltc, m) == MF_OK;
+    for (int k = 0; k < GATE_NLIGHTS; ++k)
+        s[k] = ok ? mag * mf_ltc_integrate_polygon(&ltc, &lights[k], MF_POLYGON_ONE_SIDED) : NAN;
+}
+
+/* ---- the gate's reference: the effective BRDF's shading of the gate lights -------------------- */
+
+/* The polygon clipped to z >= 0 (Sutherland-Hodgman on the vertices; the edges are great arcs,
+ * i.e. straight segments seen from the origin, so the crossing of an edge with the plane z = 0
+ * is a point of the arc on the horizon). */
+static int clip_upper(const mf_polygon *p, mf_vec3 *out)
+{
+    int n = 0;
+    for (int i = 0; i < p->n; ++i) {
+        mf_vec3 a = p->v[i], b = p->v[(i + 1) % p->n];
+        if (a.z >= 0.0)
+            out[n++] = a;
+        if ((a.z >= 0.0) != (b.z >= 0.0)) {
+            double t = a.z / (a.z - b.z);
+            mf_vec3 c = mf_vec3_add(a, mf_vec3_scale(mf_vec3_sub(b, a), t));
+            c.z = 0.0;
+            out[n++] = c;
+        }
+    }
+    return n;
+}
+
+/* The base lobe's isotropic LTC against u = sqrt(1 - cos theta): per node (a, b, d, magnitude) of
+ * M = [[a, 0, b], [0, 1, 0], [d, 0, e]] (M / M11 of the fit; e follows the same scaling). */
+typedef struct {
+    int lambert;
+    double v[MF_PREFILTER_GATE_REF_N][5]; /* a, b, d, e, magnitude */
+} gate_iso;
+
+static mf_status gate_iso_fit(const mf_prefilter_options *o, gate_iso *t)
+{
+    memset(t, 0, sizeof *t);
+    t->lambert = o->base == MF_PREFILTER_BASE_LAMBERT;
+    if (t->lambert)
+        return MF_OK;
+    const mf_brdf_model *ggx = mf_brdf_model_find("ggx");
+    if (!ggx)
+        return MF_ERR_INTERNAL;
+    mf_ltcfit_options fo;
+    mf_ltcfit_options_default(&fo);
+    double start[9], *sp = NULL;
+    for (int i = 0; i < MF_PREFILTER_GATE_REF_N; ++i) {
+        double u = i / (double)(MF_PREFILTER_GATE_REF_N - 1), c = fmax(1.0 - u * u, cos(MF_LTC_THETA_MAX));
+        mf_ltcfit_entry e;
+        mf_status st = mf_ltcfit_entry_fit(ggx, o->alpha, c, sp, &fo, &e);
+        if (st != MF_OK)
+            return st;
+        double s = e.m[4];
+        if (!(s > 0.0) || !isfinite(e.magnitude))
+            return MF_ERR_INTERNAL;
+        t->v[i][0] = e.m[0] / s, t->v[i][1] = e.m[2] / s, t->v[i][2] = e.m[6] / s, t->v[i][3] = e.m[8] / s;
+        t->v[i][4] = e.magnitude;
+        memcpy(start, e.m, sizeof start);
+        sp = start;
+    }
+    return MF_OK;
+}
+
+/* The shading of the (already horizon-clipped, texel-frame, view-azimuth-0) polygon by the base
+ * lobe at the texel-frame view cosine c. */
+static double gate_iso_shade(const gate_iso *t, double c, const mf_polygon *p)
+{
+    if (t->lambert)
+        return mf_polygon_integrate_cosine(p, MF_POLYGON_ONE_SIDED);
+    double u = sqrt(fmax(0.0, 1.0 - c)) * (MF_PREFILTER_GATE_REF_N - 1);
+    int i = (int)u;
+    if (i > MF_PREFILTER_GATE_REF_N - 2)
+        i = MF_PREFILTER_GATE_REF_N - 2;
+    double f = u - i, q[5];
+    for (int k = 0; k < 5; ++k)
+        q[k] = (1.0 - f) * t->v[i][k] + f * t->v[i + 1][k];
+    mf_mat3 m = {{{q[0], 0.0, q[1]}, {0.0, 1.0, 0.0}, {q[2], 0.0, q[3]}}};
+    mf_ltc ltc;
+    if (mf_ltc_init(&ltc, m) != MF_OK)
+        return NAN;
+    return q[4] * mf_ltc_integrate_polygon(&ltc, p, MF_POLYGON_ONE_SIDED);
+}
+
+/* Adds w times the reference shading of level-0 texel normal n (tangent frame) at view (theta,
+ * phi) of the GATE_NLIGHTS lights (aligned frame) to acc. */
+static void gate_ref_texel(const gate_iso *t, const double *n, double theta, double phi, const mf_polygon *lights,
+                           double w, double *acc)
+{
+    double cp = cos(phi), sp = sin(phi);
+    double na[3] = {cp * n[0] + sp * n[1], -sp * n[0] + cp * n[1], n[2]}; /* R_z(-phi) n */
+    double r[9];
+    mf_prefilter_min_rotation(na, r);
+    mf_vec3 wo = mf_vec3_make(sin(theta), 0.0, cos(theta));
+    mf_vec3 vq = mf_prefilter_texel_view(r, wo);
+    double h = sqrt(vq.x * vq.x + vq.y * vq.y), ca = h > 0.0 ? vq.x / h : 1.0, sa = h > 0.0 ? vq.y / h : 0.0;
+    for (int k = 0; k < GATE_NLIGHTS; ++k) {
+        mf_vec3 v[MF_POLYGON_MAX_VERTICES];
+        int nv = clip_upper(&lights[k], v);
+        if (nv < 3)
+            continue;
+        for (int i = 0; i < nv; ++i) {
+            mf_vec3 x = mf_prefilter_rot_t(r, v[i]); /* texel frame, then its view azimuth turned to 0 */
+            v[i] = mf_vec3_make(ca * x.x + sa * x.y, -sa * x.x + ca * x.y, x.z);
+        }
+        mf_polygon p = mf_polygon_make(nv, v);
+        acc[k] += w * gate_iso_shade(t, vq.z, &p);
+    }
+}
+
+/* Lone extreme of x against its two neighbours y0, y1 (0 unless above or below both). */
+static double gate_lone(double x, double y0, double y1)
+{
+    return fmax(fmax(fmin(x - y0, x - y1), fmin(y0 - x, y1 - x)), 0.0);
+}
+
+/* ---- the streamed gate ------------------------------------------------------------------------- */
+
+/* The gate sees each level row by row, in an order where the rows a row's checks need are still
+ * held (mf_prefilter_gate_stream_next): level l's row r comes right after the rows 2r and 2r + 1
+ * of level l - 1 (its children, for the level check and the reference's mean).  Per level it
+ * keeps five rows: rows 0 and 1 (the periodic texel neighbours of the last row, checked at the
+ * end) and the last three (a row's texel checks run when the row after it arrives).  Per row and
+ * entry: the lobe's shading S and the reference R of the GATE_NLIGHTS lights (doubles) and the
+ * albedo the measures divide by (float).  Each worst keeps the key (level index, entry, light,
+ * check) of its place, ties going to the smaller key: the order of a whole-level pass, so the
+ * result (values and places) does not depend on the streaming order. */
+#define GS_SLOTS 5
+
+typedef struct {
+    int level, w, h, fed;
+    int twice; /* the level below (index - 1) is exactly twice as wide and as tall: the level check */
+    size_t rowlen; /* entries per row: w * n_theta * n_phi */
+    double *S[GS_SLOTS], *R[GS_SLOTS];
+    float *A[GS_SLOTS];
+} gs_level;
+
+struct mf_prefilter_gate_stream {
+    mf_prefilter_gate *g;
+    int nl, nt, np, nv, ref, lambert;
+    mf_prefilter_options o;
+    const double *normals;
+    int W, H;
+    gs_level *L;
+    mf_polygon *lights;
+    gate_iso *iso;
+    uint64_t k_energy, k_level, k_view, k_texel, k_cont_texel, k_cont_view, k_cont_grazing, k_cont_cross;
+};
+
+static int gs_slot(int r) { return r < 2 ? r : 2 + r % 3; }
+
+/* The key of (level index, entry, light, check): the order of a pass over levels, entries, lights
+ * and the checks of one light (0 theta, 1 phi, 2 texels along x, 3 along y, 4 level). */
+static uint64_t gs_key(int li, size_t e, int k, int c)
+{
+    return (uint64_t)li << 56 | (uint64_t)e << 8 | (uint64_t)k << 4 | (uint64_t)c;
+}
+
+static void gs_worst(double v, double *worst, uint64_t *wkey, uint64_t key, char *where, size_t n, const char *what,
+                     int level, int row, int col, int a, int b)
+{
+    if (v > *worst || (v == *worst && *worst > 0.0 && key < *wkey)) {
+        *worst = v, *wkey = key;
+        snprintf(where, n, "%s at level %d, texel (%d, %d), view (%d, %d)", what, level, col, row, a, b);
+    }
+}
+
+static void gs_max(double v, double *worst)
+{
+    if (v > *worst)
+        *worst = v;
+}
+
+void mf_prefilter_gate_stream_free(mf_prefilter_gate_stream *s)
+{
+    if (!s)
+        return;
+    for (int l = 0; s->L && l < s->nl; ++l)
+        for (int i = 0; i < GS_SLOTS; ++i)
+            free(s->L[l].S[i]), free(s->L[l].R[i]), free(s->L[l].A[i]);
+    free(s->L), free(s->lights), free(s->iso), free(s);
+}
+
+mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int nlevels, const double *normals,
+                                         int width, int height, const mf_prefilter_options *o, mf_prefilter_gate *g,
+                                         mf_prefilter_gate_stream **out)
+{
+    if (out)
+        *out = NULL;
+    if (!shapes || nlevels < 1 || nlevels > 64 || !g || !out || (normals && (!o || width < 1 || height < 1)))
+        return MF_ERR_DOMAIN;
+    int nt = shapes[0].n_theta, np = shapes[0].n_phi;
+    if (nt < 2 || np < 1 || (normals && (o->n_theta != nt || o->n_phi != np)))
+        return MF_ERR_DOMAIN;
+    for (int l = 0; l < nlevels; ++l) {
+        const mf_prefilter_level *lv = &shapes[l];
+        if (lv->n_theta != nt || lv->n_phi != np || lv->width < 1 || lv->height < 1)
+            return MF_ERR_DOMAIN;
+        int k = l + 1, w = width >> k, h = height >> k;
+        if (normals && (lv->level != k || lv->width != (w > 0 ? w : 1) || lv->height != (h > 0 ? h : 1)))
+            return MF_ERR_DOMAIN;
+    }
+    mf_prefilter_gate_stream *s = calloc(1, sizeof *s);
+    if (!s)
+        return MF_ERR_ALLOC;
+    s->g = g, s->nl = nlevels, s->nt = nt, s->np = np, s->nv = nt * np, s->ref = normals != NULL;
+    s->normals = normals, s->W = width, s->H = height;
+    if (o)
+        s->o = *o;
+    s->lambert = s->ref && o->base == MF_PREFILTER_BASE_LAMBERT;
+    s->k_energy = s->k_level = s->k_view = s->k_texel = UINT64_MAX;
+    s->k_cont_texel = s->k_cont_view = s->k_cont_grazing = s->k_cont_cross = UINT64_MAX;
+    /* the results this run sets (as mf_prefilter_gate_run and _run_ref cleared them) */
+    g->nan_entries = 0;
+    g->worst_energy = g->worst_level = g->worst_view_spike = g->worst_texel_spike = 0.0;
+    g->where_energy[0] = g->where_level[0] = g->where_view[0] = g->where_texel[0] = '\0';
+    g->has_ref = s->ref, g->cont_gated = 0;
+    if (s->ref) {
+        g->worst_cont_grazing = 0.0;
+        g->where_cont_grazing[0] = '\0';
+        g->worst_cont_texel = g->worst_cont_view = g->worst_jump_texel = g->worst_jump_view = g->worst_ref_error = 0.0;
+        g->where_cont_texel[0] = g->where_cont_view[0] = '\0';
+        g->worst_cont_cross = g->worst_cont_cross_texel = 0.0;
+        g->where_cont_cross[0] = '\0';
+    }
+    s->L = calloc((size_t)nlevels, sizeof *s->L);
+    s->lights = malloc(sizeof *s->lights * GATE_NLIGHTS * (size_t)nt);
+    mf_status st = s->L && s->lights ? MF_OK : MF_ERR_ALLOC;
+    for (int a = 0; st == MF_OK && a < nt; ++a)
+        gate_lights(a / (double)(nt - 1) * MF_PREFILTER_THETA_MAX, s->lights + GATE_NLIGHTS * a);
+    for (int l = 0; st == MF_OK && l < nlevels; ++l) {
+        gs_level *L = &s->L[l];
+        const mf_prefilter_level *lv = &shapes[l];
+        L->level = lv->level, L->w = lv->width, L->h = lv->height;
+        L->twice = l > 0 && shapes[l - 1].width == 2 * lv->width && shapes[l - 1].height == 2 * lv->height;
+        L->rowlen = (size_t)lv->width * s->nv;
+        int used[GS_SLOTS] = {0}; /* a level of fewer than GS_SLOTS rows uses fewer slots */
+        for (int r = 0; r < lv->height && r < GS_SLOTS; ++r)
+            used[gs_slot(r)] = 1;
+        for (int i = 0; i < GS_SLOTS && st == MF_OK; ++i) {
+            if (!used[i])
+                continue;
+            L->S[i] = malloc(sizeof(double) * GATE_NLIGHTS * L->rowlen);
+            L->A[i] = malloc(sizeof(float) * L->rowlen);
+            if (s->ref)
+                L->R[i] = malloc(sizeof(double) * GATE_NLIGHTS * L->rowlen);
+            if (!L->S[i] || !L->A[i] || (s->ref && !L->R[i]))
+                st = MF_ERR_ALLOC;
+        }
+    }
+    if (st == MF_OK && s->ref) {
+        s->iso = malloc(sizeof *s->iso);
+        st = s->iso ? gate_iso_fit(o, s->iso) : MF_ERR_ALLOC;
+    }
+    if (st != MF_OK) {
+        mf_prefilter_gate_stream_free(s);
+        return st;
+    }
+    *out = s;
+    return MF_OK;
+}
+
+int mf_prefilter_gate_stream_next(const mf_prefilter_gate_stream *s, int *level_index, int *row)
+{
+    if (!s)
+        return 0;
+    for (int l = s->nl - 1; l >= 0; --l) {
+        const gs_level *L = &s->L[l];
+        if (L->fed >= L->h)
+            continue;
+        if (l > 0) {
+            const gs_level *C = &s->L[l - 1];
+            int need = 2 * L->fed + 1 < C->h - 1 ? 2 * L->fed + 1 : C->h - 1; /* the last child row it reads */
+            if (C->fed <= need)
+                continue;
+        }
+        *level_index = l, *row = L->fed;
+        return 1;
+    }
+    return 0;
+}
+
+/* The texel checks of row r of level index li (its rows r - 1 and r + 1, periodic for the
+ * reference's, held). */
+static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r)
+{
+    mf_prefilter_gate *g = s->g;
+    const gs_level *L = &s->L[li];
+    const int nt = s->nt, np = s->np, nv = s->nv;
+    const double *S = L->S[gs_slot(r)], *R = L->R[gs_slot(r)];
+    const float *A = L->A[gs_slot(r)];
+    for (size_t i = 0; i < L->rowlen; ++i) {
+        int col = (int)(i / nv), a = (int)(i / np % nt), b = (int)(i % np);
+        size_t e = (size_t)r * L->rowlen + i;
+        double alb = fmax(A[i], 1e-6);
+        int gr = s->ref && cos(mf_prefilter_theta(&s->o, a)) < MF_PREFILTER_MULTISTART_COS;
+        for (int k = 0; k < GATE_NLIGHTS; ++k) {
+            double x = S[GATE_NLIGHTS * i + k];
+            /* a lone texel above or below both neighbours along x or y (not periodic) */
+            for (int ax = 0; ax < 2; ++ax) {
+                int r0 = r - (ax == 1), r1 = r + (ax == 1), c0 = col - (ax == 0), c1 = col + (ax == 0);
+                if (r0 < 0 || c0 < 0 || r1 >= L->h || c1 >= L->w)
+                    continue;
+                double y0 = L->S[gs_slot(r0)][GATE_NLIGHTS * (((size_t)c0 * nt + a) * np + b) + k];
+                double y1 = L->S[gs_slot(r1)][GATE_NLIGHTS * (((size_t)c1 * nt + a) * np + b) + k];
+                double up = fmin(x - y0, x - y1), dn = fmin(y0 - x, y1 - x);
+                gs_worst(fmax(fmax(up, dn), 0.0) / alb, &g->worst_texel_spike, &s->k_texel, gs_key(li, e, k, 2 + ax),
+                         g->where_texel, sizeof g->where_texel, "texel spike", L->level, r, col, a, b);
+            }
+            if (!s->ref)
+                continue;
+            double ex = x - R[GATE_NLIGHTS * i + k];
+            if (!isfinite(ex))
+                continue; /* counted by the nan check */
+            /* cross: the error's lone extreme along every axis at once, the smallest of its lone
+             * extremes along the axes the entry has (texels x, y; theta; phi), for the entries with a
+             * texel axis; cross_texel: the same over the texel axes alone */
+            {
+                double lt = INFINITY, lv = INFINITY;
+                for (int ax = 0; ax < 2; ++ax) {
+                    int n_ax = ax ? L->h : L->w;
+                    if (n_ax < 2)
+                        continue;
+                    int r1 = (r + (ax == 1)) % L->h, c1 = (col + (ax == 0)) % L->w;
+                    int r0 = (r - (ax == 1) + L->h) % L->h, c0 = (col - (ax == 0) + L->w) % L->w;
+                    size_t i1 = ((size_t)c1 * nt + a) * np + b, i0 = ((size_t)c0 * nt + a) * np + b;
+                    int s1 = gs_slot(r1), s0 = gs_slot(r0);
+                    lt = fmin(lt, gate_lone(ex, L->S[s0][GATE_NLIGHTS * i0 + k] - L->R[s0][GATE_NLIGHTS * i0 + k],
+                                            L->S[s1][GATE_NLIGHTS * i1 + k] - L->R[s1][GATE_NLIGHTS * i1 + k]) / alb);
+                }
+                size_t vq[2][2] = {{i - np, i + np}, {i - b + (b + np - 1) % np, i - b + (b + 1) % np}};
+                for (int ax = 0; ax < 2; ++ax)
+                    if (ax == 0 ? a > 0 && a + 1 < nt : np >= 3 && a > 0)
+                        lv = fmin(lv, gate_lone(ex, S[GATE_NLIGHTS * vq[ax][0] + k] - R[GATE_NLIGHTS * vq[ax][0] + k],
+                                                S[GATE_NLIGHTS * vq[ax][1] + k] - R[GATE_NLIGHTS * vq[ax][1] + k]) / alb);
+                if (isfinite(lt)) {
+                    gs_worst(fmin(lt, lv), &g->worst_cont_cross, &s->k_cont_cross, gs_key(li, e, k, 0),
+                             g->where_cont_cross, sizeof g->where_cont_cross, "error extreme along every axis", L->level,
+                             r, col, a, b);
+                    gs_max(lt, &g->worst_cont_cross_texel);
+                }
+            }
+            /* the error's lone texel (periodic neighbours: normal maps tile) */
+            for (int ax = 0; ax < 2; ++ax) {
+                int n_ax = ax ? L->h : L->w;
+                if (n_ax < 2)
+                    continue;
+                int r1 = (r + (ax == 1)) % L->h, c1 = (col + (ax == 0)) % L->w;
+                int r0 = (r - (ax == 1) + L->h) % L->h, c0 = (col - (ax == 0) + L->w) % L->w;
+                size_t i1 = ((size_t)c1 * nt + a) * np + b, i0 = ((size_t)c0 * nt + a) * np + b;
+                int s1 = gs_slot(r1), s0 = gs_slot(r0);
+                double e1 = L->S[s1][GATE_NLIGHTS * i1 + k] - L->R[s1][GATE_NLIGHTS * i1 + k];
+                double e0 = L->S[s0][GATE_NLIGHTS * i0 + k] - L->R[s0][GATE_NLIGHTS * i0 + k];
+                double ab = fmax(alb, L->A[s1][i1]);
+                gs_max(fabs(ex - e1) / ab, &g->worst_jump_texel);
+                gs_worst(gate_lone(ex, e0, e1) / alb, gr ? &g->worst_cont_grazing : &g->worst_cont_texel,
+                         gr ? &s->k_cont_grazing : &s->k_cont_texel, gs_key(li, e, k, 2 + ax),
+                         gr ? g->where_cont_grazing : g->where_cont_texel, sizeof g->where_cont_texel,
+                         "texel error spike", L->level, r, col, a, b);
+            }
+        }
+    }
+}
+
+mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_index, int row, const float *m,
+                                       const float *magnitude, const float *albedo)
+{
+    int want_l, want_r;
+    if (!s || !m || !magnitude || !mf_prefilter_gate_stream_next(s, &want_l, &want_r) || level_index != want_l ||
+        row != want_r)
+        return MF_ERR_DOMAIN;
+    mf_prefilter_gate *g = s->g;
+    gs_level *L = &s->L[level_index];
+    const int nt = s->nt, np = s->np, nv = s->nv, sl = gs_slot(row);
+    double *S = L->S[sl], *R = L->R[sl];
+    float *A = L->A[sl];
+    /* energy, nan, the lobes' shading */
+    for (size_t i = 0; i < L->rowlen; ++i) {
+        int col = (int)(i / nv), a = (int)(i / np % nt), b = (int)(i % np);
+        size_t e = (size_t)row * L->rowlen + i;
+        const float *mi = m + 9 * i;
+        float mag = magnitude[i];
+        int bad = !isfinite(mag) || !(mag >= 0.0f);
+        for (int q = 0; q < 9; ++q)
+            bad |= !isfinite(mi[q]);
+        double n2 = (double)mi[6] * mi[6] + (double)mi[7] * mi[7] + (double)mi[8] * mi[8];
+        A[i] = albedo ? albedo[i] : mag;
+        if (!bad) {
+            /* the lobe's albedo: magnitude * its mass above the horizon, (1 + n.z) / 2 with
+             * n = M^T z / |M^T z| (the clamped cosine over the half-space (M^T z).w > 0) */
+            double frac = 0.5 * (1.0 + mi[8] / sqrt(n2));
+            double alb = albedo ? albedo[i] : mag;
+            gs_worst(alb > 0.0 ? fabs(mag * frac / alb - 1.0) : fabs(mag * frac), &g->worst_energy, &s->k_energy,
+                     gs_key(level_index, e, 0, 0), g->where_energy, sizeof g->where_energy, "energy", L->level, row, col,
+                     a, b);
+        }
+        gate_shade(mi, mag, s->lights + GATE_NLIGHTS * a, S + GATE_NLIGHTS * i);
+        for (int k = 0; k < GATE_NLIGHTS; ++k)
+            bad |= !isfinite(S[GATE_NLIGHTS * i + k]);
+        g->nan_entries += bad;
+    }
+    /* the reference: level 1 from its texels, each level above as the mean of its children */
+    if (s->ref) {
+        memset(R, 0, sizeof(double) * GATE_NLIGHTS * L->rowlen);
+        int cw = level_index ? s->L[level_index - 1].w : s->W, ch = level_index ? s->L[level_index - 1].h : s->H;
+        for (int col = 0; col < L->w; ++col) {
+            int nc = 0;
+            for (int dy = 0; dy < 2; ++dy)
+                for (int dx = 0; dx < 2; ++dx)
+                    nc += 2 * row + dy < ch && 2 * col + dx < cw;
+            for (int dy = 0; dy < 2; ++dy)
+                for (int dx = 0; dx < 2; ++dx) {
+                    int cr = 2 * row + dy, cc = 2 * col + dx;
+                    if (cr >= ch || cc >= cw)
+                        continue;
+                    for (int a = 0; a < nt; ++a)
+                        for (int b = 0; b < np; ++b) {
+                            size_t i = ((size_t)col * nt + a) * np + b;
+                            double *acc = R + GATE_NLIGHTS * i;
+                            if (level_index == 0) {
+                                gate_ref_texel(s->iso, s->normals + 3 * ((size_t)cr * s->W + cc), mf_prefilter_theta(&s->o, a),
+                                               mf_prefilter_phi(&s->o, b), s->lights + GATE_NLIGHTS * a, 1.0 / nc, acc);
+                            } else {
+                                const gs_level *C = &s->L[level_index - 1];
+                                const double *c = C->R[gs_slot(cr)] + GATE_NLIGHTS * (((size_t)cc * nt + a) * np + b);
+                                for (int k = 0; k < GATE_NLIGHTS; ++k)
+                                    acc[k] += c[k] / nc;
+                            }
+                        }
+                }
+        }
+    }
+    /* the checks within the row: views, levels; against the reference: the error, its jumps and
+     * spikes along the views */
+    for (size_t i = 0; i < L->rowlen; ++i) {
+        int col = (int)(i / nv), a = (int)(i / np % nt), b = (int)(i % np);
+        size_t e = (size_t)row * L->rowlen + i;
+        double alb = fmax(A[i], 1e-6);
+        int gr = s->ref && cos(mf_prefilter_theta(&s->o, a)) < MF_PREFILTER_MULTISTART_COS;
+        size_t vm = i - b + (b + np - 1) % np, vp = i - b + (b + 1) % np; /* phi neighbours (periodic) */
+        for (int k = 0; k < GATE_NLIGHTS; ++k) {
+            double x = S[GATE_NLIGHTS * i + k];
+            /* views: second differences along theta (interior) and phi (periodic) */
+            if (a > 0 && a + 1 < nt) {
+                double d = fabs(2.0 * x - S[GATE_NLIGHTS * (i - np) + k] - S[GATE_NLIGHTS * (i + np) + k]);
+                gs_worst(0.5 * d / alb, &g->worst_view_spike, &s->k_view, gs_key(level_index, e, k, 0), g->where_view,
+                         sizeof g->where_view, "theta spike", L->level, row, col, a, b);
+            }
+            if (np >= 3 && a > 0) {
+                double d = fabs(2.0 * x - S[GATE_NLIGHTS * vm + k] - S[GATE_NLIGHTS * vp + k]);
+                gs_worst(0.5 * d / alb, &g->worst_view_spike, &s->k_view, gs_key(level_index, e, k, 1), g->where_view,
+                         sizeof g->where_view, "phi spike", L->level, row, col, a, b);
+            }
+            /* levels: the effective BRDF of a footprint is the mean of its four children's (equal
+             * areas), so the parent's shading is compared with the mean of the children's */
+            if (L->twice) {
+                const gs_level *C = &s->L[level_index - 1];
+                double mc = 0.0;
+                for (int dy = 0; dy < 2; ++dy)
+                    for (int dx = 0; dx < 2; ++dx)
+                        mc += C->S[gs_slot(2 * row + dy)][GATE_NLIGHTS * ((((size_t)2 * col + dx) * nt + a) * np + b) + k];
+                gs_worst(fabs(x - 0.25 * mc) / alb, &g->worst_level, &s->k_level, gs_key(level_index, e, k, 4),
+                         g->where_level, sizeof g->where_level, "parent vs children", L->level, row, col, a, b);
+            }
+            if (!s->ref)
+                continue;
+            double ex = x - R[GATE_NLIGHTS * i + k];
+            if (!isfinite(ex))
+                continue; /* counted by the nan check */
+            gs_max(fabs(ex) / alb, &g->worst_ref_error);
+            size_t vn[4] = {0};
+            int has[4] = {a > 0, a + 1 < nt, np >= 3, np >= 2};
+            if (has[0])
+                vn[0] = i - np;
+            if (has[1])
+                vn[1] = i + np;
+            vn[2] = vm, vn[3] = vp;
+            double en[4] = {0.0};
+            for (int q = 0; q < 4; ++q)
+                en[q] = has[q] ? S[GATE_NLIGHTS * vn[q] + k] - R[GATE_NLIGHTS * vn[q] + k] : 0.0;
+            for (int q = 0; q < 4; ++q)
+                if (has[q] && (q != 3 || np >= 3 || b == 0))
+                    gs_max(fabs(ex - en[q]) / fmax(alb, A[vn[q]]), &g->worst_jump_view);
+            double *wv = gr ? &g->worst_cont_grazing : &g->worst_cont_view;
+            uint64_t *kv = gr ? &s->k_cont_grazing : &s->k_cont_view;
+            char *pv = gr ? g->where_cont_grazing : g->where_cont_view;
+            if (has[0] && has[1])
+                gs_worst(gate_lone(ex, en[0], en[1]) / alb, wv, kv, gs_key(level_index, e, k, 0), pv,
+                         sizeof g->where_cont_view, "theta error spike", L->level, row, col, a, b);
+            if (np >= 3 && a > 0)
+                gs_worst(gate_lone(ex, en[2], en[3]) / alb, wv, kv, gs_key(level_index, e, k, 1), pv,
+                         sizeof g->where_cont_view, "phi error spike", L->level, row, col, a, b);
+        }
+    }
+    L->fed++;
+    /* the texel checks of the row above (its neighbours now held); at the level's end, the last row
+     * and row 0 (periodic neighbours) */
+    if (row >= 2)
+        gs_texel_checks(s, level_index, row - 1);
+    if (row == L->h - 1) {
+        if (row >= 1)
+            gs_texel_checks(s, level_index, row);
+        gs_texel_checks(s, level_index, 0);
+    }
+    return MF_OK;
+}
+
+mf_status mf_prefilter_gate_stream_end(mf_prefilter_gate_stream *s)
+{
+    if (!s)
+        return MF_ERR_DOMAIN;
+    int l, r;
+    if (mf_prefilter_gate_stream_next(s, &l, &r)) {
+        mf_prefilter_gate_stream_free(s);
+        return MF_ERR_DOMAIN; /* rows not fed */
+    }
+    mf_prefilter_gate *g = s->g;
+    g->pass_energy = g->worst_energy <= g->max_energy;
+    g->pass_nan = g->nan_entries == 0;
+    g->pass_level = g->worst_level <= g->max_level;
+    g->pass_view = g->worst_view_spike <= g->max_view_spike;
+    g->pass_texel = g->worst_texel_spike <= g->max_texel_spike;
+    /* the view and texel spikes are reported, not gated: a coarse view grid and a sharp map give
+     * genuine spikes (the V-groove's level-1 texels alternate between two tilts) */
+    g->pass = g->pass_energy && g->pass_nan && g->pass_level;
+    if (s->ref) {
+        /* GGX: reported, not gated (they do not separate good from corrupted runs); Lambert: gated
+         * (mf_prefilter.h) */
+        g->cont_gated = s->lambert;
+        g->pass_cont_texel = g->worst_cont_texel <= (g->cont_gated ? g->max_cont_lambert : g->max_cont_texel);
+        g->pass_cont_view = g->worst_cont_view <= (g->cont_gated ? g->max_cont_lambert : g->max_cont_view);
+        g->pass_cont_grazing = g->worst_cont_grazing <= (g->cont_gated ? g->max_cont_lambert : g->max_cont_grazing);
+        g->pass_cont_cross = g->worst_cont_cross <= g->max_cont_cross;
+        if (g->cont_gated)
+            g->pass = g->pass && g->pass_cont_texel && g->pass_cont_view && g->pass_cont_grazing;
+    }
+    mf_prefilter_gate_stream_free(s);
+    return MF_OK;
+}
+
+/* The whole-level entry points: every row of levels held in memory, fed in the stream's order. */
+static mf_status gate_levels(const mf_prefilter_level *levels, int nlevels, const double *normals, int width,
+                             int height, const mf_prefilter_options *o, mf_prefilter_gate *g)
+{
+    mf_prefilter_gate_stream *s;
+    mf_status st = mf_prefilter_gate_stream_begin(levels, nlevels, normals, width, height, o, g, &s);
+    if (st != MF_OK)
+        return st;
+    int l, r;
+    while (st == MF_OK && mf_prefilter_gate_stream_next(s, &l, &r)) {
+        const mf_prefilter_level *lv = &levels[l];
+        size_t off = (size_t)r * lv->width * lv->n_theta * lv->n_phi;
+        if (!lv->m || !lv->magnitude)
+            st = MF_ERR_DOMAIN;
+        else
+            st = mf_prefilter_gate_stream_row(s, l, r, lv->m + 9 * off, lv->magnitude + off,
+                                              lv->albedo ? lv->albedo + off : NULL);
+    }
+    if (st != MF_OK) {
+        mf_prefilter_gate_stream_free(s);
+        return st;
+    }
+    return mf_prefilter_gate_stream_end(s);
+}
+
+mf_status mf_prefilter_gate_run(const mf_prefilter_level *levels, int nlevels, mf_prefilter_gate *g)
+{
+    return gate_levels(levels, nlevels, NULL, 0, 0, NULL, g);
+}
+
+mf_status mf_prefilter_gate_run_ref(const mf_prefilter_level *levels, int nlevels, const double *normals, int width,
+                                    int height, const mf_prefilter_options *o, mf_prefilter_gate *g)
+{
+    if (!levels || nlevels < 1 || !g || !normals || !o || width < 1 || height < 1)
+        return MF_ERR_DOMAIN;
+    return gate_levels(levels, nlevels, normals, width, height, o, g);
+}

@@ -1,0 +1,16 @@
+/* mf_prefilter_internal.h -- functions of mf_prefilter.c that the gate (mf_prefilter_gate.c) shares
+ * (not installed; not a public API). */
+#ifndef MF_PREFILTER_INTERNAL_H
+#define MF_PREFILTER_INTERNAL_H
+
+#include "mfkit/mf_core.h"
+
+/* The minimal rotation taking z to the unit normal n (n.z > -1), row-major 3x3 into r. */
+void mf_prefilter_min_rotation(const double *n, double *r);
+/* The view wo in the texel frame of rotation r, its elevation cosine clamped to
+ * MF_PREFILTER_COS_MIN at the same azimuth [Nahmias 2022, Sec. 3, "Sampling the base BRDF"]. */
+mf_vec3 mf_prefilter_texel_view(const double *r, mf_vec3 wo);
+/* R^T v for the row-major rotation r. */
+mf_vec3 mf_prefilter_rot_t(const double *r, mf_vec3 v);
+
+#endif
