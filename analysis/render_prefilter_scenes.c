@@ -7,7 +7,7 @@
  *
  *   render_prefilter_scenes --prefilter DIR [--map NORMALMAP] [--ltc-table FILE] [--size N] [--tiles T]
  *       [--distances D,D,...] [--light-half H] [--mc-samples K] [--images 0|1] [--seed S] [--out DIR] [--csv FILE]
- *       [--split none|LIST] [--oracle STRIDE]
+ *       [--split none|LIST] [--aniso N] [--oracle STRIDE]
  * Run from the source directory: the default --ltc-table is tests/data/reference/ltc_code_ggx_64.csv
  * (Heitz et al. 2016's GGX table, the one the thesis shades with); the map is the manifest's (a path
  * relative to where mfkit prefilter ran) unless --map; it is decoded as mfkit prefilter's defaults do.
@@ -60,6 +60,10 @@
  *             Olano & Baker 2010, Eq. 3-6), covariance plus alpha^2 / 2 per axis, mfkit's LEADR
  *             specular [Dupuy 2013, Eq. 17], integrated over the light's area by Monte Carlo with
  *             8 x 8 jittered points per pixel.
+ * --aniso N (default 1, off): every method filtered anisotropically as a texture unit does: n =
+ * min(N, ceil(longer / shorter projected edge)) lookups spread along the pixel's longer edge, each at the
+ * level of detail of longer edge / n, averaged (naive, Toksvig: the filtered normal; LEADR: the moments;
+ * mfkit: M and magnitude; mfkit_taps and mfkit's level 0: the shading).
  * --oracle STRIDE (0: off): every STRIDE-th pixel in x and y also gets one lobe fitted to its own
  * footprint at its own view (shade_oracle: no interpolation of any kind), and
  * DIR/prefilter_scenes_oracle.csv gets every method's MSE against truth on those pixels.
@@ -261,51 +265,81 @@ static void quad_rel(const scene *s, mf_vec3 P, mf_vec3 q[4])
 /* ---- per-pixel methods ---------------------------------------------------------------------------- */
 
 static double g_alpha;
+static int g_aniso = 1; /* --aniso N: every method filtered with up to N taps along the longer axis (1: off) */
+static int g_an_n = 1;       /* this pixel's anisotropic taps (1: the isotropic filter) */
+static double g_an_u, g_an_v; /* the pixel's longer projected edge in texture coordinates */
+
+/* the anisotropic filter's tap i of g_an_n: offset along the longer edge */
+static double an_t(int i) { return (i + 0.5) / g_an_n - 0.5; }
 static int g_oracle; /* --oracle STRIDE: every STRIDE-th pixel in x and y also gets shade_oracle (0: off) */
 static int g_split = MF_PREFILTER_SPLIT_TEXEL | MF_PREFILTER_SPLIT_LEVEL; /* mfkit_taps' axes (--split) */
 static mf_prefilter_lookup_levels g_pf;
 static mf_prefilter_mix *g_mix; /* one per level-0 texel (the exact GGX of that normal) */
+
+/* pyr_trilinear averaged over the pixel's anisotropic taps (a texture unit's anisotropic filter) */
+static void pyr_aniso(const pyramid *p, int nc, double u, double v, double lod, double *out)
+{
+    double t[8];
+    for (int c = 0; c < nc; ++c)
+        out[c] = 0.0;
+    for (int ia = 0; ia < g_an_n; ++ia) {
+        pyr_trilinear(p, u + an_t(ia) * g_an_u, v + an_t(ia) * g_an_v, lod, t);
+        for (int c = 0; c < nc; ++c)
+            out[c] += t[c] / g_an_n;
+    }
+}
 
 static double shade_mfkit(const scene *s, mf_vec3 P, double u, double v, double lod, int split)
 {
     mf_vec3 wo = mf_vec3_normalize(mf_vec3_sub(s->cam, P)), q[4];
     quad_rel(s, P, q);
     double s0 = 0.0, s1 = 0.0;
-    if (lod < 1.0) { /* level 0: bilinear filter of the per-texel shading */
-        double xf = u * W - 0.5, yf = v * H - 0.5, x0 = floor(xf), y0 = floor(yf), fx = xf - x0, fy = yf - y0;
-        for (int j = 0; j < 4; ++j) {
-            int dx = j & 1, dy = j >> 1;
-            double wt = (dx ? fx : 1.0 - fx) * (dy ? fy : 1.0 - fy);
-            int x = wrapi((int)fmod(x0, W) + dx, W), y = wrapi((int)fmod(y0, H) + dy, H);
-            const double *n = g_n + 3 * ((size_t)y * W + x);
-            s0 += wt * shade_texel_ltc(v3(n[0], n[1], n[2]), g_alpha, wo, q);
+    if (lod < 1.0) /* level 0: bilinear filter of the per-texel shading (per anisotropic tap) */
+        for (int ia = 0; ia < g_an_n; ++ia) {
+            double ua = u + an_t(ia) * g_an_u, va = v + an_t(ia) * g_an_v;
+            double xf = ua * W - 0.5, yf = va * H - 0.5, x0 = floor(xf), y0 = floor(yf), fx = xf - x0, fy = yf - y0;
+            for (int j = 0; j < 4; ++j) {
+                int dx = j & 1, dy = j >> 1;
+                double wt = (dx ? fx : 1.0 - fx) * (dy ? fy : 1.0 - fy) / g_an_n;
+                int x = wrapi((int)fmod(x0, W) + dx, W), y = wrapi((int)fmod(y0, H) + dy, H);
+                const double *n = g_n + 3 * ((size_t)y * W + x);
+                s0 += wt * shade_texel_ltc(v3(n[0], n[1], n[2]), g_alpha, wo, q);
+            }
         }
-        if (lod <= 0.0)
-            return s0;
-    }
+    if (lod <= 0.0)
+        return s0;
     double theta = acos(fmin(1.0, wo.z)), phi = atan2(wo.y, wo.x);
     double c = cos(phi), sn = sin(phi);
     mf_vec3 r[4];
     for (int k = 0; k < 4; ++k)
         r[k] = v3(c * q[k].x + sn * q[k].y, -sn * q[k].x + c * q[k].y, q[k].z);
     mf_polygon poly = mf_polygon_make(4, r);
-    if (!split) { /* mfpfLookup: one blended M */
-        double M[9], mag;
-        mf_prefilter_lookup(&g_pf, u, v, lod, theta, phi, M, &mag);
+    if (!split) { /* mfpfLookup: one blended M (the anisotropic taps' mean, as a texture unit filters) */
+        double M[9] = {0}, mag = 0.0;
+        for (int ia = 0; ia < g_an_n; ++ia) {
+            double Ma[9], ma;
+            mf_prefilter_lookup(&g_pf, u + an_t(ia) * g_an_u, v + an_t(ia) * g_an_v, lod, theta, phi, Ma, &ma);
+            for (int k = 0; k < 9; ++k)
+                M[k] += Ma[k] / g_an_n;
+            mag += ma / g_an_n;
+        }
         mf_ltc ltc;
         if (mf_ltc_init(&ltc, mf_ltc_matrix_general(M)) != MF_OK)
             return NAN;
         s1 = mag * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
     } else { /* mfpfLookupTap (split texel + level) or --split: the corner lobes shaded one by one */
         double M[32 * 9], mag[32], w[32];
-        int nt = mf_prefilter_lookup_taps(&g_pf, u, v, lod, theta, phi, split, M, mag, w);
-        for (int k = 0; k < nt; ++k) {
-            if (!(w[k] > 0.0))
-                continue;
-            mf_ltc ltc;
-            if (mf_ltc_init(&ltc, mf_ltc_matrix_general(M + 9 * k)) != MF_OK)
-                return NAN;
-            s1 += w[k] * mag[k] * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
+        for (int ia = 0; ia < g_an_n; ++ia) {
+            int nt = mf_prefilter_lookup_taps(&g_pf, u + an_t(ia) * g_an_u, v + an_t(ia) * g_an_v, lod, theta, phi, split,
+                                              M, mag, w);
+            for (int k = 0; k < nt; ++k) {
+                if (!(w[k] > 0.0))
+                    continue;
+                mf_ltc ltc;
+                if (mf_ltc_init(&ltc, mf_ltc_matrix_general(M + 9 * k)) != MF_OK)
+                    return NAN;
+                s1 += w[k] / g_an_n * mag[k] * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
+            }
         }
     }
     return lod < 1.0 ? (1.0 - lod) * s0 + lod * s1 : s1;
@@ -364,7 +398,7 @@ static void shade_naive_toksvig(const scene *s, mf_vec3 P, double u, double v, d
     mf_vec3 wo = mf_vec3_normalize(mf_vec3_sub(s->cam, P)), q[4];
     quad_rel(s, P, q);
     double n[3];
-    pyr_trilinear(&g_nrm, u, v, lod, n);
+    pyr_aniso(&g_nrm, 3, u, v, lod, n);
     double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     mf_vec3 nb = v3(n[0] / len, n[1] / len, n[2] / len);
     *naive = shade_texel_ltc(nb, g_alpha, wo, q);
@@ -389,7 +423,7 @@ static double shade_leadr(const scene *s, mf_vec3 P, double u, double v, double 
 {
     mf_vec3 wo = mf_vec3_normalize(mf_vec3_sub(s->cam, P));
     double mo[5];
-    pyr_trilinear(&g_mom, u, v, lod, mo);
+    pyr_aniso(&g_mom, 5, u, v, lod, mo);
     mf_gaussian_slopes g;
     g.mean_x = mo[0], g.mean_y = mo[1];
     g.var_x = mo[2] - mo[0] * mo[0] + 0.5 * g_alpha * g_alpha;
@@ -460,7 +494,7 @@ int main(int argc, char **argv)
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             printf("usage: " PROG " --prefilter DIR [--map NORMALMAP] [--ltc-table FILE] [--size N] [--tiles T] [--distances D,D,...] "
                    "[--light-half H] [--mc-samples K] [--images 0|1] [--seed S] [--out DIR] [--csv FILE] [--split none|LIST] "
-                   "[--oracle STRIDE]\n");
+                   "[--aniso N] [--oracle STRIDE]\n");
             return 0;
         }
         if (!val)
@@ -479,7 +513,11 @@ int main(int argc, char **argv)
             csv = val;
         else if (!strcmp(a, "--distances"))
             dlist = val;
-        else if (!strcmp(a, "--oracle")) {
+        else if (!strcmp(a, "--aniso")) {
+            g_aniso = (int)strtol(val, &e, 10);
+            if (*e || g_aniso < 1 || g_aniso > 64)
+                return die("--aniso %s: expected a tap count in [1, 64] (1: off)%s", val, "");
+        } else if (!strcmp(a, "--oracle")) {
             g_oracle = (int)strtol(val, &e, 10);
             if (*e || g_oracle < 0 || g_oracle > 4096)
                 return die("--oracle %s: expected a pixel stride in [0, 4096] (0: off)%s", val, "");
@@ -718,10 +756,20 @@ int main(int argc, char **argv)
                     }
                     img_v[R_TRUTH][pi] = tl / nsub;
                     img_v[R_TRUTH_MC][pi] = mc > 0 ? tm / nsub : 0.0;
-                    img_v[R_MFKIT][pi] = shade_mfkit(&S, P, u, v, lod, 0);
-                    img_v[R_MFKIT_TAPS][pi] = shade_mfkit(&S, P, u, v, lod, g_split);
-                    shade_naive_toksvig(&S, P, u, v, lod, &img_v[R_NAIVE][pi], &img_v[R_TOKSVIG][pi]);
-                    img_v[R_LEADR][pi] = shade_leadr(&S, P, u, v, lod, &rng);
+                    /* --aniso: n taps along the longer edge, each at the level of detail of rho / n */
+                    g_an_n = 1, g_an_u = g_an_v = 0.0;
+                    double flod = lod;
+                    if (g_aniso > 1) {
+                        int na = (int)ceil(fmax(dx, dy) / fmax(fmin(dx, dy), 1e-9));
+                        g_an_n = na < 1 ? 1 : na > g_aniso ? g_aniso : na;
+                        mf_vec3 A = dx >= dy ? Px : Py;
+                        g_an_u = (A.x - P.x) * tu, g_an_v = -(A.y - P.y) * tu;
+                        flod = log2(rho / g_an_n);
+                    }
+                    img_v[R_MFKIT][pi] = shade_mfkit(&S, P, u, v, flod, 0);
+                    img_v[R_MFKIT_TAPS][pi] = shade_mfkit(&S, P, u, v, flod, g_split);
+                    shade_naive_toksvig(&S, P, u, v, flod, &img_v[R_NAIVE][pi], &img_v[R_TOKSVIG][pi]);
+                    img_v[R_LEADR][pi] = shade_leadr(&S, P, u, v, flod, &rng);
                     omask[pi] = g_oracle > 0 && px % g_oracle == 0 && py % g_oracle == 0;
                     if (omask[pi])
                         oimg[pi] = shade_oracle(&S, P, otex, ntex);
