@@ -850,8 +850,9 @@ def plot_prefilter_scenes(d, out_dir, made):
     supersampled ground truth as a function of camera distance, for the near-normal and the grazing
     scene (the thesis' error-against-distance graphs, Nahmias 2022, Fig. 4.6 and 4.10).  Solid: against
     the per-texel LTC truth (the thesis'); dashed: against the exact GGX by Monte Carlo."""
-    methods = [("mfkit", "mfkit lobes", "C3"), ("naive", "naive (MIP normal)", "C0"),
-               ("toksvig", "Toksvig", "C1"), ("leadr", "LEADR", "C2")]
+    methods = [("mfkit", "mfkit lobes", "C3"), ("mfkit_taps", "mfkit lobes, split lookup", "C4"),
+               ("naive", "naive (MIP normal)", "C0"), ("toksvig", "Toksvig", "C1"), ("leadr", "LEADR", "C2")]
+    methods = [m for m in methods if np.any(d["method"] == m[0])]
     scenes = [s for s in ("normal", "grazing") if np.any(d["scene"] == s)]
     fig, axes = new_figure(len(scenes), 1, width=5.2)
     for i, sc in enumerate(scenes):
@@ -886,8 +887,9 @@ def plot_prefilter_scenes_ssim(d, out_dir, made):
     """analysis/prefilter_scenes_ssim.py: SSIM (Wang et al. 2004) of each method's display image against
     the ground truth's over the plane, per camera distance, for both scenes (the thesis' pooled perceptual
     metric, there FLIP, Nahmias 2022, Fig. 4.6 and 4.10)."""
-    methods = [("mfkit", "mfkit lobes", "C3"), ("naive", "naive (MIP normal)", "C0"),
-               ("toksvig", "Toksvig", "C1"), ("leadr", "LEADR", "C2"), ("truth_mc", "Monte Carlo truth", "0.5")]
+    methods = [("mfkit", "mfkit lobes", "C3"), ("mfkit_taps", "mfkit lobes, split lookup", "C4"),
+               ("naive", "naive (MIP normal)", "C0"), ("toksvig", "Toksvig", "C1"), ("leadr", "LEADR", "C2"),
+               ("truth_mc", "Monte Carlo truth", "0.5")]
     scenes = [s for s in ("normal", "grazing") if np.any(d["scene"] == s)]
     fig, axes = new_figure(len(scenes), 1, width=5.2)
     for i, sc in enumerate(scenes):

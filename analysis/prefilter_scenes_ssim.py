@@ -30,7 +30,7 @@ except ImportError as exc:  # the README's install line provides them
                      % exc)
     sys.exit(3)
 
-METHODS = ("truth_mc", "mfkit", "naive", "toksvig", "leadr")
+METHODS = ("truth_mc", "mfkit", "naive", "toksvig", "leadr", "mfkit_taps")
 
 
 def main(argv):

@@ -7,6 +7,7 @@
  *
  *   render_prefilter_scenes --prefilter DIR [--map NORMALMAP] [--ltc-table FILE] [--size N] [--tiles T]
  *       [--distances D,D,...] [--light-half H] [--mc-samples K] [--images 0|1] [--seed S] [--out DIR] [--csv FILE]
+ *       [--split none|LIST] [--aniso N] [--oracle STRIDE]
  * Run from the source directory: the default --ltc-table is tests/data/reference/ltc_code_ggx_64.csv
  * (Heitz et al. 2016's GGX table, the one the thesis shades with); the map is the manifest's (a path
  * relative to where mfkit prefilter ran) unless --map; it is decoded as mfkit prefilter's defaults do.
@@ -46,6 +47,11 @@
  *             axes), polygon rotated by -phi, magnitude x LTC integral; at lod < 1 blended linearly
  *             (weight lod) with level 0, the bilinear filter of the four nearest texels' per-texel LTC
  *             shading (docs/prefilter.md: level 0 is shaded with the base's isotropic table);
+ *   mfkit_taps the same lobes through the split lookup (mfpfLookupTap, mf_prefilter_lookup_taps): the
+ *             eight texel taps of the trilinear filter (four texels at each of two MIP levels, views
+ *             blended in M) each shaded and summed with their weights; --split chooses the axes split
+ *             (a comma-separated list of texel, level, view; none: mf_prefilter_lookup), for the
+ *             per-cause measurements of docs/prefilter.md;
  *   naive     the trilinear MIP filter of the box-averaged normals, normalised, shaded with the
  *             per-texel LTC at the base alpha [Nahmias 2022, Sec. 4.1, the "naive baseline"];
  *   toksvig   the same normal, alpha' = sqrt(alpha^2 + 2 (1 - |n|) / |n|), |n| the filtered normal's
@@ -54,6 +60,13 @@
  *             Olano & Baker 2010, Eq. 3-6), covariance plus alpha^2 / 2 per axis, mfkit's LEADR
  *             specular [Dupuy 2013, Eq. 17], integrated over the light's area by Monte Carlo with
  *             8 x 8 jittered points per pixel.
+ * --aniso N (default 1, off): every method filtered anisotropically as a texture unit does: n =
+ * min(N, ceil(longer / shorter projected edge)) lookups spread along the pixel's longer edge, each at the
+ * level of detail of longer edge / n, averaged (naive, Toksvig: the filtered normal; LEADR: the moments;
+ * mfkit: M and magnitude; mfkit_taps and mfkit's level 0: the shading).
+ * --oracle STRIDE (0: off): every STRIDE-th pixel in x and y also gets one lobe fitted to its own
+ * footprint at its own view (shade_oracle: no interpolation of any kind), and
+ * DIR/prefilter_scenes_oracle.csv gets every method's MSE against truth on those pixels.
  * MSE over the pixels that see the plane, per scene, distance and method, against truth and
  * (with --mc-samples) truth_mc.  Images (--images 1): DIR/<scene>_d<d>_<method>.exr (float) and
  * .png (value / the truth's largest value, gamma 1/2.2), error maps <scene>_d<d>_<method>_err.png
@@ -62,6 +75,7 @@
  */
 #include "mfkit/mfkit.h"
 #include "mfkit/fit/mf_image_oiio.h"
+#include "mfkit/fit/mf_ltcfit_aniso.h"
 #include "mfkit/fit/mf_prefilter.h"
 #include "mfkit/fit/mf_prefilter_lookup.h"
 #include "mfkit/io/mf_image.h"
@@ -80,9 +94,9 @@
 
 #define PROG "render_prefilter_scenes"
 #define MAXD 16
-#define NMETH 6
-enum { R_TRUTH, R_TRUTH_MC, R_MFKIT, R_NAIVE, R_TOKSVIG, R_LEADR };
-static const char *const k_meth[NMETH] = {"truth", "truth_mc", "mfkit", "naive", "toksvig", "leadr"};
+#define NMETH 7
+enum { R_TRUTH, R_TRUTH_MC, R_MFKIT, R_NAIVE, R_TOKSVIG, R_LEADR, R_MFKIT_TAPS };
+static const char *const k_meth[NMETH] = {"truth", "truth_mc", "mfkit", "naive", "toksvig", "leadr", "mfkit_taps"};
 
 /* ---- small helpers ------------------------------------------------------------------------------- */
 
@@ -251,38 +265,131 @@ static void quad_rel(const scene *s, mf_vec3 P, mf_vec3 q[4])
 /* ---- per-pixel methods ---------------------------------------------------------------------------- */
 
 static double g_alpha;
+static int g_aniso = 1; /* --aniso N: every method filtered with up to N taps along the longer axis (1: off) */
+static int g_an_n = 1;       /* this pixel's anisotropic taps (1: the isotropic filter) */
+static double g_an_u, g_an_v; /* the pixel's longer projected edge in texture coordinates */
+
+/* the anisotropic filter's tap i of g_an_n: offset along the longer edge */
+static double an_t(int i) { return (i + 0.5) / g_an_n - 0.5; }
+static int g_oracle; /* --oracle STRIDE: every STRIDE-th pixel in x and y also gets shade_oracle (0: off) */
+static int g_split = MF_PREFILTER_SPLIT_TEXEL | MF_PREFILTER_SPLIT_LEVEL; /* mfkit_taps' axes (--split) */
 static mf_prefilter_lookup_levels g_pf;
 static mf_prefilter_mix *g_mix; /* one per level-0 texel (the exact GGX of that normal) */
 
-static double shade_mfkit(const scene *s, mf_vec3 P, double u, double v, double lod)
+/* pyr_trilinear averaged over the pixel's anisotropic taps (a texture unit's anisotropic filter) */
+static void pyr_aniso(const pyramid *p, int nc, double u, double v, double lod, double *out)
+{
+    double t[8];
+    for (int c = 0; c < nc; ++c)
+        out[c] = 0.0;
+    for (int ia = 0; ia < g_an_n; ++ia) {
+        pyr_trilinear(p, u + an_t(ia) * g_an_u, v + an_t(ia) * g_an_v, lod, t);
+        for (int c = 0; c < nc; ++c)
+            out[c] += t[c] / g_an_n;
+    }
+}
+
+static double shade_mfkit(const scene *s, mf_vec3 P, double u, double v, double lod, int split)
 {
     mf_vec3 wo = mf_vec3_normalize(mf_vec3_sub(s->cam, P)), q[4];
     quad_rel(s, P, q);
     double s0 = 0.0, s1 = 0.0;
-    if (lod < 1.0) { /* level 0: bilinear filter of the per-texel shading */
-        double xf = u * W - 0.5, yf = v * H - 0.5, x0 = floor(xf), y0 = floor(yf), fx = xf - x0, fy = yf - y0;
-        for (int j = 0; j < 4; ++j) {
-            int dx = j & 1, dy = j >> 1;
-            double wt = (dx ? fx : 1.0 - fx) * (dy ? fy : 1.0 - fy);
-            int x = wrapi((int)fmod(x0, W) + dx, W), y = wrapi((int)fmod(y0, H) + dy, H);
-            const double *n = g_n + 3 * ((size_t)y * W + x);
-            s0 += wt * shade_texel_ltc(v3(n[0], n[1], n[2]), g_alpha, wo, q);
+    if (lod < 1.0) /* level 0: bilinear filter of the per-texel shading (per anisotropic tap) */
+        for (int ia = 0; ia < g_an_n; ++ia) {
+            double ua = u + an_t(ia) * g_an_u, va = v + an_t(ia) * g_an_v;
+            double xf = ua * W - 0.5, yf = va * H - 0.5, x0 = floor(xf), y0 = floor(yf), fx = xf - x0, fy = yf - y0;
+            for (int j = 0; j < 4; ++j) {
+                int dx = j & 1, dy = j >> 1;
+                double wt = (dx ? fx : 1.0 - fx) * (dy ? fy : 1.0 - fy) / g_an_n;
+                int x = wrapi((int)fmod(x0, W) + dx, W), y = wrapi((int)fmod(y0, H) + dy, H);
+                const double *n = g_n + 3 * ((size_t)y * W + x);
+                s0 += wt * shade_texel_ltc(v3(n[0], n[1], n[2]), g_alpha, wo, q);
+            }
         }
-        if (lod <= 0.0)
-            return s0;
-    }
-    double theta = acos(fmin(1.0, wo.z)), phi = atan2(wo.y, wo.x), M[9], mag;
-    mf_prefilter_lookup(&g_pf, u, v, lod, theta, phi, M, &mag);
+    if (lod <= 0.0)
+        return s0;
+    double theta = acos(fmin(1.0, wo.z)), phi = atan2(wo.y, wo.x);
     double c = cos(phi), sn = sin(phi);
     mf_vec3 r[4];
     for (int k = 0; k < 4; ++k)
         r[k] = v3(c * q[k].x + sn * q[k].y, -sn * q[k].x + c * q[k].y, q[k].z);
-    mf_ltc ltc;
-    if (mf_ltc_init(&ltc, mf_ltc_matrix_general(M)) != MF_OK)
-        return NAN;
     mf_polygon poly = mf_polygon_make(4, r);
-    s1 = mag * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
+    if (!split) { /* mfpfLookup: one blended M (the anisotropic taps' mean, as a texture unit filters) */
+        double M[9] = {0}, mag = 0.0;
+        for (int ia = 0; ia < g_an_n; ++ia) {
+            double Ma[9], ma;
+            mf_prefilter_lookup(&g_pf, u + an_t(ia) * g_an_u, v + an_t(ia) * g_an_v, lod, theta, phi, Ma, &ma);
+            for (int k = 0; k < 9; ++k)
+                M[k] += Ma[k] / g_an_n;
+            mag += ma / g_an_n;
+        }
+        mf_ltc ltc;
+        if (mf_ltc_init(&ltc, mf_ltc_matrix_general(M)) != MF_OK)
+            return NAN;
+        s1 = mag * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
+    } else { /* mfpfLookupTap (split texel + level) or --split: the corner lobes shaded one by one */
+        double M[32 * 9], mag[32], w[32];
+        for (int ia = 0; ia < g_an_n; ++ia) {
+            int nt = mf_prefilter_lookup_taps(&g_pf, u + an_t(ia) * g_an_u, v + an_t(ia) * g_an_v, lod, theta, phi, split,
+                                              M, mag, w);
+            for (int k = 0; k < nt; ++k) {
+                if (!(w[k] > 0.0))
+                    continue;
+                mf_ltc ltc;
+                if (mf_ltc_init(&ltc, mf_ltc_matrix_general(M + 9 * k)) != MF_OK)
+                    return NAN;
+                s1 += w[k] / g_an_n * mag[k] * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
+            }
+        }
+    }
     return lod < 1.0 ? (1.0 - lod) * s0 + lod * s1 : s1;
+}
+
+/* --oracle: one lobe fitted to the pixel's own footprint (the level-0 texels its truth sub-samples hit,
+ * weighted by their counts) at the pixel's own view, no interpolation of any kind: the single lobe's
+ * own error, the floor of any lookup of one lobe per pixel.  The fit as the prefilter's rows do it
+ * (normals rotated by -phi, mf_ltcfit_aniso_entry_fit_mirrored from the closed-form start, 4096
+ * directions), the magnitude the texels' mean albedo over the lobe's mass above the horizon (the
+ * prefilter's keep_albedo rule). */
+static double shade_oracle(const scene *s, mf_vec3 P, const int *tex, int ntex)
+{
+    mf_vec3 wo = mf_vec3_normalize(mf_vec3_sub(s->cam, P)), q[4];
+    quad_rel(s, P, q);
+    double theta = acos(fmin(1.0, wo.z)), phi = atan2(wo.y, wo.x), c = cos(phi), sn = sin(phi);
+    double *nr = malloc(sizeof(double) * 3 * (size_t)ntex), alb = 0.0;
+    for (int k = 0; k < ntex; ++k) {
+        const double *n = g_n + 3 * (size_t)tex[k];
+        mf_result r;
+        if (mf_prefilter_texel_albedo(g_alpha, n, wo, 0, &r) != MF_OK) {
+            free(nr);
+            return NAN;
+        }
+        alb += r.val / ntex;
+        nr[3 * k] = c * n[0] + sn * n[1], nr[3 * k + 1] = -sn * n[0] + c * n[1], nr[3 * k + 2] = n[2];
+    }
+    mf_prefilter_mix mix;
+    mf_brdf_params bp = {g_alpha, g_alpha};
+    mf_ltcfit_aniso_options fo;
+    mf_ltcfit_aniso_options_default(&fo);
+    mf_ltcfit_aniso_entry e;
+    mf_status st = mf_prefilter_mix_init(&mix, mf_brdf_model_find("ggx"), nr, ntex);
+    free(nr);
+    if (st != MF_OK)
+        return NAN;
+    st = mf_ltcfit_aniso_entry_fit_mirrored(&mix.model, bp, fmin(theta, MF_PREFILTER_THETA_MAX), 0, alb, 0.0, NULL,
+                                            NULL, &fo, &e);
+    mf_prefilter_mix_free(&mix);
+    if (st != MF_OK)
+        return NAN;
+    double hm = 0.5 * (1.0 + e.m[8] / sqrt(e.m[6] * e.m[6] + e.m[7] * e.m[7] + e.m[8] * e.m[8]));
+    mf_vec3 r[4];
+    for (int k = 0; k < 4; ++k)
+        r[k] = v3(c * q[k].x + sn * q[k].y, -sn * q[k].x + c * q[k].y, q[k].z);
+    mf_polygon poly = mf_polygon_make(4, r);
+    mf_ltc ltc;
+    if (mf_ltc_init(&ltc, mf_ltc_matrix_general(e.m)) != MF_OK)
+        return NAN;
+    return alb / fmax(hm, MF_PREFILTER_HORIZON_MIN) * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
 }
 
 static void shade_naive_toksvig(const scene *s, mf_vec3 P, double u, double v, double lod, double *naive,
@@ -291,7 +398,7 @@ static void shade_naive_toksvig(const scene *s, mf_vec3 P, double u, double v, d
     mf_vec3 wo = mf_vec3_normalize(mf_vec3_sub(s->cam, P)), q[4];
     quad_rel(s, P, q);
     double n[3];
-    pyr_trilinear(&g_nrm, u, v, lod, n);
+    pyr_aniso(&g_nrm, 3, u, v, lod, n);
     double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     mf_vec3 nb = v3(n[0] / len, n[1] / len, n[2] / len);
     *naive = shade_texel_ltc(nb, g_alpha, wo, q);
@@ -316,7 +423,7 @@ static double shade_leadr(const scene *s, mf_vec3 P, double u, double v, double 
 {
     mf_vec3 wo = mf_vec3_normalize(mf_vec3_sub(s->cam, P));
     double mo[5];
-    pyr_trilinear(&g_mom, u, v, lod, mo);
+    pyr_aniso(&g_mom, 5, u, v, lod, mo);
     mf_gaussian_slopes g;
     g.mean_x = mo[0], g.mean_y = mo[1];
     g.var_x = mo[2] - mo[0] * mo[0] + 0.5 * g_alpha * g_alpha;
@@ -386,7 +493,8 @@ int main(int argc, char **argv)
         const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             printf("usage: " PROG " --prefilter DIR [--map NORMALMAP] [--ltc-table FILE] [--size N] [--tiles T] [--distances D,D,...] "
-                   "[--light-half H] [--mc-samples K] [--images 0|1] [--seed S] [--out DIR] [--csv FILE]\n");
+                   "[--light-half H] [--mc-samples K] [--images 0|1] [--seed S] [--out DIR] [--csv FILE] [--split none|LIST] "
+                   "[--aniso N] [--oracle STRIDE]\n");
             return 0;
         }
         if (!val)
@@ -405,6 +513,29 @@ int main(int argc, char **argv)
             csv = val;
         else if (!strcmp(a, "--distances"))
             dlist = val;
+        else if (!strcmp(a, "--aniso")) {
+            g_aniso = (int)strtol(val, &e, 10);
+            if (*e || g_aniso < 1 || g_aniso > 64)
+                return die("--aniso %s: expected a tap count in [1, 64] (1: off)%s", val, "");
+        } else if (!strcmp(a, "--oracle")) {
+            g_oracle = (int)strtol(val, &e, 10);
+            if (*e || g_oracle < 0 || g_oracle > 4096)
+                return die("--oracle %s: expected a pixel stride in [0, 4096] (0: off)%s", val, "");
+        } else if (!strcmp(a, "--split")) {
+            g_split = 0;
+            for (const char *t = val; *t;) {
+                size_t n = strcspn(t, ",");
+                if (n == 5 && !strncmp(t, "texel", 5))
+                    g_split |= MF_PREFILTER_SPLIT_TEXEL;
+                else if (n == 5 && !strncmp(t, "level", 5))
+                    g_split |= MF_PREFILTER_SPLIT_LEVEL;
+                else if (n == 4 && !strncmp(t, "view", 4))
+                    g_split |= MF_PREFILTER_SPLIT_VIEW;
+                else if (!(n == 4 && !strncmp(t, "none", 4)))
+                    return die("--split %s: expected none or a comma-separated list of texel, level, view%s", val, "");
+                t += n + (t[n] == ',');
+            }
+        }
         else if (!strcmp(a, "--tiles")) {
             g_tiles = strtod(val, &e);
             if (*e || !(g_tiles >= 1.0 && g_tiles <= 4096.0))
@@ -547,7 +678,17 @@ int main(int argc, char **argv)
     fprintf(fc, "scene,distance,pixels,mean_lod,method,mse,rel_rms,mse_mc,mean_value\n");
 
     double *img_v[NMETH], *lodmap = malloc(sizeof(double) * N * N);
-    unsigned char *mask = malloc((size_t)N * N);
+    unsigned char *mask = malloc((size_t)N * N), *omask = calloc((size_t)N * N, 1);
+    double *oimg = calloc((size_t)N * N, sizeof(double));
+    int *otex = malloc(sizeof(int) * 32 * 32);
+    FILE *fo = NULL;
+    if (g_oracle > 0) {
+        snprintf(path, sizeof path, "%s/prefilter_scenes_oracle.csv", out);
+        if (!(fo = fopen(path, "w")))
+            return die("%s: %s", path, strerror(errno)), 3;
+        study_write_header(fo, PROG, argc, argv, sd);
+        fprintf(fo, "scene,distance,pixels,mean_lod,method,mse,mean_value\n");
+    }
     for (int m = 0; m < NMETH; ++m)
         img_v[m] = malloc(sizeof(double) * N * N);
     int rc = 0;
@@ -562,7 +703,7 @@ int main(int argc, char **argv)
                     for (int m = 0; m < NMETH; ++m)
                         img_v[m][pi] = 0.0;
                     mf_vec3 P, Px, Py;
-                    mask[pi] = 0;
+                    mask[pi] = 0, omask[pi] = 0;
                     lodmap[pi] = 0.0;
                     if (!hit(&S, N, px + 0.5, py + 0.5, &P))
                         continue;
@@ -582,6 +723,7 @@ int main(int argc, char **argv)
                     ss = ss < 4 ? 4 : ss > 32 ? 32 : ss;
                     double tl = 0.0, tm = 0.0;
                     long nsub = 0;
+                    int ntex = 0;
                     for (int j = 0; j < ss; ++j)
                         for (int i = 0; i < ss; ++i) {
                             mf_vec3 Q;
@@ -592,6 +734,7 @@ int main(int argc, char **argv)
                             quad_rel(&S, Q, q);
                             const mf_vec3 *n = texel_normal(Q.x * tu, -Q.y * tu);
                             tl += shade_texel_ltc(*n, g_alpha, wo, q);
+                            otex[ntex++] = (int)(n - (const mf_vec3 *)g_n);
                             if (mc > 0) {
                                 size_t t = (size_t)(n - (const mf_vec3 *)g_n);
                                 int m = (int)ceil(sqrt(16.0 * mc / (ss * ss))); /* >= 16 K points a pixel */
@@ -608,14 +751,28 @@ int main(int argc, char **argv)
                             ++nsub;
                         }
                     if (nsub == 0) {
-                        mask[pi] = 0, --npx;
+                        mask[pi] = 0, omask[pi] = 0, --npx;
                         continue;
                     }
                     img_v[R_TRUTH][pi] = tl / nsub;
                     img_v[R_TRUTH_MC][pi] = mc > 0 ? tm / nsub : 0.0;
-                    img_v[R_MFKIT][pi] = shade_mfkit(&S, P, u, v, lod);
-                    shade_naive_toksvig(&S, P, u, v, lod, &img_v[R_NAIVE][pi], &img_v[R_TOKSVIG][pi]);
-                    img_v[R_LEADR][pi] = shade_leadr(&S, P, u, v, lod, &rng);
+                    /* --aniso: n taps along the longer edge, each at the level of detail of rho / n */
+                    g_an_n = 1, g_an_u = g_an_v = 0.0;
+                    double flod = lod;
+                    if (g_aniso > 1) {
+                        int na = (int)ceil(fmax(dx, dy) / fmax(fmin(dx, dy), 1e-9));
+                        g_an_n = na < 1 ? 1 : na > g_aniso ? g_aniso : na;
+                        mf_vec3 A = dx >= dy ? Px : Py;
+                        g_an_u = (A.x - P.x) * tu, g_an_v = -(A.y - P.y) * tu;
+                        flod = log2(rho / g_an_n);
+                    }
+                    img_v[R_MFKIT][pi] = shade_mfkit(&S, P, u, v, flod, 0);
+                    img_v[R_MFKIT_TAPS][pi] = shade_mfkit(&S, P, u, v, flod, g_split);
+                    shade_naive_toksvig(&S, P, u, v, flod, &img_v[R_NAIVE][pi], &img_v[R_TOKSVIG][pi]);
+                    img_v[R_LEADR][pi] = shade_leadr(&S, P, u, v, flod, &rng);
+                    omask[pi] = g_oracle > 0 && px % g_oracle == 0 && py % g_oracle == 0;
+                    if (omask[pi])
+                        oimg[pi] = shade_oracle(&S, P, otex, ntex);
                     for (int m = 0; m < NMETH; ++m)
                         if (!isfinite(img_v[m][pi])) {
                             fprintf(stderr, PROG ": %s d=%g pixel (%d, %d): non-finite %s\n", S.name, dist[di], px, py,
@@ -671,6 +828,27 @@ int main(int argc, char **argv)
                     }
                 }
             }
+            if (fo) { /* every method on the oracle's pixels, against truth */
+                long no = 0;
+                double ol = 0.0;
+                for (int i = 0; i < N * N; ++i)
+                    if (omask[i] && mask[i])
+                        ++no, ol += lodmap[i];
+                for (int m = 0; m <= NMETH; ++m) {
+                    if (m == R_TRUTH || (m == R_TRUTH_MC && mc == 0))
+                        continue;
+                    const double *im = m < NMETH ? img_v[m] : oimg;
+                    double e = 0.0, mv = 0.0;
+                    for (int i = 0; i < N * N; ++i)
+                        if (omask[i] && mask[i]) {
+                            double a = im[i] - img_v[R_TRUTH][i];
+                            e += a * a, mv += im[i];
+                        }
+                    double n1 = no > 0 ? (double)no : 1.0;
+                    fprintf(fo, "%s,%g,%ld,%.6f,%s,%.9g,%.9g\n", S.name, dist[di], no, ol / n1,
+                            m < NMETH ? k_meth[m] : "oracle", e / n1, mv / n1);
+                }
+            }
             fprintf(stderr, PROG ": %s d=%g: %ld plane pixels, mean lod %.2f\n", S.name, dist[di], npx,
                     lsum / (npx > 0 ? npx : 1));
         }
@@ -684,7 +862,9 @@ int main(int argc, char **argv)
         printf("wrote %s\n", csvpath);
     for (int m = 0; m < NMETH; ++m)
         free(img_v[m]);
-    free(lodmap), free(mask);
+    free(lodmap), free(mask), free(omask), free(oimg), free(otex);
+    if (fo && fclose(fo) != 0 && !rc)
+        rc = 3;
     if (mc > 0)
         for (int t = 0; t < W * H; ++t)
             mf_prefilter_mix_free(&g_mix[t]);

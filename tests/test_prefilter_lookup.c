@@ -7,6 +7,11 @@
  *     matrix and magnitude of that texel, level and view;
  *   - at 4000 random (uv, lod, theta, phi) (fixed seed) it equals the same filter computed directly
  *     on the .npy arrays (their own indexing, no atlas).
+ *   - the split lookup (DIR/prefilter_lookup.glsl's mfpfLookupTap, eight texel taps read with
+ *     texelFetch): at the same random points its twin over the atlases has weights summing to 1, its
+ *     taps blended with their weights give mfpfLookup's M and magnitude (the filter is linear), and
+ *     tap k equals tap k of mf_prefilter_lookup_taps (mf_prefilter_lookup.h, split texel + level) on
+ *     the .npy arrays, so the renderer's taps are the shader's.
  * Tolerance 1e-12 relative to max(1, |value|): both evaluate the same float32 texels in double with
  * weights that differ only by rounding (the view grid theta_i = i / (n - 1) theta_max mapped back,
  * the summation order), a few ulps of double; a layout or channel error is O(|value|). */
@@ -17,6 +22,7 @@
 
 #include "mfkit/fit/mf_image_oiio.h"
 #include "mfkit/fit/mf_prefilter.h"
+#include "mfkit/fit/mf_prefilter_lookup.h"
 #include "mfkit/io/mf_image.h"
 #include "mfkit/mf_rng.h"
 
@@ -131,6 +137,40 @@ static void twin_lookup(double u, double v, double lod, double theta, double phi
     *mag = c[1];
 }
 
+/* mfpfLookupTap, line for line: tap k (0..7) of the texel-split filter; returns its weight */
+static double twin_tap(int k, double u, double v, double lod, double theta, double phi, double M[9], double *mag)
+{
+    double ft = fmin(fmax(theta / MF_PREFILTER_THETA_MAX, 0.0), 1.0) * (nt - 1);
+    int i0 = (int)ft < nt - 2 ? (int)ft : nt - 2;
+    double wt = ft - i0;
+    double fp = phi * (np / 6.28318530717958648);
+    fp -= np * floor(fp / np);
+    int j0 = (int)fp < np - 1 ? (int)fp : np - 1;
+    double wp = fp - j0;
+    int j1 = (j0 + 1) % np;
+    double l = fmin(fmax(lod - 1.0, 0.0), nlev - 1.0);
+    int l0 = (int)floor(l), il = k >> 2, lv = l0 + il < nlev - 1 ? l0 + il : nlev - 1;
+    int sw = L[lv].w, sh = L[lv].h;
+    double fx = u * sw - 0.5, fy = v * sh - 0.5, f0x = floor(fx), f0y = floor(fy);
+    int ix = k & 1, iy = (k >> 1) & 1;
+    int x = ((int)(f0x - sw * floor(f0x / sw)) + ix) % sw, y = ((int)(f0y - sh * floor(f0y / sh)) + iy) % sh;
+    double weight = (il == 1 ? l - l0 : 1.0 - (l - l0)) * (ix ? fx - f0x : 1.0 - (fx - f0x)) *
+                    (iy ? fy - f0y : 1.0 - (fy - f0y));
+    double a[4] = {0}, b[4] = {0}, c[4] = {0};
+    for (int q = 0; q < 4; ++q) {
+        int di = q & 1, dj = q >> 1;
+        double w = (di ? wt : 1.0 - wt) * (dj ? wp : 1.0 - wp);
+        int layer = (i0 + di) * np + (dj ? j1 : j0);
+        const float *pa = atlas(0, lv, layer, x, y), *pb = atlas(1, lv, layer, x, y), *pc = atlas(2, lv, layer, x, y);
+        for (int e = 0; e < 4; ++e)
+            a[e] += w * pa[e], b[e] += w * pb[e], c[e] += w * pc[e];
+    }
+    double rows[9] = {a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3], c[0]};
+    memcpy(M, rows, sizeof rows);
+    *mag = c[1];
+    return weight;
+}
+
 /* ---- the reference: the same filter on the .npy arrays ------------------------------------------- */
 
 static double npy_val(int lv, int x, int y, int a, int p, int q)
@@ -232,6 +272,11 @@ int main(int argc, char **argv)
                             check(M[q], npy_val(k, x, y, a, p, q), "texel centre", u, v, k + 1.0, th, ph, q);
                         check(mag, npy_val(k, x, y, a, p, 9), "texel centre", u, v, k + 1.0, th, ph, 9);
                     }
+    /* the header's lookup over the same .npy arrays (for the split lookup's taps) */
+    mf_prefilter_lookup_level hlev[MAXL];
+    for (int k = 0; k < nlev; ++k)
+        hlev[k].w = L[k].w, hlev[k].h = L[k].h, hlev[k].m = L[k].m, hlev[k].mag = L[k].mag;
+    mf_prefilter_lookup_levels hl = {nlev, nt, np, hlev};
     /* anywhere: the filter on the .npy arrays */
     mf_pcg32 rng;
     mf_pcg32_seed(&rng, 13, 1);
@@ -244,6 +289,28 @@ int main(int argc, char **argv)
         for (int q = 0; q < 9; ++q)
             check(M[q], ref_value(u, v, lod, th, ph, q), "random", u, v, lod, th, ph, q);
         check(mag, ref_value(u, v, lod, th, ph, 9), "random", u, v, lod, th, ph, 9);
+        /* the split lookup */
+        double TM[8 * 9], tmag[8], tw[8], HM[32 * 9], hmag[32], hw[32], sM[10] = {0}, wsum = 0.0;
+        int nh = mf_prefilter_lookup_taps(&hl, u, v, lod, th, ph, MF_PREFILTER_SPLIT_TEXEL | MF_PREFILTER_SPLIT_LEVEL,
+                                          HM, hmag, hw);
+        check(nh, 8, "tap count", u, v, lod, th, ph, 0);
+        for (int k = 0; k < 8; ++k) {
+            tw[k] = twin_tap(k, u, v, lod, th, ph, TM + 9 * k, &tmag[k]);
+            wsum += tw[k];
+            for (int q = 0; q < 9; ++q)
+                sM[q] += tw[k] * TM[9 * k + q];
+            sM[9] += tw[k] * tmag[k];
+            check(tw[k], hw[k], "tap weight", u, v, lod, th, ph, k);
+            if (hw[k] > 0.0) {
+                for (int q = 0; q < 9; ++q)
+                    check(TM[9 * k + q], HM[9 * k + q], "tap matrix", u, v, lod, th, ph, q);
+                check(tmag[k], hmag[k], "tap magnitude", u, v, lod, th, ph, 9);
+            }
+        }
+        check(wsum, 1.0, "tap weights' sum", u, v, lod, th, ph, 0);
+        for (int q = 0; q < 9; ++q)
+            check(sM[q], M[q], "taps blended", u, v, lod, th, ph, q);
+        check(sM[9], mag, "taps blended", u, v, lod, th, ph, 9);
     }
     for (int k = 0; k < nlev; ++k) {
         free(L[k].m), free(L[k].mag);

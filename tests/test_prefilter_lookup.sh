@@ -2,7 +2,7 @@
 # test_prefilter_lookup.sh MFKIT SRC LOOKUP -- `mfkit prefilter`'s textures and lookup snippets on a
 # 16 x 8 cut of the shipped V-groove map (not square, so that a swapped width and height shows) with
 # 2 x 2 views (about 2 s of CPU): the GLSL and HLSL snippets compile (glslangValidator, in a fragment
-# shader each), and LOOKUP (test_prefilter_lookup.c, the C twin of the snippet over the EXR atlases)
+# shader each that calls both mfpfLookup and the split lookup mfpfLookupTap), and LOOKUP (test_prefilter_lookup.c, the C twin of the snippet over the EXR atlases)
 # matches the .npy arrays.
 mfkit="$1"; src="$2"; lookup="$3"
 source "$(dirname "$0")/cli_test_lib.sh"
@@ -17,7 +17,9 @@ ok '[ $rc -eq 0 ]' "prefilter of the 16 x 8 map exits 0 (rc=$rc): $(tail -2 "$tm
   cat "$tmp/pf/prefilter_lookup.glsl"
   printf 'void main()\n{\n    mat3 M;\n    float magnitude;\n'
   printf '    mfpfLookup(t0, t1, t2, uv, view.z, view.x, view.y, M, magnitude);\n'
-  printf '    color = vec4(magnitude * inverse(M)[2], 1.0);\n}\n'; } >"$tmp/lookup.frag"
+  printf '    color = vec4(magnitude * inverse(M)[2], 1.0);\n'
+  printf '    for (int k = 0; k < 8; ++k) {\n        float w = mfpfLookupTap(t0, t1, t2, k, uv, view.z, view.x, view.y, M, magnitude);\n'
+  printf '        if (w > 0.0) color.xyz += w * magnitude * inverse(M)[2];\n    }\n}\n'; } >"$tmp/lookup.frag"
 glslangValidator -V -o "$tmp/glsl.spv" "$tmp/lookup.frag" >"$tmp/glsl.log" 2>&1; rc=$?
 ok '[ $rc -eq 0 ]' "the GLSL lookup compiles (rc=$rc): $(head -c 800 "$tmp/glsl.log")"
 
@@ -26,7 +28,9 @@ ok '[ $rc -eq 0 ]' "the GLSL lookup compiles (rc=$rc): $(head -c 800 "$tmp/glsl.
   cat "$tmp/pf/prefilter_lookup.hlsl"
   printf 'float4 main(float2 uv : TEXCOORD0, float3 view : TEXCOORD1) : SV_Target\n{\n    float3x3 M;\n    float magnitude;\n'
   printf '    mfpfLookup(t0, t1, t2, s, uv, view.z, view.x, view.y, M, magnitude);\n'
-  printf '    return float4(magnitude * M[2], 1.0);\n}\n'; } >"$tmp/lookup.hlsl"
+  printf '    float4 c = float4(magnitude * M[2], 1.0);\n'
+  printf '    for (int k = 0; k < 8; ++k) {\n        float w = mfpfLookupTap(t0, t1, t2, k, uv, view.z, view.x, view.y, M, magnitude);\n'
+  printf '        if (w > 0.0) c.xyz += w * magnitude * M[2];\n    }\n    return c;\n}\n'; } >"$tmp/lookup.hlsl"
 glslangValidator -V -D -e main -S frag -o "$tmp/hlsl.spv" "$tmp/lookup.hlsl" >"$tmp/hlsl.log" 2>&1; rc=$?
 ok '[ $rc -eq 0 ]' "the HLSL lookup compiles (rc=$rc): $(head -c 800 "$tmp/hlsl.log")"
 

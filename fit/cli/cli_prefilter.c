@@ -430,6 +430,15 @@ static const char *const k_lookup_doc =
     " * texture coordinate, lod the map's level of detail (>= 1; below, shade with the base LTC table),\n"
     " * theta, phi the view's elevation and azimuth in the tangent frame (radians).";
 
+static const char *const k_tap_doc =
+    "mfpfLookupTap: the filter of mfpfLookup split into its eight texel taps (tap k = 0..7: MIP level\n"
+    " * (k >> 2) of the two around lod - 1, corner (k & 1, (k >> 1) & 1) of the bilinear footprint;\n"
+    " * the four views blended as in mfpfLookup); returns the tap's weight (the eight sum to 1) and its\n"
+    " * M and magnitude.  Shade each tap's lobe and sum weight * magnitude * integral: neighbouring texels\n"
+    " * whose lobes reflect different facets then give the mean of their highlights, where mfpfLookup's\n"
+    " * blended M gives one lobe between them.  Eight LTC integrals per pixel instead of one; skip taps of\n"
+    " * weight 0.  The same textures; texelFetch, so no sampler.";
+
 static void write_glsl(mf_buf *b, const mf_prefilter_options *o)
 {
     mf_buf_printf(b,
@@ -459,8 +468,42 @@ static void write_glsl(mf_buf *b, const mf_prefilter_options *o)
         "    }\n"
         "    M = mat3(a.x, a.w, b.z, a.y, b.x, b.w, a.z, b.y, c.x); // columns of the row-major M\n"
         "    magnitude = c.y;\n"
+        "}\n"
+        "/* %s */\n"
+        "float mfpfLookupTap(sampler2DArray t0, sampler2DArray t1, sampler2DArray t2, int k, vec2 uv, float lod,\n"
+        "                    float theta, float phi, out mat3 M, out float magnitude)\n"
+        "{\n"
+        "    float ft = clamp(theta / MFPF_THETA_MAX, 0.0, 1.0) * float(MFPF_N_THETA - 1);\n"
+        "    int i0 = min(int(ft), MFPF_N_THETA - 2);\n"
+        "    float wt = ft - float(i0);\n"
+        "    float fp = phi * (float(MFPF_N_PHI) / 6.28318530717958648);\n"
+        "    fp -= float(MFPF_N_PHI) * floor(fp / float(MFPF_N_PHI));\n"
+        "    int j0 = min(int(fp), MFPF_N_PHI - 1);\n"
+        "    float wp = fp - float(j0);\n"
+        "    int j1 = (j0 + 1) %% MFPF_N_PHI;\n"
+        "    int nl = textureQueryLevels(t0);\n"
+        "    float l = min(max(lod - 1.0, 0.0), float(nl - 1));\n"
+        "    int l0 = int(floor(l)), il = k >> 2, lv = min(l0 + il, nl - 1);\n"
+        "    ivec2 size = textureSize(t0, lv).xy;\n"
+        "    vec2 f = uv * vec2(size) - 0.5, f0 = floor(f), fr = f - f0;\n"
+        "    int ix = k & 1, iy = (k >> 1) & 1;\n"
+        "    ivec2 xy = (ivec2(f0 - vec2(size) * floor(f0 / vec2(size))) + ivec2(ix, iy)) %% size;\n"
+        "    float weight = (il == 1 ? l - float(l0) : 1.0 - (l - float(l0))) * (ix == 1 ? fr.x : 1.0 - fr.x)\n"
+        "                 * (iy == 1 ? fr.y : 1.0 - fr.y);\n"
+        "    vec4 a = vec4(0.0), b = vec4(0.0), c = vec4(0.0);\n"
+        "    for (int q = 0; q < 4; ++q) {\n"
+        "        int di = q & 1, dj = q >> 1;\n"
+        "        float w = (di == 1 ? wt : 1.0 - wt) * (dj == 1 ? wp : 1.0 - wp);\n"
+        "        ivec3 s = ivec3(xy, (i0 + di) * MFPF_N_PHI + (dj == 1 ? j1 : j0));\n"
+        "        a += w * texelFetch(t0, s, lv);\n"
+        "        b += w * texelFetch(t1, s, lv);\n"
+        "        c += w * texelFetch(t2, s, lv);\n"
+        "    }\n"
+        "    M = mat3(a.x, a.w, b.z, a.y, b.x, b.w, a.z, b.y, c.x);\n"
+        "    magnitude = c.y;\n"
+        "    return weight;\n"
         "}\n",
-        k_lookup_doc, o->n_theta, o->n_phi, MF_PREFILTER_THETA_MAX);
+        k_lookup_doc, o->n_theta, o->n_phi, MF_PREFILTER_THETA_MAX, k_tap_doc);
 }
 
 static void write_hlsl(mf_buf *b, const mf_prefilter_options *o)
@@ -492,8 +535,43 @@ static void write_hlsl(mf_buf *b, const mf_prefilter_options *o)
         "    }\n"
         "    M = float3x3(a.x, a.y, a.z, a.w, b.x, b.y, b.z, b.w, c.x); // rows of M\n"
         "    magnitude = c.y;\n"
+        "}\n"
+        "/* %s */\n"
+        "float mfpfLookupTap(Texture2DArray t0, Texture2DArray t1, Texture2DArray t2, int k, float2 uv, float lod,\n"
+        "                    float theta, float phi, out float3x3 M, out float magnitude)\n"
+        "{\n"
+        "    float ft = clamp(theta / MFPF_THETA_MAX, 0.0, 1.0) * float(MFPF_N_THETA - 1);\n"
+        "    int i0 = min(int(ft), MFPF_N_THETA - 2);\n"
+        "    float wt = ft - float(i0);\n"
+        "    float fp = phi * (float(MFPF_N_PHI) / 6.28318530717958648);\n"
+        "    fp -= float(MFPF_N_PHI) * floor(fp / float(MFPF_N_PHI));\n"
+        "    int j0 = min(int(fp), MFPF_N_PHI - 1);\n"
+        "    float wp = fp - float(j0);\n"
+        "    int j1 = (j0 + 1) %% MFPF_N_PHI;\n"
+        "    uint w0, h0, el, nl;\n"
+        "    t0.GetDimensions(0, w0, h0, el, nl);\n"
+        "    float l = min(max(lod - 1.0, 0.0), float(nl) - 1.0);\n"
+        "    int l0 = int(floor(l)), il = k >> 2, lv = min(l0 + il, int(nl) - 1);\n"
+        "    int2 size = int2(max(int(w0) >> lv, 1), max(int(h0) >> lv, 1));\n"
+        "    float2 f = uv * float2(size) - 0.5, f0 = floor(f), fr = f - f0;\n"
+        "    int ix = k & 1, iy = (k >> 1) & 1;\n"
+        "    int2 xy = (int2(f0 - float2(size) * floor(f0 / float2(size))) + int2(ix, iy)) %% size;\n"
+        "    float weight = (il == 1 ? l - float(l0) : 1.0 - (l - float(l0))) * (ix == 1 ? fr.x : 1.0 - fr.x)\n"
+        "                 * (iy == 1 ? fr.y : 1.0 - fr.y);\n"
+        "    float4 a = 0.0, b = 0.0, c = 0.0;\n"
+        "    for (int q = 0; q < 4; ++q) {\n"
+        "        int di = q & 1, dj = q >> 1;\n"
+        "        float w = (di == 1 ? wt : 1.0 - wt) * (dj == 1 ? wp : 1.0 - wp);\n"
+        "        int4 p = int4(xy, (i0 + di) * MFPF_N_PHI + (dj == 1 ? j1 : j0), lv);\n"
+        "        a += w * t0.Load(p);\n"
+        "        b += w * t1.Load(p);\n"
+        "        c += w * t2.Load(p);\n"
+        "    }\n"
+        "    M = float3x3(a.x, a.y, a.z, a.w, b.x, b.y, b.z, b.w, c.x);\n"
+        "    magnitude = c.y;\n"
+        "    return weight;\n"
         "}\n",
-        k_lookup_doc, o->n_theta, o->n_phi, MF_PREFILTER_THETA_MAX);
+        k_lookup_doc, o->n_theta, o->n_phi, MF_PREFILTER_THETA_MAX, k_tap_doc);
 }
 
 static int begin_file(mf_io_atomic *files, int *nf, const char *dir, const char *name, char *msg, size_t msg_size)

@@ -97,6 +97,71 @@ static inline void mf_prefilter_lookup(const mf_prefilter_lookup_levels *s, doub
     *magnitude = acc[9];
 }
 
+/* The same filter split into taps (the corner lobes) that the renderer shades one by one and sums
+ * with their weights, instead of shading the one blended M.  split: a combination of
+ * MF_PREFILTER_SPLIT_TEXEL (the four texels of the bilinear filter), MF_PREFILTER_SPLIT_LEVEL (the two
+ * MIP levels) and MF_PREFILTER_SPLIT_VIEW (the four tabulated views): along a split axis each corner
+ * is its own tap, along the others the entries are blended as by mf_prefilter_lookup.  Up to 32 taps
+ * (all three split); tap k gets M[9 k .. 9 k + 8], magnitude mag[k] and weight w[k] (the taps'
+ * weights sum to 1, a tap's M and magnitude are its normalised blend).  The shading
+ * sum_k w[k] mag[k] integral D_{M_k} is linear in the corners' shading along the split axes, so two
+ * texels whose lobes reflect opposite facets give the mean of their two highlights, where the
+ * blended M gives one lobe between them (docs/prefilter.md, "Textures and the lookup").  Returns the
+ * number of taps; a tap of weight 0 (the sample sits on a texel centre, an integer level or a tabulated
+ * view) has M = 0 and magnitude 0: skip it. */
+#define MF_PREFILTER_SPLIT_TEXEL 1
+#define MF_PREFILTER_SPLIT_LEVEL 2
+#define MF_PREFILTER_SPLIT_VIEW 4
+static inline int mf_prefilter_lookup_taps(const mf_prefilter_lookup_levels *s, double u, double v, double lod,
+                                           double theta, double phi, int split, double M[32 * 9], double mag[32],
+                                           double w[32])
+{
+    const int nt = s->n_theta, np = s->n_phi;
+    double ft = fmin(fmax(theta / MF_PREFILTER_THETA_MAX, 0.0), 1.0) * (nt - 1);
+    int a0 = (int)ft < nt - 2 ? (int)ft : nt - 2;
+    double fp = fmod(phi / (2.0 * MF_PI) * np, (double)np);
+    if (fp < 0)
+        fp += np;
+    int p0 = (int)fp < np - 1 ? (int)fp : np - 1;
+    double wa[2] = {1.0 - (ft - a0), ft - a0}, wp[2] = {1.0 - (fp - p0), fp - p0};
+    double l = fmin(fmax(lod - 1.0, 0.0), s->nlev - 1.0);
+    int l0 = (int)floor(l);
+    double wl[2] = {1.0 - (l - l0), l - l0};
+    int nx = split & MF_PREFILTER_SPLIT_TEXEL ? 4 : 1, nl = split & MF_PREFILTER_SPLIT_LEVEL ? 2 : 1,
+        nv = split & MF_PREFILTER_SPLIT_VIEW ? 4 : 1, ntap = nx * nl * nv;
+    double acc[32 * 10] = {0};
+    for (int k = 0; k < ntap; ++k)
+        w[k] = 0.0;
+    for (int il = 0; il < 2; ++il) {
+        int lv = l0 + il < s->nlev ? l0 + il : s->nlev - 1;
+        const mf_prefilter_lookup_level *L1 = &s->lev[lv];
+        double xf = u * L1->w - 0.5, yf = v * L1->h - 0.5;
+        double x0f = floor(xf), y0f = floor(yf);
+        int x0 = mf_prefilter_lookup_wrap_((int)fmod(x0f, (double)L1->w), L1->w);
+        int y0 = mf_prefilter_lookup_wrap_((int)fmod(y0f, (double)L1->h), L1->h);
+        double wx[2] = {1.0 - (xf - x0f), xf - x0f}, wy[2] = {1.0 - (yf - y0f), yf - y0f};
+        for (int ia = 0; ia < 2; ++ia)
+            for (int ip = 0; ip < 2; ++ip)
+                for (int iy = 0; iy < 2; ++iy)
+                    for (int ix = 0; ix < 2; ++ix) {
+                        double wt = wl[il] * wa[ia] * wp[ip] * wy[iy] * wx[ix];
+                        int tx = nx > 1 ? 2 * iy + ix : 0, tl = nl > 1 ? il : 0, tv = nv > 1 ? 2 * ip + ia : 0;
+                        int k = (tv * nl + tl) * nx + tx;
+                        int x = (x0 + ix) % L1->w, y = (y0 + iy) % L1->h, p = (p0 + ip) % np;
+                        w[k] += wt;
+                        for (int q = 0; q < 10; ++q)
+                            acc[10 * k + q] += wt * mf_prefilter_lookup_value_(s, lv, x, y, a0 + ia, p, q);
+                    }
+    }
+    for (int k = 0; k < ntap; ++k) {
+        double d = w[k];
+        for (int q = 0; q < 9; ++q)
+            M[9 * k + q] = d > 0.0 ? acc[10 * k + q] / d : 0.0;
+        mag[k] = d > 0.0 ? acc[10 * k + 9] / d : 0.0;
+    }
+    return ntap;
+}
+
 /* Per-texel LTC shading [Nahmias 2022, Sec. 4.1: "for each normal, we evaluate the view elevation
  * and use the standard technique from [HDHN16] to integrate over the light"]: the isotropic LTC of
  * table t (mf_ltc_table.h layout; field[0..4] the indices of minv_00, minv_20, minv_02, minv_22,
