@@ -996,3 +996,231 @@ double mf_ltc_gate_texel_difference(const mf_ltc *ltc, double magnitude, const m
         *worst = at;
     return d;
 }
+
+/* ---- the neighbour check (fitter-free; mf_ltc_gate.h, docs/validation.md "The neighbour check") ----
+ * Every texel is predicted from its neighbours along r and along u by six stencils per axis, in two
+ * spaces of the 2 x 2 block B = [[minv_00, minv_02], [minv_20, minv_22]] (the stored fields; and
+ * log-polar: B = R(psi) S, S symmetric positive definite, coordinates psi and the three entries of
+ * log S), and the stored texel is compared with each prediction by the texel check's d on its 24 gate
+ * polygons, magnitudes set to 1 (the magnitude is the albedo checks' business).  s = the smallest d
+ * over the predictions; e = the largest, over the texel's (up to 4) axis neighbours, of the
+ * neighbour's own s computed without the stencils that use this texel.  The check's value is
+ * s / (NB_TAU + NB_C e). */
+#define NB_TAU MF_LTC_GATE_NEIGHBOUR_TAU
+#define NB_C MF_LTC_GATE_NEIGHBOUR_C
+#define NB_AXIS_PRED 6
+#define NB_PRED (2 * NB_AXIS_PRED)
+
+/* The stencils: offsets used and weights (prediction = sum w_i x(k + o_i)). */
+static const int nb_off[NB_AXIS_PRED][4] = {{-2, -1, 1, 2}, {-1, 1, 0, 0}, {-1, -2, -3, 0},
+                                            {1, 2, 3, 0},    {-1, -2, 0, 0}, {1, 2, 0, 0}};
+static const double nb_w[NB_AXIS_PRED][4] = {{-1.0 / 6.0, 4.0 / 6.0, 4.0 / 6.0, -1.0 / 6.0},
+                                             {0.5, 0.5, 0, 0},
+                                             {3.0, -3.0, 1.0, 0},
+                                             {3.0, -3.0, 1.0, 0},
+                                             {2.0, -1.0, 0, 0},
+                                             {2.0, -1.0, 0, 0}};
+static const int nb_n[NB_AXIS_PRED] = {4, 2, 3, 3, 2, 2};
+
+/* Stored fields (minv_00, minv_20, minv_02, minv_22) -> log-polar (psi, L11, L12, L22); 0 if the
+ * block's determinant is not positive. */
+static int nb_to_logpolar(const double f[4], double x[4])
+{
+    double a = f[0], c = f[1], b = f[2], d = f[3];
+    if (!(a * d - b * c > 0.0))
+        return 0;
+    double psi = atan2(c - b, a + d), cs = cos(psi), sn = sin(psi);
+    double s11 = cs * a + sn * c, s22 = -sn * b + cs * d;
+    double s12 = 0.5 * ((cs * b + sn * d) + (-sn * a + cs * c));
+    double half = 0.5 * (s11 + s22), df = 0.5 * (s11 - s22), r = sqrt(df * df + s12 * s12);
+    double l1 = half + r, l2 = half - r;
+    if (!(l2 > 0.0) || !isfinite(l1))
+        return 0;
+    double th = 0.5 * atan2(2.0 * s12, s11 - s22), ct = cos(th), st = sin(th);
+    double g1 = log(l1), g2 = log(l2);
+    x[0] = psi;
+    x[1] = ct * ct * g1 + st * st * g2;
+    x[2] = ct * st * (g1 - g2);
+    x[3] = st * st * g1 + ct * ct * g2;
+    return 1;
+}
+
+static void nb_from_logpolar(const double x[4], double f[4])
+{
+    double l11 = x[1], l12 = x[2], l22 = x[3];
+    double half = 0.5 * (l11 + l22), df = 0.5 * (l11 - l22), r = sqrt(df * df + l12 * l12);
+    double th = 0.5 * atan2(2.0 * l12, l11 - l22), ct = cos(th), st = sin(th);
+    double e1 = exp(half + r), e2 = exp(half - r);
+    double s11 = ct * ct * e1 + st * st * e2, s12 = ct * st * (e1 - e2), s22 = st * st * e1 + ct * ct * e2;
+    double cs = cos(x[0]), sn = sin(x[0]);
+    f[0] = cs * s11 - sn * s12; /* minv_00 */
+    f[1] = sn * s11 + cs * s12; /* minv_20 */
+    f[2] = cs * s12 - sn * s22; /* minv_02 */
+    f[3] = sn * s12 + cs * s22; /* minv_22 */
+}
+
+/* d of each prediction of texel (ir, iu) (NB_PRED values: NB_NONE where a stencil leaves the table
+ * or meets a non-finite texel, +inf where the stored texel or the prediction cannot be unpacked, NaN
+ * for a NaN integral). */
+#define NB_NONE (-1.0)
+static void nb_texel(const mf_table *t, const gate_layout *L, const mf_brdf_model *model, uint64_t seed, int ir, int iu,
+                     double *d)
+{
+    mf_polygon p[MF_LTC_GATE_TEXEL_POLYGONS];
+    mf_ltc_gate_texel_polygons(t, model, seed, ir, iu, MF_LTC_GATE_TEXEL_POLYGONS, p);
+    mf_ltc s;
+    int sok = unpack_at(t, L, ir, iu, &s);
+    for (int ax = 0; ax < 2; ++ax) {
+        int n = ax ? L->nu : L->nr, k = ax ? iu : ir;
+        double raw[7][4], lp[7][4];
+        int have[7], have_lp[7];
+        for (int o = -3; o <= 3; ++o) {
+            int kk = k + o, j = o + 3;
+            have[j] = have_lp[j] = 0;
+            if (o == 0 || kk < 0 || kk >= n)
+                continue;
+            const double *r = rec(t, ax ? ir : kk, ax ? kk : iu);
+            for (int q = 0; q < 4; ++q)
+                raw[j][q] = r[L->f[q]];
+            have[j] = isfinite(raw[j][0]) && isfinite(raw[j][1]) && isfinite(raw[j][2]) && isfinite(raw[j][3]);
+            have_lp[j] = have[j] && nb_to_logpolar(raw[j], lp[j]);
+        }
+        /* psi unwrapped about the nearest neighbour's (either side) */
+        double ref = NAN;
+        for (int o = 1; o <= 3 && isnan(ref); ++o)
+            ref = have_lp[3 - o] ? lp[3 - o][0] : have_lp[3 + o] ? lp[3 + o][0] : NAN;
+        for (int j = 0; j < 7; ++j)
+            if (have_lp[j])
+                lp[j][0] -= 2.0 * MF_PI * floor((lp[j][0] - ref) / (2.0 * MF_PI) + 0.5);
+        for (int pr = 0; pr < NB_AXIS_PRED; ++pr) {
+            double best = NB_NONE;
+            for (int space = 0; space < 2; ++space) {
+                int ok = 1;
+                double x[4] = {0, 0, 0, 0}, f[4];
+                for (int i = 0; i < nb_n[pr] && ok; ++i) {
+                    int j = nb_off[pr][i] + 3;
+                    ok = space ? have_lp[j] : have[j];
+                    for (int q = 0; q < 4 && ok; ++q)
+                        x[q] += nb_w[pr][i] * (space ? lp[j][q] : raw[j][q]);
+                }
+                if (!ok)
+                    continue;
+                if (space)
+                    nb_from_logpolar(x, f);
+                else
+                    memcpy(f, x, sizeof f);
+                mf_ltc q;
+                double v = INFINITY;
+                if (sok && mf_ltc_table_unpack(f, &q) == MF_OK)
+                    v = mf_ltc_gate_texel_difference(&s, 1.0, &q, 1.0, p, MF_LTC_GATE_TEXEL_POLYGONS, NULL);
+                if (isnan(v) || isnan(best))
+                    best = NAN; /* a NaN integral is reported, not hidden by the other space */
+                else if (best == NB_NONE || v < best)
+                    best = v;
+            }
+            d[ax * NB_AXIS_PRED + pr] = best;
+        }
+    }
+}
+
+/* The smallest d of texel j over its predictions, leaving out those whose stencil uses the texel
+ * (xr, xu) (xr < 0: none left out).  +inf if there is none. */
+static double nb_min(const double *dj, int jr, int ju, int xr, int xu)
+{
+    double b = INFINITY;
+    for (int ax = 0; ax < 2; ++ax)
+        for (int pr = 0; pr < NB_AXIS_PRED; ++pr) {
+            double v = dj[ax * NB_AXIS_PRED + pr];
+            if (v == NB_NONE || !(isnan(v) || v < b))
+                continue;
+            int uses = 0;
+            for (int i = 0; i < nb_n[pr] && xr >= 0; ++i) {
+                int o = nb_off[pr][i];
+                if ((ax ? jr : jr + o) == xr && (ax ? ju + o : ju) == xu)
+                    uses = 1;
+            }
+            if (!uses) {
+                if (isnan(v))
+                    return NAN;
+                b = v;
+            }
+        }
+    return b;
+}
+
+mf_status mf_ltc_gate_neighbour_scores(const mf_table *t, const mf_brdf_model *model, uint64_t seed, double *s,
+                                       double *e, double *v)
+{
+    gate_layout L;
+    if (!model || !layout_of(t, &L))
+        return MF_ERR_DOMAIN;
+    size_t n = (size_t)L.nr * (size_t)L.nu;
+    double *d = malloc(sizeof *d * n * NB_PRED);
+    if (!d)
+        return MF_ERR_ALLOC;
+    for (int iu = 0; iu < L.nu; ++iu)
+        for (int ir = 0; ir < L.nr; ++ir)
+            nb_texel(t, &L, model, seed, ir, iu, d + ((size_t)ir + (size_t)L.nr * iu) * NB_PRED);
+    const int nb[4][2] = {{-1, 0}, {1, 0}, {0, -1}, {0, 1}};
+    for (int iu = 0; iu < L.nu; ++iu)
+        for (int ir = 0; ir < L.nr; ++ir) {
+            size_t k = (size_t)ir + (size_t)L.nr * iu;
+            const double *dk = d + k * NB_PRED;
+            /* +inf: no prediction at all (an axis of 2 texels and the other unusable) or an unusable texel */
+            double sk = nb_min(dk, ir, iu, -1, -1);
+            double ek = 0.0;
+            for (int q = 0; q < 4; ++q) {
+                int jr = ir + nb[q][0], ju = iu + nb[q][1];
+                if (jr < 0 || ju < 0 || jr >= L.nr || ju >= L.nu)
+                    continue;
+                double x = nb_min(d + ((size_t)jr + (size_t)L.nr * ju) * NB_PRED, jr, ju, ir, iu);
+                if (isfinite(x) && x > ek)
+                    ek = x;
+            }
+            if (s)
+                s[k] = sk;
+            if (e)
+                e[k] = ek;
+            if (v)
+                v[k] = sk / (NB_TAU + NB_C * ek);
+        }
+    free(d);
+    return MF_OK;
+}
+
+mf_status mf_ltc_gate_neighbour_check(const mf_table *t, const mf_brdf_model *model, uint64_t seed, mf_check *c)
+{
+    if (!c)
+        return MF_ERR_DOMAIN;
+    mf_check_begin(c, "ltc_texel_neighbours",
+                   "max over texels of s / (0.05 + 2 e): s the shading difference d from the neighbours' predictions",
+                   1.0);
+    gate_layout L;
+    if (!model || !layout_of(t, &L)) {
+        mf_check_fail(c, "no model or not an LTC table layout");
+        return MF_ERR_DOMAIN;
+    }
+    size_t n = (size_t)L.nr * (size_t)L.nu;
+    double *s = malloc(sizeof *s * n * 3);
+    if (!s) {
+        mf_check_fail(c, "out of memory");
+        return MF_ERR_ALLOC;
+    }
+    double *e = s + n, *v = e + n;
+    mf_status st = mf_ltc_gate_neighbour_scores(t, model, seed, s, e, v);
+    if (st != MF_OK) {
+        free(s);
+        mf_check_fail(c, "out of memory");
+        return st;
+    }
+    for (int iu = 0; iu < L.nu; ++iu)
+        for (int ir = 0; ir < L.nr; ++ir) {
+            size_t k = (size_t)ir + (size_t)L.nr * iu;
+            char w[64];
+            snprintf(w, sizeof w, "s %.3g, e %.3g", s[k], e[k]);
+            record_texel(c, v[k], w, ir, iu, mf_ltc_table_alpha(t, ir), mf_ltc_table_cos_theta(t, iu));
+        }
+    free(s);
+    mf_check_finish(c);
+    return MF_OK;
+}
