@@ -1011,16 +1011,46 @@ double mf_ltc_gate_texel_difference(const mf_ltc *ltc, double magnitude, const m
 #define NB_AXIS_PRED 6
 #define NB_PRED (2 * NB_AXIS_PRED)
 
-/* The stencils: offsets used and weights (prediction = sum w_i x(k + o_i)). */
+/* The stencils: the neighbour offsets each one uses.  The weights are Lagrange's for a polynomial
+ * through the stencil's texels evaluated at the texel (nb_weights): on the r axis in the abscissa
+ * log(alpha), along u in the texel index.  In the index these are the centred cubic
+ * (-1, 4, 4, -1) / 6, the centred mean, and the one-sided extrapolations (3, -3, 1) and (2, -1). */
 static const int nb_off[NB_AXIS_PRED][4] = {{-2, -1, 1, 2}, {-1, 1, 0, 0}, {-1, -2, -3, 0},
                                             {1, 2, 3, 0},    {-1, -2, 0, 0}, {1, 2, 0, 0}};
-static const double nb_w[NB_AXIS_PRED][4] = {{-1.0 / 6.0, 4.0 / 6.0, 4.0 / 6.0, -1.0 / 6.0},
-                                             {0.5, 0.5, 0, 0},
-                                             {3.0, -3.0, 1.0, 0},
-                                             {3.0, -3.0, 1.0, 0},
-                                             {2.0, -1.0, 0, 0},
-                                             {2.0, -1.0, 0, 0}};
 static const int nb_n[NB_AXIS_PRED] = {4, 2, 3, 3, 2, 2};
+
+/* Lagrange weights of stencil pr at texel k of axis ax.  Along r the abscissa is log(alpha): a
+ * narrow lobe's matrix changes with alpha over orders of magnitude near the table's low-roughness
+ * edge (alpha = r^2, so log alpha = 2 log r), where a polynomial in the index predicts it badly;
+ * where two texels share an alpha (a clamp) the index is used. */
+static void nb_weights(const mf_table *t, int ax, int k, int pr, double *w)
+{
+    double xi[4], xt = 0.0;
+    int idx = ax == 1;
+    if (!idx) {
+        xt = log(mf_ltc_table_alpha(t, k));
+        for (int i = 0; i < nb_n[pr]; ++i)
+            xi[i] = log(mf_ltc_table_alpha(t, k + nb_off[pr][i]));
+        idx = !isfinite(xt);
+        for (int i = 0; i < nb_n[pr] && !idx; ++i) {
+            idx = !isfinite(xi[i]) || xi[i] == xt;
+            for (int j = 0; j < i && !idx; ++j)
+                idx = xi[i] == xi[j];
+        }
+    }
+    if (idx) {
+        xt = 0.0;
+        for (int i = 0; i < nb_n[pr]; ++i)
+            xi[i] = (double)nb_off[pr][i];
+    }
+    for (int i = 0; i < nb_n[pr]; ++i) {
+        double v = 1.0;
+        for (int j = 0; j < nb_n[pr]; ++j)
+            if (j != i)
+                v *= (xt - xi[j]) / (xi[i] - xi[j]);
+        w[i] = v;
+    }
+}
 
 /* Stored fields (minv_00, minv_20, minv_02, minv_22) -> log-polar (psi, L11, L12, L22); 0 if the
  * block's determinant is not positive. */
@@ -1093,15 +1123,20 @@ static void nb_texel(const mf_table *t, const gate_layout *L, const mf_brdf_mode
             if (have_lp[j])
                 lp[j][0] -= 2.0 * MF_PI * floor((lp[j][0] - ref) / (2.0 * MF_PI) + 0.5);
         for (int pr = 0; pr < NB_AXIS_PRED; ++pr) {
-            double best = NB_NONE;
+            double best = NB_NONE, wt[4];
+            int inside = 1;
+            for (int i = 0; i < nb_n[pr]; ++i)
+                inside &= k + nb_off[pr][i] >= 0 && k + nb_off[pr][i] < n;
+            if (inside)
+                nb_weights(t, ax, k, pr, wt);
             for (int space = 0; space < 2; ++space) {
                 int ok = 1;
                 double x[4] = {0, 0, 0, 0}, f[4];
                 for (int i = 0; i < nb_n[pr] && ok; ++i) {
                     int j = nb_off[pr][i] + 3;
-                    ok = space ? have_lp[j] : have[j];
+                    ok = inside && (space ? have_lp[j] : have[j]);
                     for (int q = 0; q < 4 && ok; ++q)
-                        x[q] += nb_w[pr][i] * (space ? lp[j][q] : raw[j][q]);
+                        x[q] += wt[i] * (space ? lp[j][q] : raw[j][q]);
                 }
                 if (!ok)
                     continue;
@@ -1148,32 +1183,59 @@ static double nb_min(const double *dj, int jr, int ju, int xr, int xu)
     return b;
 }
 
-mf_status mf_ltc_gate_neighbour_scores(const mf_table *t, const mf_brdf_model *model, uint64_t seed, double *s,
-                                       double *e, double *v)
+/* The second smallest d of texel k over its predictions (the smallest if it has only one): one
+ * prediction alone may pass anywhere near a corrupted texel where the stencils scatter (a narrow
+ * lobe, whose predictions put it in or out of a polygon), two seldom do.  +inf if there is none;
+ * NaN if a prediction's integral was NaN. */
+static double nb_second(const double *dk)
+{
+    double m1 = INFINITY, m2 = INFINITY;
+    int any = 0;
+    for (int q = 0; q < NB_PRED; ++q) {
+        double v = dk[q];
+        if (v == NB_NONE)
+            continue;
+        if (isnan(v))
+            return NAN;
+        any = 1;
+        if (v < m1) {
+            m2 = m1;
+            m1 = v;
+        } else if (v < m2)
+            m2 = v;
+    }
+    if (!any)
+        return INFINITY;
+    return m2 < INFINITY ? m2 : m1; /* one usable prediction: that one */
+}
+
+mf_status mf_ltc_gate_neighbour_scores_box(const mf_table *t, const mf_brdf_model *model, uint64_t seed, int r0,
+                                           int r1, int u0, int u1, double *s, double *e, double *v)
 {
     gate_layout L;
-    if (!model || !layout_of(t, &L))
+    if (!model || !layout_of(t, &L) || r0 < 0 || u0 < 0 || r1 >= L.nr || u1 >= L.nu || r0 > r1 || u0 > u1)
         return MF_ERR_DOMAIN;
-    size_t n = (size_t)L.nr * (size_t)L.nu;
-    double *d = malloc(sizeof *d * n * NB_PRED);
+    /* d of every prediction of the box and its axis neighbours (the allowance reads theirs) */
+    int br0 = r0 > 0 ? r0 - 1 : 0, br1 = r1 + 1 < L.nr ? r1 + 1 : r1;
+    int bu0 = u0 > 0 ? u0 - 1 : 0, bu1 = u1 + 1 < L.nu ? u1 + 1 : u1, bnr = br1 - br0 + 1;
+    size_t nb_texels = (size_t)bnr * (size_t)(bu1 - bu0 + 1);
+    double *d = malloc(sizeof *d * nb_texels * NB_PRED);
     if (!d)
         return MF_ERR_ALLOC;
-    for (int iu = 0; iu < L.nu; ++iu)
-        for (int ir = 0; ir < L.nr; ++ir)
-            nb_texel(t, &L, model, seed, ir, iu, d + ((size_t)ir + (size_t)L.nr * iu) * NB_PRED);
+#define NB_D(ir, iu) (d + ((size_t)((ir) - br0) + (size_t)bnr * (size_t)((iu) - bu0)) * NB_PRED)
+    for (int iu = bu0; iu <= bu1; ++iu)
+        for (int ir = br0; ir <= br1; ++ir)
+            nb_texel(t, &L, model, seed, ir, iu, NB_D(ir, iu));
     const int nb[4][2] = {{-1, 0}, {1, 0}, {0, -1}, {0, 1}};
-    for (int iu = 0; iu < L.nu; ++iu)
-        for (int ir = 0; ir < L.nr; ++ir) {
+    for (int iu = u0; iu <= u1; ++iu)
+        for (int ir = r0; ir <= r1; ++ir) {
             size_t k = (size_t)ir + (size_t)L.nr * iu;
-            const double *dk = d + k * NB_PRED;
-            /* +inf: no prediction at all (an axis of 2 texels and the other unusable) or an unusable texel */
-            double sk = nb_min(dk, ir, iu, -1, -1);
-            double ek = 0.0;
+            double sk = nb_second(NB_D(ir, iu)), ek = 0.0;
             for (int q = 0; q < 4; ++q) {
                 int jr = ir + nb[q][0], ju = iu + nb[q][1];
                 if (jr < 0 || ju < 0 || jr >= L.nr || ju >= L.nu)
                     continue;
-                double x = nb_min(d + ((size_t)jr + (size_t)L.nr * ju) * NB_PRED, jr, ju, ir, iu);
+                double x = nb_min(NB_D(jr, ju), jr, ju, ir, iu);
                 if (isfinite(x) && x > ek)
                     ek = x;
             }
@@ -1184,8 +1246,18 @@ mf_status mf_ltc_gate_neighbour_scores(const mf_table *t, const mf_brdf_model *m
             if (v)
                 v[k] = sk / (NB_TAU + NB_C * ek);
         }
+#undef NB_D
     free(d);
     return MF_OK;
+}
+
+mf_status mf_ltc_gate_neighbour_scores(const mf_table *t, const mf_brdf_model *model, uint64_t seed, double *s,
+                                       double *e, double *v)
+{
+    gate_layout L;
+    if (!model || !layout_of(t, &L))
+        return MF_ERR_DOMAIN;
+    return mf_ltc_gate_neighbour_scores_box(t, model, seed, 0, L.nr - 1, 0, L.nu - 1, s, e, v);
 }
 
 mf_status mf_ltc_gate_neighbour_check(const mf_table *t, const mf_brdf_model *model, uint64_t seed, mf_check *c)
@@ -1193,7 +1265,7 @@ mf_status mf_ltc_gate_neighbour_check(const mf_table *t, const mf_brdf_model *mo
     if (!c)
         return MF_ERR_DOMAIN;
     mf_check_begin(c, "ltc_texel_neighbours",
-                   "max over texels of s / (0.05 + 2 e): s the shading difference d from the neighbours' predictions",
+                   "max over texels of s / (0.05 + 2 e): s the 2nd smallest shading difference d from 12 neighbour predictions",
                    1.0);
     gate_layout L;
     if (!model || !layout_of(t, &L)) {

@@ -181,20 +181,23 @@ double mf_ltc_gate_texel_difference(const mf_ltc *ltc, double magnitude, const m
 /* ---- the neighbour check (fitter-free: `mfkit validate TABLE` with a model) ---------------------
  * ltc_texel_neighbours: every texel against predictions from its neighbours.  Each texel (ir, iu) is
  * predicted by 6 stencils along r and 6 along u (centred cubic and linear, one-sided quadratic and
- * linear extrapolations from up to 3 neighbours), each in two spaces of the matrix block
+ * linear extrapolations from up to 3 neighbours; polynomials in log(alpha) along r, in the index
+ * along u), each in two spaces of the matrix block
  * [[minv_00, minv_02], [minv_20, minv_22]]: the stored fields, and log-polar (B = R(psi) S, S
  * symmetric positive definite: psi and log S), which follows the narrow lobes of low roughness
  * whose fields change by orders of magnitude between texels.  With d the texel check's difference
  * (mf_ltc_gate_texel_difference, magnitudes 1: the albedo checks cover the magnitude) on the texel's
  * gate polygons (mf_ltc_gate_texel_polygons):
- *   s = min over the predictions of d(stored, prediction),
+ *   s = the second smallest, over the 12 predictions, of d(stored, prediction) (each the smaller
+ *       of its two spaces; one prediction alone can lie near a corrupted texel where the stencils
+ *       scatter),
  *   e = max over the texel's axis neighbours j of s_j without the stencils that use this texel,
  *   value = s / (MF_LTC_GATE_NEIGHBOUR_TAU + MF_LTC_GATE_NEIGHBOUR_C e), bound 1.
  * A smooth region (e small) allows a texel 0.05 of shading difference from its neighbours'
  * prediction, half the issue's 10 %; where the neighbours themselves are predicted only to e (the
  * grazing rows, the narrow lobes), the allowance grows with e.  docs/validation.md ("The neighbour
  * check") gives the measured power and false alarms.  No fitter: pure table and polygon arithmetic
- * (about 0.7 s of CPU for 64 x 64). */
+ * (about 1.2 s of CPU for 64 x 64). */
 #define MF_LTC_GATE_NEIGHBOUR_TAU 0.05
 #define MF_LTC_GATE_NEIGHBOUR_C 2.0
 
@@ -203,6 +206,14 @@ double mf_ltc_gate_texel_difference(const mf_ltc *ltc, double magnitude, const m
  * without a model or for a table that is not an LTC layout, MF_ERR_ALLOC. */
 mf_status mf_ltc_gate_neighbour_scores(const mf_table *t, const mf_brdf_model *model, uint64_t seed, double *s,
                                        double *e, double *value) MF_WARN_UNUSED;
+
+/* The same for the texels of the box r0..r1 x u0..u1 (inclusive) only, computing the predictions of
+ * the box and its axis neighbours: what a power study needs after changing one texel (the values of
+ * texels more than 4 steps from it along both axes cannot change).  The arrays are still of
+ * nr * nu; entries outside the box are not written. */
+mf_status mf_ltc_gate_neighbour_scores_box(const mf_table *t, const mf_brdf_model *model, uint64_t seed, int r0,
+                                           int r1, int u0, int u1, double *s, double *e,
+                                           double *value) MF_WARN_UNUSED;
 
 /* The check ltc_texel_neighbours into *c (begun and finished here; the worst texel with its s and e).
  * Returns MF_OK when it ran (c->passed says whether it passed), else as mf_ltc_gate_neighbour_scores
