@@ -19,10 +19,11 @@
  *
  * Asserted (fast, CI): the good 16 x 16 table and the reference table pass; the issue's own example
  * (texel (5, 9) of the 16 x 16 table, minv_00 x 1.3) fails; of 150 corruptions of the 16 x 16
- * table none with D < 0.05 is flagged, and at least 85 % of those with D > 0.11 are (measured:
- * 88 %; a regression guard, not a claim of power 1: docs/validation.md, "The neighbour check").
- * usage: test_ltc_neighbours [full] [REFERENCE_DIR]   (full: the study at 16, 32, 64, the reference
- * table and the magnitude, label slow)
+ * table none with D < 0.05 is flagged, and at least 80 % of those with D > 0.11 are (measured:
+ * 86 %; a regression guard, not a claim of power 1: docs/validation.md, "The neighbour check").
+ * usage: test_ltc_neighbours [full | full16] [REFERENCE_DIR]   (full: the study at 16, 32, 64, the
+ * reference table and the magnitude, label slow; full16: the study at 16 x 16 only; environment
+ * MF_TEST_VERBOSE=1: one line per corruption)
  */
 #include "mf_test.h"
 
@@ -160,6 +161,13 @@ static void magnitude_sweep(const char *title, const mf_table *t, const mf_brdf_
         mf_status s = mf_ltc_gate_run(&bad, m, &o, c, MF_LTC_GATE_MAX_CHECKS, &n);
         CHECK(s == MF_OK || s == MF_ERR_CHECK_FAILED);
         int fl = s != MF_OK;
+        if (getenv("MF_TEST_VERBOSE")) {
+            printf("  %s magnitude case %2d texel (%2d, %2d) %+g: %s", title, k, ir, iu, delta, is_above ? "above" : "below");
+            for (int i = 0; i < n; ++i)
+                if (!c[i].passed)
+                    printf(", %s fails (%.3g)", c[i].name, c[i].worst);
+            printf("\n");
+        }
         if (is_above) {
             ++above;
             above_f += fl;
@@ -208,7 +216,8 @@ static double expect_pass(const char *title, const mf_table *t, const mf_brdf_mo
 
 int main(int argc, char **argv)
 {
-    int full = argc > 1 && !strcmp(argv[1], "full");
+    int full16 = argc > 1 && !strcmp(argv[1], "full16"); /* the full study at 16 x 16 only */
+    int full = (argc > 1 && !strcmp(argv[1], "full")) || full16;
     const char *refdir = argc > 1 + full ? argv[1 + full] : NULL;
 #ifdef MFKIT_REFERENCE_DIR
     if (!refdir)
@@ -230,7 +239,7 @@ int main(int argc, char **argv)
         expect_pass("the reference table (ltc_code_ggx_64.csv)", &ref, ggx);
 
     const int sizes_fast[1] = {16}, sizes_full[3] = {16, 32, 64};
-    const int *sizes = full ? sizes_full : sizes_fast, nsizes = full ? 3 : 1;
+    const int *sizes = full ? sizes_full : sizes_fast, nsizes = full && !full16 ? 3 : 1;
     for (int si = 0; si < nsizes; ++si) {
         int n = sizes[si];
         mf_table good;
@@ -260,14 +269,14 @@ int main(int argc, char **argv)
             CHECK(st.n[0] >= 30 && an >= 40); /* both sides populated by the seed */
             if (st.f[0] != 0)
                 MF_FAIL_AT("%d of %d corruptions with D < 0.05 flagged (measured 0)", st.f[0], st.n[0]);
-            if (!(af >= 0.85 * an))
-                MF_FAIL_AT("power %d of %d on D >= 0.11, below the guard 0.85 (measured 0.88)", af, an);
+            if (!(af >= 0.8 * an))
+                MF_FAIL_AT("power %d of %d on D >= 0.11, below the guard 0.8 (measured 0.86)", af, an);
         }
         if (full)
             magnitude_sweep(title, &good, ggx, 40);
         mf_table_free(&good);
     }
-    if (full && have_ref) {
+    if (full && !full16 && have_ref) {
         sweep_stats st;
         matrix_sweep("the reference table", &ref, ggx, 300, 64 + 1000, &st);
     }

@@ -1265,7 +1265,7 @@ mf_status mf_ltc_gate_neighbour_check(const mf_table *t, const mf_brdf_model *mo
     if (!c)
         return MF_ERR_DOMAIN;
     mf_check_begin(c, "ltc_texel_neighbours",
-                   "max over texels of s / (0.05 + 2 e): s the 2nd smallest shading difference d from 12 neighbour predictions",
+                   "max over texels of s / (0.06 + 2 e): s the 2nd smallest shading difference d from 12 neighbour predictions",
                    1.0);
     gate_layout L;
     if (!model || !layout_of(t, &L)) {
