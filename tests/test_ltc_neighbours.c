@@ -21,8 +21,9 @@
  * (texel (5, 9) of the 16 x 16 table, minv_00 x 1.3) fails; of 150 corruptions of the 16 x 16
  * table none with D < 0.05 is flagged, and at least 80 % of those with D > 0.11 are (measured:
  * 86 %; a regression guard, not a claim of power 1: docs/validation.md, "The neighbour check").
- * usage: test_ltc_neighbours [full | full16] [REFERENCE_DIR]   (full: the study at 16, 32, 64, the
- * reference table and the magnitude, label slow; full16: the study at 16 x 16 only; environment
+ * usage: test_ltc_neighbours [full | full16 | fullref] [REFERENCE_DIR]   (full: the study at 16, 32,
+ * 64, the reference table and the magnitude, label slow; full16: the study at 16 x 16 only; fullref:
+ * the reference table's sweep only; environment
  * MF_TEST_VERBOSE=1: one line per corruption)
  */
 #include "mf_test.h"
@@ -217,7 +218,8 @@ static double expect_pass(const char *title, const mf_table *t, const mf_brdf_mo
 int main(int argc, char **argv)
 {
     int full16 = argc > 1 && !strcmp(argv[1], "full16"); /* the full study at 16 x 16 only */
-    int full = (argc > 1 && !strcmp(argv[1], "full")) || full16;
+    int fullref = argc > 1 && !strcmp(argv[1], "fullref"); /* the reference table's sweep only */
+    int full = (argc > 1 && !strcmp(argv[1], "full")) || full16 || fullref;
     const char *refdir = argc > 1 + full ? argv[1 + full] : NULL;
 #ifdef MFKIT_REFERENCE_DIR
     if (!refdir)
@@ -239,7 +241,7 @@ int main(int argc, char **argv)
         expect_pass("the reference table (ltc_code_ggx_64.csv)", &ref, ggx);
 
     const int sizes_fast[1] = {16}, sizes_full[3] = {16, 32, 64};
-    const int *sizes = full ? sizes_full : sizes_fast, nsizes = full && !full16 ? 3 : 1;
+    const int *sizes = full ? sizes_full : sizes_fast, nsizes = fullref ? 0 : full && !full16 ? 3 : 1;
     for (int si = 0; si < nsizes; ++si) {
         int n = sizes[si];
         mf_table good;
