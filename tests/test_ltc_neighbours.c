@@ -21,10 +21,10 @@
  * (texel (5, 9) of the 16 x 16 table, minv_00 x 1.3) fails; of 150 corruptions of the 16 x 16
  * table none with D < 0.05 is flagged, and at least 80 % of those with D > 0.11 are (measured:
  * 86 %; a regression guard, not a claim of power 1: docs/validation.md, "The neighbour check").
- * usage: test_ltc_neighbours [full | full16 | fullref] [REFERENCE_DIR]   (full: the study at 16, 32,
- * 64, the reference table and the magnitude, label slow; full16: the study at 16 x 16 only; fullref:
- * the reference table's sweep only; environment
- * MF_TEST_VERBOSE=1: one line per corruption)
+ * usage: test_ltc_neighbours [full | full16 | full64 | fullref] [REFERENCE_DIR]   (full: the study
+ * at 16, 32, 64, the reference table and the magnitude, label slow; full16, full64: the study at
+ * that size only; fullref: the reference table's sweep only; environment MF_TEST_VERBOSE=1: one
+ * line per corruption; MF_TEST_SKIP_MAGNITUDE=1: no magnitude sweep)
  */
 #include "mf_test.h"
 
@@ -217,9 +217,11 @@ static double expect_pass(const char *title, const mf_table *t, const mf_brdf_mo
 
 int main(int argc, char **argv)
 {
+    setvbuf(stdout, NULL, _IOLBF, 0); /* progress lines as they come, also into a file */
     int full16 = argc > 1 && !strcmp(argv[1], "full16"); /* the full study at 16 x 16 only */
+    int full64 = argc > 1 && !strcmp(argv[1], "full64"); /* ... at 64 x 64 only */
     int fullref = argc > 1 && !strcmp(argv[1], "fullref"); /* the reference table's sweep only */
-    int full = (argc > 1 && !strcmp(argv[1], "full")) || full16 || fullref;
+    int full = (argc > 1 && !strcmp(argv[1], "full")) || full16 || full64 || fullref;
     const char *refdir = argc > 1 + full ? argv[1 + full] : NULL;
 #ifdef MFKIT_REFERENCE_DIR
     if (!refdir)
@@ -241,7 +243,8 @@ int main(int argc, char **argv)
         expect_pass("the reference table (ltc_code_ggx_64.csv)", &ref, ggx);
 
     const int sizes_fast[1] = {16}, sizes_full[3] = {16, 32, 64};
-    const int *sizes = full ? sizes_full : sizes_fast, nsizes = fullref ? 0 : full && !full16 ? 3 : 1;
+    const int *sizes = full64 ? sizes_full + 2 : full ? sizes_full : sizes_fast;
+    int nsizes = fullref ? 0 : full && !full16 && !full64 ? 3 : 1;
     for (int si = 0; si < nsizes; ++si) {
         int n = sizes[si];
         mf_table good;
@@ -274,11 +277,11 @@ int main(int argc, char **argv)
             if (!(af >= 0.8 * an))
                 MF_FAIL_AT("power %d of %d on D >= 0.11, below the guard 0.8 (measured 0.86)", af, an);
         }
-        if (full)
+        if (full && !getenv("MF_TEST_SKIP_MAGNITUDE"))
             magnitude_sweep(title, &good, ggx, 40);
         mf_table_free(&good);
     }
-    if (full && !full16 && have_ref) {
+    if (full && !full16 && !full64 && have_ref) {
         sweep_stats st;
         matrix_sweep("the reference table", &ref, ggx, 300, 64 + 1000, &st);
     }
