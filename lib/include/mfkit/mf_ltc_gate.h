@@ -29,7 +29,9 @@
  * MC the Monte Carlo integral of f cos over the polygon (the model's sampler, its weights).
  * The fit side adds one check that needs the fitter (mf_ltc_bake_texel_check, run by
  * `mfkit fit ltc`): ltc_texel_refit, every texel against a fresh fit of it, with the building
- * blocks at the end of this header.
+ * blocks at the end of this header.  `mfkit validate`, which has no fitter, adds instead the
+ * fitter-free ltc_texel_neighbours (every texel against predictions from its neighbours,
+ * mf_ltc_gate_neighbour_check at the end of this header).
  *
  * Deterministic: every random number comes from PCG32 streams keyed by (seed, texel, purpose),
  * so a result depends on the seed only (the gate is single-threaded; `threads` is accepted for
@@ -199,7 +201,7 @@ double mf_ltc_gate_texel_difference(const mf_ltc *ltc, double magnitude, const m
  * bound); where the neighbours themselves are predicted only to e (the grazing rows, the narrow
  * lobes), the allowance grows with e.  docs/validation.md ("The neighbour
  * check") gives the measured power and false alarms.  No fitter: pure table and polygon arithmetic
- * (about 1.2 s of CPU for 64 x 64). */
+ * (about 1 s of CPU for 64 x 64). */
 #define MF_LTC_GATE_NEIGHBOUR_TAU 0.06
 #define MF_LTC_GATE_NEIGHBOUR_C 2.0
 
