@@ -1002,10 +1002,10 @@ double mf_ltc_gate_texel_difference(const mf_ltc *ltc, double magnitude, const m
  * spaces of the 2 x 2 block B = [[minv_00, minv_02], [minv_20, minv_22]] (the stored fields; and
  * log-polar: B = R(psi) S, S symmetric positive definite, coordinates psi and the three entries of
  * log S), and the stored texel is compared with each prediction by the texel check's d on its 24 gate
- * polygons, magnitudes set to 1 (the magnitude is the albedo checks' business).  s = the smallest d
- * over the predictions; e = the largest, over the texel's (up to 4) axis neighbours, of the
- * neighbour's own s computed without the stencils that use this texel.  The check's value is
- * s / (NB_TAU + NB_C e). */
+ * polygons, magnitudes set to 1 (the magnitude is the albedo checks' business).  s = the second
+ * smallest d over the predictions; e = the largest, over the texel's (up to 4) axis neighbours, of
+ * the neighbour's smallest d over its predictions whose stencils do not use this texel.  The
+ * check's value is s / (NB_TAU + NB_C e). */
 #define NB_TAU MF_LTC_GATE_NEIGHBOUR_TAU
 #define NB_C MF_LTC_GATE_NEIGHBOUR_C
 #define NB_AXIS_PRED 6
