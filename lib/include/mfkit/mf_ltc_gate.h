@@ -29,7 +29,9 @@
  * MC the Monte Carlo integral of f cos over the polygon (the model's sampler, its weights).
  * The fit side adds one check that needs the fitter (mf_ltc_bake_texel_check, run by
  * `mfkit fit ltc`): ltc_texel_refit, every texel against a fresh fit of it, with the building
- * blocks at the end of this header.
+ * blocks at the end of this header.  `mfkit validate`, which has no fitter, adds instead the
+ * fitter-free ltc_texel_neighbours (every texel against predictions from its neighbours,
+ * mf_ltc_gate_neighbour_check at the end of this header).
  *
  * Deterministic: every random number comes from PCG32 streams keyed by (seed, texel, purpose),
  * so a result depends on the seed only (the gate is single-threaded; `threads` is accepted for
@@ -177,6 +179,54 @@ mf_status mf_ltc_gate_texel(const mf_table *t, int ir, int iu, mf_ltc *ltc, doub
  * counted: d = 0).  NaN if an integral is NaN. */
 double mf_ltc_gate_texel_difference(const mf_ltc *ltc, double magnitude, const mf_ltc *ref, double ref_magnitude,
                                     const mf_polygon *p, int n, int *worst);
+
+/* ---- the neighbour check (fitter-free: `mfkit validate TABLE` with a model) ---------------------
+ * ltc_texel_neighbours: every texel against predictions from its neighbours.  Each texel (ir, iu) is
+ * predicted by 6 stencils along r and 6 along u (centred cubic and linear, one-sided quadratic and
+ * linear extrapolations from up to 3 neighbours; polynomials in log(alpha) along r, in the index
+ * along u), each in two spaces of the matrix block
+ * [[minv_00, minv_02], [minv_20, minv_22]]: the stored fields, and log-polar (B = R(psi) S, S
+ * symmetric positive definite: psi and log S), which follows the narrow lobes of low roughness
+ * whose fields change by orders of magnitude between texels.  With d the texel check's difference
+ * (mf_ltc_gate_texel_difference, magnitudes 1: the albedo checks cover the magnitude) on the texel's
+ * gate polygons (mf_ltc_gate_texel_polygons):
+ *   s = the second smallest, over the 12 predictions, of d(stored, prediction) (each the smaller
+ *       of its two spaces; one prediction alone can lie near a corrupted texel where the stencils
+ *       scatter),
+ *   e = max over the texel's axis neighbours j of s_j without the stencils that use this texel,
+ *   value = s / (MF_LTC_GATE_NEIGHBOUR_TAU + MF_LTC_GATE_NEIGHBOUR_C e), bound 1.
+ * A smooth region (e small) allows a texel 0.06 of shading difference from its neighbours'
+ * prediction, a little over half the issue's 10 % (so that a corruption of 0.1 still reads above
+ * it after the prediction's own error; 0.05 left a fitted Beckmann 32 x 32 texel at 0.99 of the
+ * bound); where the neighbours themselves are predicted only to e (the grazing rows, the narrow
+ * lobes), the allowance grows with e.  docs/validation.md ("The neighbour
+ * check") gives the measured power and false alarms.  No fitter: pure table and polygon arithmetic
+ * (about 1 s of CPU for 64 x 64). */
+#define MF_LTC_GATE_NEIGHBOUR_TAU 0.06
+#define MF_LTC_GATE_NEIGHBOUR_C 2.0
+/* Tables with fewer texels along an axis are not checked (the check records no case and passes,
+ * its `what` says so): there the neighbours are too far apart to predict a texel, and good tables
+ * fail (fitted GGX 8 x 8, 10 x 10, 12 x 12 read 97, 2.5 and 1.2; 16 x 16 and larger pass). */
+#define MF_LTC_GATE_NEIGHBOUR_MIN_SIZE 16
+
+/* s, e and the value above for every texel (arrays of nr * nu, index ir + nr iu; any may be NULL);
+ * +inf where the texel or every prediction is unusable, NaN for a NaN integral.  MF_ERR_DOMAIN
+ * without a model or for a table that is not an LTC layout, MF_ERR_ALLOC. */
+mf_status mf_ltc_gate_neighbour_scores(const mf_table *t, const mf_brdf_model *model, uint64_t seed, double *s,
+                                       double *e, double *value) MF_WARN_UNUSED;
+
+/* The same for the texels of the box r0..r1 x u0..u1 (inclusive) only, computing the predictions of
+ * the box and its axis neighbours: what a power study needs after changing one texel (the values of
+ * texels more than 4 steps from it along both axes cannot change).  The arrays are still of
+ * nr * nu; entries outside the box are not written. */
+mf_status mf_ltc_gate_neighbour_scores_box(const mf_table *t, const mf_brdf_model *model, uint64_t seed, int r0,
+                                           int r1, int u0, int u1, double *s, double *e,
+                                           double *value) MF_WARN_UNUSED;
+
+/* The check ltc_texel_neighbours into *c (begun and finished here; the worst texel with its s and e).
+ * Returns MF_OK when it ran (c->passed says whether it passed), else as mf_ltc_gate_neighbour_scores
+ * (c then failed). */
+mf_status mf_ltc_gate_neighbour_check(const mf_table *t, const mf_brdf_model *model, uint64_t seed, mf_check *c);
 
 #ifdef __cplusplus
 }
