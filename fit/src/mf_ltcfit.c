@@ -103,7 +103,7 @@ static double ltc_integral_value_v(const mf_vec3 *pv, int pn, const double prm[4
  * the horizon, D ~ a^2 / (pi |M^-1 w|^3) peaking ~a from it), b tilts it towards or away from the
  * view, every parameter is continuous at the normal view (where b = 0 by symmetry), and two
  * parameters leave one minimum, found by a grid search (closed_form_start). */
-#define SHEEN_A_MIN_PER_ALPHA 1.0
+#define SHEEN_A_MIN 0x1p-14
 static int sheen_family(const mf_brdf_model *m) { return m && m->name && !strcmp(m->name, "charlie"); }
 
 /* The integral of the sheen-family LTC over polygon p (view frame), with d/da and d/db: the
@@ -235,7 +235,7 @@ typedef struct {
     double scale;                  /* the weights' factor to the quadrature magnitude */
     double invn;                   /* scale / N */
     double magnitude, magnitude_err, fresnel;
-    double a_min;   /* the sheen family's lower bound of a (SHEEN_A_MIN_PER_ALPHA alpha) */
+    double a_min;   /* the sheen family's lower bound of a (SHEEN_A_MIN) */
     int sheen;      /* the sheen family (sheen_family): parameters (a, b) of the view-frame M^-1, and
                      * lobe_poly / lobe_upper hold the lights in the view frame */
     double *sc_dot; /* scratch of texel_light_sums: the cap dot products of a centre's candidates */
@@ -375,7 +375,7 @@ static mf_status texel_prepare(const mf_brdf_model *m, double alpha, double cos_
     width = fmin(fmax(width, 1e-4), 1.2);
     t->lobe = m_dir;
     t->sheen = sheen_family(m);
-    t->a_min = t->sheen ? fmax(A_MIN, SHEEN_A_MIN_PER_ALPHA * alpha) : A_MIN;
+    t->a_min = t->sheen ? SHEEN_A_MIN : A_MIN;
     t->k = make_lights(m_dir, width, t->lights);
     double invn = scale / ws->n;
     /* compact the directions of positive density (order kept: same sums; those of zero weight
@@ -659,8 +659,10 @@ static void prox_residuals(const texel *t, const double *p, double out[PROX_RESI
             out[i] = 0.0;
         return;
     }
-    if (t->sheen) { /* the shear absolute, the scale relative; two residuals unused */
-        out[0] = t->prox * (p[1] - t->prox_at[1]);
+    if (t->sheen) { /* the shear relative beyond 1 (at low roughness the fitted b goes from ~-30 at 40 deg
+                     * to ~-3 at 78 deg: an absolute pull held a column at b = -35 where its lights'
+                     * optimum was -3, cost 20x the optimum's), the scale relative; two unused */
+        out[0] = t->prox * (p[1] - t->prox_at[1]) / fmax(1.0, fabs(t->prox_at[1]));
         out[1] = out[3] = 0.0;
         out[2] = t->prox * (p[0] - t->prox_at[0]) / t->prox_at[0];
         return;
@@ -693,7 +695,7 @@ static int residual_fn(void *user, const double *p, double *res, double *jac)
         for (int j = 0; j < 2 * PROX_RESIDUALS; ++j)
             jac[2 * t->k + j] = 0.0;
         if (t->prox > 0.0) {
-            jac[2 * t->k + 1] = t->prox;
+            jac[2 * t->k + 1] = t->prox / fmax(1.0, fabs(t->prox_at[1]));
             jac[2 * (t->k + 2) + 0] = t->prox / t->prox_at[0];
         }
     } else if (jac) {
@@ -864,21 +866,42 @@ static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_thet
     int warm = lobe_start ? (memcpy(q, lobe_start, sizeof q), 1)
                : start && (t->sheen ? sheen_params(mf_ltc_matrix_general(start), q)
                                     : lobe_params(t->lobe, mf_ltc_matrix_general(start), q));
-    if (!warm) {
+    if (t->sheen) {
+        /* the sheen family: the start chosen on the targets from the samples alone, then the
+         * control variate from it, and the proximal pull only when the warm start was chosen.
+         * At low roughness the samples' weights span hundreds of orders of magnitude (effective
+         * sample size ~40-200 of 4096 at alpha <= 0.001 short of 79 deg), and a control variate
+         * from a poor warm start made that start look good on its own targets: charlie 64 x 64,
+         * alpha 2.5e-4, rows 40-57 stayed at a = 6, b = -2000 (cost 25.6 on the sample targets)
+         * where the grid's best is a ~0.1, b = -6 (cost 0.12). */
         texel_targets_raw(t, ws);
-        closed_form_start(t, q, INFINITY);
+        double cq = warm ? cost_at(t, q) : NAN;
+        double c0 = closed_form_start(t, p, isnan(cq) ? INFINITY : cq);
+        int use_warm = warm && cq <= c0;
+        if (use_warm)
+            memcpy(p, q, sizeof p);
+        texel_control_variate(t, ws, p);
+        if (use_warm && q[0] > 0.0) {
+            t->prox = PROX_WEIGHT;
+            memcpy(t->prox_at, q, sizeof q);
+        }
+    } else {
+        if (!warm) {
+            texel_targets_raw(t, ws);
+            closed_form_start(t, q, INFINITY);
+        }
+        texel_control_variate(t, ws, q);
+        t->prox = 0.0;
+        if (warm && q[0] > 0.0 && q[2] > 0.0) { /* (a start from mf_ltcfit_entry_fit may be anything) */
+            t->prox = PROX_WEIGHT;
+            memcpy(t->prox_at, q, sizeof q);
+        }
+        /* the warm start unless some grid point costs less (a NaN warm cost never wins) */
+        double cq = warm ? cost_at(t, q) : NAN;
+        double c0 = closed_form_start(t, p, isnan(cq) ? INFINITY : cq);
+        if (warm && cq <= c0)
+            memcpy(p, q, sizeof p);
     }
-    texel_control_variate(t, ws, q);
-    t->prox = 0.0;
-    if (warm && q[0] > 0.0 && q[2] > 0.0) { /* (a start from mf_ltcfit_entry_fit may be anything) */
-        t->prox = PROX_WEIGHT;
-        memcpy(t->prox_at, q, sizeof q);
-    }
-    /* the warm start unless some grid point costs less (a NaN warm cost never wins) */
-    double cq = warm ? cost_at(t, q) : NAN;
-    double c0 = closed_form_start(t, p, isnan(cq) ? INFINITY : cq);
-    if (warm && cq <= c0)
-        memcpy(p, q, sizeof p);
     double lower[4] = {t->a_min, -INFINITY, A_MIN, -INFINITY}, upper[4] = {INFINITY, INFINITY, INFINITY, INFINITY};
     mf_solver_options so;
     mf_solver_options_default(&so);
