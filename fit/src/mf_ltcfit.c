@@ -103,7 +103,12 @@ static double ltc_integral_value_v(const mf_vec3 *pv, int pn, const double prm[4
  * the horizon, D ~ a^2 / (pi |M^-1 w|^3) peaking ~a from it), b tilts it towards or away from the
  * view, every parameter is continuous at the normal view (where b = 0 by symmetry), and two
  * parameters leave one minimum, found by a grid search (closed_form_start). */
+/* The sheen family's domain: the stored minv_22 = 1/a and minv_02 = b/a stay within the RGBA16F
+ * exports' range (65504): a >= 2^-14, |b| <= 2^15 a.  Without it charlie's texels of albedo
+ * ~1e-300 (alpha 1e-4 short of 60 deg, where a is not determined by any light) stored
+ * minv_02 = -7.5e5, infinite in half floats. */
 #define SHEEN_A_MIN 0x1p-14
+#define SHEEN_B_PER_A 0x1p15
 static int sheen_family(const mf_brdf_model *m) { return m && m->name && !strcmp(m->name, "charlie"); }
 
 /* The integral of the sheen-family LTC over polygon p (view frame), with d/da and d/db: the
@@ -300,7 +305,7 @@ static int texel_np(const texel *t) { return t->sheen ? 2 : 4; }
 static int texel_params_ok(const texel *t, const double *p)
 {
     if (t->sheen)
-        return p[0] >= t->a_min && isfinite(p[1]);
+        return p[0] >= t->a_min && fabs(p[1]) <= SHEEN_B_PER_A * p[0];
     return p[0] > 0.0 && p[2] > 0.0 && p[0] - p[1] * p[3] > 0.0;
 }
 

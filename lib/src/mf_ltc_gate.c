@@ -618,27 +618,42 @@ static double smooth_value(const gate_ctx *g, int f, int ir, int iu)
     return (f == g->t->nfields ? 1.0 : r[f]) / n;
 }
 
-/* The weight of a shape difference among texels whose largest magnitude is m: the light a lobe
- * reflects is at most its magnitude, so below GATE_SHAPE_MAG even a wrong shape shades less than
- * the magnitude error ltc_albedo_quad accepts there; 1 for every other field, and for a
- * magnitude that is not finite. */
-static double smooth_weight(const gate_ctx *g, int f, double m)
+/* The weight of a shape difference among texels whose magnitudes range from lo to hi (1 for every
+ * other field, and where a magnitude is not finite):
+ *   min(1, hi / GATE_SHAPE_MAG) / max(1, log2(hi / lo)).
+ * The first factor: the light a lobe reflects is at most its magnitude, so below GATE_SHAPE_MAG
+ * even a wrong shape shades less than the magnitude error ltc_albedo_quad accepts there.  The
+ * second: the magnitude is the one field whose truth the gate knows (ltc_albedo_quad holds it to
+ * the model's albedo within 1e-3), and where it changes by a factor 2^s > 2 between the texels
+ * compared, the model itself changes by s doublings within one step: the grid resolves it s times
+ * more coarsely than a field that doubles per step, and so the shape may change s times as much
+ * (charlie at alpha 1e-4: albedo 0.25 at 88.2 deg, 17.2 at 89.95 deg, and its lobe's azimuthal
+ * width doubles).  No texel of the other registered models has neighbours' magnitudes a factor
+ * 2 apart, so both factors are 1 for them. */
+static double smooth_weight(const gate_ctx *g, int f, double hi, double lo)
 {
-    if (!is_shape_field(g, f) || !(m < GATE_SHAPE_MAG))
+    if (!is_shape_field(g, f) || !isfinite(hi) || !isfinite(lo))
         return 1.0;
-    return m > 0.0 ? m / GATE_SHAPE_MAG : 0.0;
+    double w = hi < GATE_SHAPE_MAG ? (hi > 0.0 ? hi / GATE_SHAPE_MAG : 0.0) : 1.0;
+    if (!(lo > 0.0))
+        return hi > 0.0 ? 0.0 : w; /* a magnitude 0 beside a positive one: unresolved (log2 infinite) */
+    double s = log2(hi / lo);
+    return s > 1.0 ? w / s : w;
 }
 
-static double max_magnitude(const gate_ctx *g, const int *ir, const int *iu, int n)
+static void magnitude_range(const gate_ctx *g, const int *ir, const int *iu, int n, double *hi, double *lo)
 {
-    double m = 0.0;
+    *hi = 0.0;
+    *lo = INFINITY;
     for (int k = 0; k < n; ++k) {
-        double v = rec(g->t, ir[k], iu[k])[g->L.f[MF_LTC_F_MAGNITUDE]];
-        if (!isfinite(v))
-            return NAN;
-        m = fabs(v) > m ? fabs(v) : m;
+        double v = fabs(rec(g->t, ir[k], iu[k])[g->L.f[MF_LTC_F_MAGNITUDE]]);
+        if (!isfinite(v)) {
+            *hi = *lo = NAN;
+            return;
+        }
+        *hi = v > *hi ? v : *hi;
+        *lo = v < *lo ? v : *lo;
     }
-    return m;
 }
 
 static int quad_fresnel(gate_ctx *g, int ir, int iu, mf_result *q);
@@ -671,7 +686,9 @@ static void check_smooth_jump(void *ctx, mf_check *c)
                     if (!isfinite(a) || !isfinite(b))
                         continue;
                     const int tr[2] = {ir, ir + dr}, tu[2] = {iu, iu + du};
-                    double wt = smooth_weight(g, f, max_magnitude(g, tr, tu, 2));
+                    double mhi, mlo;
+                    magnitude_range(g, tr, tu, 2, &mhi, &mlo);
+                    double wt = smooth_weight(g, f, mhi, mlo);
                     char w[64];
                     snprintf(w, sizeof w, "%s along %s", smooth_field_name(g, f), axis == 0 ? "r" : "u");
                     double d = fabs(b - a);
@@ -744,7 +761,9 @@ static void check_smooth_spike(void *ctx, mf_check *c)
                     if (!isfinite(a) || !isfinite(b) || !isfinite(l))
                         continue;
                     const int t3r[3] = {ir - dr, ir, ir + dr}, t3u[3] = {iu - du, iu, iu + du};
-                    double wt = smooth_weight(g, f, max_magnitude(g, t3r, t3u, 3));
+                    double mhi, mlo;
+                    magnitude_range(g, t3r, t3u, 3, &mhi, &mlo);
+                    double wt = smooth_weight(g, f, mhi, mlo);
                     char w[64];
                     snprintf(w, sizeof w, "%s along %s", smooth_field_name(g, f), axis == 0 ? "r" : "u");
                     double lo = l < b ? l : b, hi = l < b ? b : l;
