@@ -88,21 +88,22 @@ static double ltc_integral_value_v(const mf_vec3 *pv, int pn, const double prm[4
     return ltc_clip_integrate_value(q, pn);
 }
 
-
 /* ---- the sheen family (charlie) --------------------------------------------------------------
  * For the Charlie sheen lobe [Estevez & Kulla 2017] the table is fitted in the restricted family
  * of Zeltner, Burley and Chiang ["Practical Multiple-Scattering Sheen Using Linearly Transformed
- * Cosines", 2022, Sec. 4], parametrised in the VIEW frame by its inverse:
+ * Cosines", 2022: the same matrix form, M = [[1/a, 0, -b/a], [0, 1/a, 0], [0, 0, 1]]], parametrised in
+ * the VIEW frame by its inverse:
  *   M^-1 = [[a, 0, b], [0, a, 0], [0, 0, 1]]      (a > 0; stored table: minv = M^-1 / a)
  * Why not the general family about the lobe's mean (above): near the normal view at low roughness
- * charlie reflects into a ring at the horizon of width ~2 alpha.  Its mean direction is the normal
- * at the normal view and swings by ~3x the view's rate just off it (alpha 0.27: 0, 8, 14 deg at
- * views 0, 2.6, 5.2 deg), so a family and a light set anchored to that mean turn with it; and a
- * ring is not unimodal for the 4-parameter family (several minima of similar cost: refits landed
- * 16 % to 6x away).  In this family the ring is a -> 0 with b = 0 (the cosine stretched towards
- * the horizon, D ~ a^2 / (pi |M^-1 w|^3) peaking ~a from it), b tilts it towards or away from the
- * view, every parameter is continuous at the normal view (where b = 0 by symmetry), and two
- * parameters leave one minimum, found by a grid search (closed_form_start). */
+ * charlie reflects into a ring at the horizon of width ~2 alpha, which that family held as
+ * diag(s, s, 1), s ~ 1/(2 alpha), ill-conditioned where the ring meets the horizon lobe; its mean
+ * direction is the normal at the normal view and swings by ~3x the view's rate just off it (alpha
+ * 0.27: 0, 8, 14 deg at views 0, 2.6, 5.2 deg), and the lobe frame turns with it; and a ring is not
+ * unimodal for four parameters (refits landed 16 % to 6x away).  In this family the ring is a -> 0
+ * with b = 0 (the cosine stretched towards the horizon, peaking ~a from it), b tilts it towards or
+ * away from the view, every parameter is continuous at the normal view (where b = 0 by symmetry)
+ * and independent of the lobe's mean (the lights are still placed about it), and two parameters
+ * leave one minimum, found by a grid search (closed_form_start). */
 /* The sheen family's domain: the stored minv_22 = 1/a and minv_02 = b/a stay within the RGBA16F
  * exports' range (65504): a >= 2^-14, |b| <= 2^15 a.  Without it charlie's texels of albedo
  * ~1e-300 (alpha 1e-4 short of 60 deg, where a is not determined by any light) stored
