@@ -25,8 +25,9 @@
  * instead of mixing columns of two fitters.  2: control variate, proximal shears, mirror
  * convention, 4x directions at grazing views.  3: proximal scales too. */
 /* Revision 4: the body is followed by its FNV-1a 64 checksum (revision 3 files are refused).
- * 5: the cap about the normal faded for narrow lobes near its rim (normal_cap_factor). */
-#define CKPT_MAGIC "MFLTCCK5"
+ * 5: the cap about the normal faded for narrow lobes near its rim (normal_cap_factor).
+ * 6: charlie fitted in the sheen family (sheen_family). */
+#define CKPT_MAGIC "MFLTCCK6"
 #define ENTRY_DOUBLES 19
 #define PROX_RESIDUALS 4
 
