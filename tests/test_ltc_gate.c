@@ -276,6 +276,38 @@ int main(int argc, char **argv)
         }
         mf_table_free(&big);
     }
+    /* The smoothness checks read the matrix scaled by its largest entry (docs/validation.md,
+     * "Smoothness of the shape").  A ring lobe at the horizon, minv = diag(1, 1, s) with
+     * s = 1 / (2 alpha) as a charlie table holds near the normal view (s up to 5000 at alpha 1e-4),
+     * is smooth in the shape it defines (scaled: diag(1/s, 1/s, 1), steps <= 4 h), though its
+     * stored minv_22 steps by thousands: model-free it must pass every check on a 32 x 32 table
+     * (the stored values would read 1.3e4 x the jump bound).  The same table with one texel
+     * leaning (minv_02 = s: scaled 1 against 0 at its neighbours, 1.94 x the jump bound at
+     * 32 x 32) must fail both smoothness checks; with every magnitude 1e-7 (below the 1e-5 at
+     * which a shape starts to count fully) it reads 1e-2 of that and passes. */
+    {
+        mf_table ring, bad;
+        CHECK(lambert_table(&ring, 32));
+        for (int iu = 0; iu < 32; ++iu)
+            for (int ir = 0; ir < 32; ++ir) {
+                const int id[2] = {ir, iu};
+                double *r = mf_table_record(&ring, id);
+                r[MF_LTC_F_MINV_22] = 1.0 / (2.0 * mf_ltc_table_alpha(&ring, ir));
+                r[MF_LTC_F_MAGNITUDE] = 0.5;
+            }
+        expect("ring lobes, diag(1, 1, 1 / (2 alpha)), model-free", &ring, NULL, seed, 1, NULL, 0);
+        const int id[2] = {13, 18};
+        CHECK(mf_table_copy(&bad, &ring) == MF_OK);
+        double *r = mf_table_record(&bad, id);
+        r[MF_LTC_F_MINV_02] = r[MF_LTC_F_MINV_22];
+        const char *const f[] = {"ltc_smooth_jump", "ltc_smooth_spike"};
+        expect("ring lobes, one leaning texel", &bad, NULL, seed, 1, f, 2);
+        for (size_t i = 0; i < mf_table_texels(&bad); ++i)
+            bad.data[i * (size_t)bad.nfields + MF_LTC_F_MAGNITUDE] = 1e-7;
+        expect("ring lobes, one leaning texel, magnitude 1e-7", &bad, NULL, seed, 1, NULL, 0);
+        mf_table_free(&bad);
+        mf_table_free(&ring);
+    }
     /* An albedo > 1. */
     {
         mf_table bad;

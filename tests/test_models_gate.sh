@@ -6,7 +6,7 @@
 # seconds of the whole command (fit, gate, export; bash `time`), and each gate check's worst value
 # / bound from the report; fails if any fit does not pass.
 # CTest: test_models_gate_slow (32,64, all models; label slow: tens of minutes on 2 cores) and
-# test_models_gate (every model but charlie at 6 x 6; label fit).
+# test_models_gate (every registered model at 6 x 6; label fit).
 set -u
 mfkit=$1
 sizes=$2

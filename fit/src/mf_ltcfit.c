@@ -25,8 +25,9 @@
  * instead of mixing columns of two fitters.  2: control variate, proximal shears, mirror
  * convention, 4x directions at grazing views.  3: proximal scales too. */
 /* Revision 4: the body is followed by its FNV-1a 64 checksum (revision 3 files are refused).
- * 5: the cap about the normal faded for narrow lobes near its rim (normal_cap_factor). */
-#define CKPT_MAGIC "MFLTCCK5"
+ * 5: the cap about the normal faded for narrow lobes near its rim (normal_cap_factor).
+ * 6: charlie fitted in the sheen family (sheen_family). */
+#define CKPT_MAGIC "MFLTCCK6"
 #define ENTRY_DOUBLES 19
 #define PROX_RESIDUALS 4
 
@@ -88,9 +89,87 @@ static double ltc_integral_value_v(const mf_vec3 *pv, int pn, const double prm[4
     return ltc_clip_integrate_value(q, pn);
 }
 
-static double ltc_integral_value(const mf_polygon *p, const double prm[4])
+/* ---- the sheen family (charlie) --------------------------------------------------------------
+ * For the Charlie sheen lobe [Estevez & Kulla 2017] the table is fitted in the restricted family
+ * of Zeltner, Burley and Chiang ["Practical Multiple-Scattering Sheen Using Linearly Transformed
+ * Cosines", 2022: the same matrix form, M = [[1/a, 0, -b/a], [0, 1/a, 0], [0, 0, 1]]], parametrised in
+ * the VIEW frame by its inverse:
+ *   M^-1 = [[a, 0, b], [0, a, 0], [0, 0, 1]]      (a > 0; stored table: minv = M^-1 / a)
+ * Why not the general family about the lobe's mean (above): near the normal view at low roughness
+ * charlie reflects into a ring at the horizon of width ~2 alpha, which that family held as
+ * diag(s, s, 1), s ~ 1/(2 alpha), ill-conditioned where the ring meets the horizon lobe; its mean
+ * direction is the normal at the normal view and swings by ~3x the view's rate just off it (alpha
+ * 0.27: 0, 8, 14 deg at views 0, 2.6, 5.2 deg), and the lobe frame turns with it; and a ring is not
+ * unimodal for four parameters (refits landed 16 % to 6x away).  In this family the ring is a -> 0
+ * with b = 0 (the cosine stretched towards the horizon, peaking ~a from it), b tilts it towards or
+ * away from the view, every parameter is continuous at the normal view (where b = 0 by symmetry)
+ * and independent of the lobe's mean (the lights are still placed about it), and two parameters
+ * leave one minimum, found by a grid search (closed_form_start). */
+/* The sheen family's domain: the stored minv_22 = 1/a and minv_02 = b/a stay within the RGBA16F
+ * exports' range (65504): a >= 2^-14, |b| <= 2^15 a.  Without it charlie's texels of albedo
+ * ~1e-300 (alpha 1e-4 short of 60 deg, where a is not determined by any light) stored
+ * minv_02 = -7.5e5, infinite in half floats. */
+#define SHEEN_A_MIN 0x1p-14
+#define SHEEN_B_PER_A 0x1p15
+static int sheen_family(const mf_brdf_model *m) { return m && m->name && !strcmp(m->name, "charlie"); }
+
+/* The integral of the sheen-family LTC over polygon p (view frame), with d/da and d/db: the
+ * polygon transformed by M^-1 itself (positive scalings do not matter), clipped and integrated as
+ * in ltc_integral_dual. */
+static dual sheen_integral_dual(const mf_vec3 *pv, int pn, const double prm[2])
 {
-    return ltc_integral_value_v(p->v, p->n, prm);
+    double a = prm[0], b = prm[1];
+    dvec3 q[MF_POLYGON_MAX_VERTICES];
+    for (int i = 0; i < pn; ++i) {
+        mf_vec3 v = pv[i];
+        dvec3 t;
+        t.x = dconst(a * v.x + b * v.z);
+        t.x.d[0] = v.x;
+        t.x.d[1] = v.z;
+        t.y = dconst(a * v.y);
+        t.y.d[0] = v.y;
+        t.z = dconst(v.z);
+        q[i] = t;
+    }
+    return ltc_clip_integrate_dual(q, pn);
+}
+
+/* Its value alone (the same operations, so bitwise the .v of sheen_integral_dual). */
+static double sheen_integral_value_v(const mf_vec3 *pv, int pn, const double prm[2])
+{
+    double a = prm[0], b = prm[1];
+    mf_vec3 q[MF_POLYGON_MAX_VERTICES + 1];
+    for (int i = 0; i < pn; ++i) {
+        mf_vec3 v = pv[i];
+        q[i].x = a * v.x + b * v.z;
+        q[i].y = a * v.y;
+        q[i].z = v.z;
+    }
+    return ltc_clip_integrate_value(q, pn);
+}
+
+/* The view-frame M of sheen parameters (a, b): the inverse of [[a, 0, b], [0, a, 0], [0, 0, 1]]. */
+static mf_mat3 sheen_matrix(const double q[2])
+{
+    double a = q[0], b = q[1];
+    mf_mat3 mv = {{{1.0 / a, 0.0, -b / a}, {0.0, 1.0 / a, 0.0}, {0.0, 0.0, 1.0}}};
+    return mv;
+}
+
+/* Sheen parameters of a view-frame matrix: M^-1 normalised by its (2, 2) element, a the mean of
+ * its (0, 0) and (1, 1) elements (the projection onto the family); 0 if there is none. */
+static int sheen_params(mf_mat3 mv, double q[4])
+{
+    mf_mat3 inv;
+    if (mf_mat3_inverse(mv, &inv) != MF_OK)
+        return 0;
+    double n = inv.m[2][2];
+    if (!(n > 0.0) || !isfinite(n))
+        return 0;
+    q[0] = q[2] = 0.5 * (inv.m[0][0] + inv.m[1][1]) / n;
+    q[1] = inv.m[0][2] / n;
+    q[3] = 0.0;
+    return q[0] > 0.0 && isfinite(q[0]) && isfinite(q[1]);
 }
 
 /* The residual weight of the large cap about the normal (radius NCAP_RADIUS, a vertex at the
@@ -163,6 +242,9 @@ typedef struct {
     double scale;                  /* the weights' factor to the quadrature magnitude */
     double invn;                   /* scale / N */
     double magnitude, magnitude_err, fresnel;
+    double a_min;   /* the sheen family's lower bound of a (SHEEN_A_MIN) */
+    int sheen;      /* the sheen family (sheen_family): parameters (a, b) of the view-frame M^-1, and
+                     * lobe_poly / lobe_upper hold the lights in the view frame */
     double *sc_dot; /* scratch of texel_light_sums: the cap dot products of a centre's candidates */
     int *sc_in;     /* and the indices inside one light (all sized for the texel's directions) */
     double *sc_x, *sc_y, *sc_z; /* the candidates' components */
@@ -217,6 +299,31 @@ static void texel_free(texel *t)
         free(t->sc_x);
         free(t);
     }
+}
+
+/* The texel's family: its parameter count, domain, integrals and view-frame matrix. */
+static int texel_np(const texel *t) { return t->sheen ? 2 : 4; }
+
+static int texel_params_ok(const texel *t, const double *p)
+{
+    if (t->sheen)
+        return p[0] >= t->a_min && fabs(p[1]) <= SHEEN_B_PER_A * p[0];
+    return p[0] > 0.0 && p[2] > 0.0 && p[0] - p[1] * p[3] > 0.0;
+}
+
+static dual texel_integral_dual(const texel *t, const mf_polygon *poly, const double *p)
+{
+    return t->sheen ? sheen_integral_dual(poly->v, poly->n, p) : ltc_integral_dual(poly, p);
+}
+
+static double texel_integral_value_v(const texel *t, const mf_vec3 *pv, int pn, const double *p)
+{
+    return t->sheen ? sheen_integral_value_v(pv, pn, p) : ltc_integral_value_v(pv, pn, p);
+}
+
+static mf_mat3 texel_view_matrix(const texel *t, const double *p)
+{
+    return t->sheen ? sheen_matrix(p) : view_matrix(t->lobe, p);
 }
 
 /* Samples, magnitude, lobe statistics, lights and their BRDF integrals of one texel. */
@@ -274,6 +381,8 @@ static mf_status texel_prepare(const mf_brdf_model *m, double alpha, double cos_
     double width = sum > 0.0 ? sqrt(ang2 / sum) : 0.5;
     width = fmin(fmax(width, 1e-4), 1.2);
     t->lobe = m_dir;
+    t->sheen = sheen_family(m);
+    t->a_min = t->sheen ? SHEEN_A_MIN : A_MIN;
     t->k = make_lights(m_dir, width, t->lights);
     double invn = scale / ws->n;
     /* compact the directions of positive density (order kept: same sums; those of zero weight
@@ -298,18 +407,18 @@ static mf_status texel_prepare(const mf_brdf_model *m, double alpha, double cos_
     for (int k = 0; k < t->k; ++k) {
         light *l = &t->lights[k];
         l->lobe_poly = l->poly;
-        for (int i = 0; i < l->poly.n; ++i)
+        for (int i = 0; i < l->poly.n && !t->sheen; ++i)
             l->lobe_poly.v[i] = to_lobe(m_dir, l->poly.v[i]);
         /* the part of the light the samples can reach: clipped to z >= 0 (Sutherland-Hodgman) */
         l->n_upper = 0;
         for (int i = 0; i < l->poly.n; ++i) {
             mf_vec3 a = l->poly.v[i], b = l->poly.v[(i + 1) % l->poly.n];
             if (a.z >= 0.0)
-                l->lobe_upper[l->n_upper++] = to_lobe(m_dir, a);
+                l->lobe_upper[l->n_upper++] = t->sheen ? a : to_lobe(m_dir, a);
             if ((a.z >= 0.0) != (b.z >= 0.0)) {
                 double f = a.z / (a.z - b.z);
                 mf_vec3 x = mf_vec3_make(a.x + f * (b.x - a.x), a.y + f * (b.y - a.y), 0.0);
-                l->lobe_upper[l->n_upper++] = to_lobe(m_dir, x);
+                l->lobe_upper[l->n_upper++] = t->sheen ? x : to_lobe(m_dir, x);
             }
         }
     }
@@ -524,7 +633,7 @@ static int cv_weights(const mf_ltc *ltc, double magnitude, const workspace *ws, 
 static void texel_control_variate(texel *t, workspace *ws, const double p0[4])
 {
     mf_ltc ltc;
-    int ok = mf_ltc_init(&ltc, view_matrix(t->lobe, p0)) == MF_OK && cv_weights(&ltc, t->magnitude, ws, t->live);
+    int ok = mf_ltc_init(&ltc, texel_view_matrix(t, p0)) == MF_OK && cv_weights(&ltc, t->magnitude, ws, t->live);
     if (!ok) {
         texel_targets_raw(t, ws);
         return;
@@ -539,7 +648,7 @@ static void texel_control_variate(texel *t, workspace *ws, const double p0[4])
         double my = sm[0] * t->invn, mx = sm[1] / n;
         double sxx = sm[2] - n * mx * mx, sxy = t->scale * sm[3] - n * mx * my;
         double beta = sxx > 0.0 ? fmin(fmax(sxy / sxx, 0.0), 1.0) : 0.0;
-        double c = l->n_upper >= 3 ? ltc_integral_value_v(l->lobe_upper, l->n_upper, p0) : 0.0;
+        double c = l->n_upper >= 3 ? texel_integral_value_v(t, l->lobe_upper, l->n_upper, p0) : 0.0;
         t->raw_target[k] = my;
         t->target[k] = my - beta * (mx - t->magnitude * c);
         t->inv_weight[k] = l->factor / (fmax(t->target[k], 0.0) + WEIGHT_FLOOR * t->magnitude + 1e-300);
@@ -557,6 +666,14 @@ static void prox_residuals(const texel *t, const double *p, double out[PROX_RESI
             out[i] = 0.0;
         return;
     }
+    if (t->sheen) { /* the shear relative beyond 1 (at low roughness the fitted b goes from ~-30 at 40 deg
+                     * to ~-3 at 78 deg: an absolute pull held a column at b = -35 where its lights'
+                     * optimum was -3, cost 20x the optimum's), the scale relative; two unused */
+        out[0] = t->prox * (p[1] - t->prox_at[1]) / fmax(1.0, fabs(t->prox_at[1]));
+        out[1] = out[3] = 0.0;
+        out[2] = t->prox * (p[0] - t->prox_at[0]) / t->prox_at[0];
+        return;
+    }
     out[0] = t->prox * (p[1] - t->prox_at[1]);
     out[1] = t->prox * (p[3] - t->prox_at[3]);
     out[2] = t->prox * (p[0] - t->prox_at[0]) / t->prox_at[0];
@@ -566,21 +683,29 @@ static void prox_residuals(const texel *t, const double *p, double out[PROX_RESI
 static int residual_fn(void *user, const double *p, double *res, double *jac)
 {
     const texel *t = user;
-    if (!(p[0] > 0.0) || !(p[2] > 0.0) || !(p[0] - p[1] * p[3] > 0.0))
+    const int np = texel_np(t);
+    if (!texel_params_ok(t, p))
         return 1;
     for (int k = 0; k < t->k; ++k) {
-        dual e = ltc_integral_dual(&t->lights[k].lobe_poly, p);
+        dual e = texel_integral_dual(t, &t->lights[k].lobe_poly, p);
         res[k] = (t->magnitude * e.v - t->target[k]) * t->inv_weight[k];
         if (jac)
-            for (int j = 0; j < 4; ++j)
-                jac[4 * k + j] = t->magnitude * e.d[j] * t->inv_weight[k];
+            for (int j = 0; j < np; ++j)
+                jac[np * k + j] = t->magnitude * e.d[j] * t->inv_weight[k];
     }
     /* the proximal residuals (fit_texel): shears absolute, scales relative; 0 without a warm start */
     double pr[PROX_RESIDUALS];
     prox_residuals(t, p, pr);
     for (int i = 0; i < PROX_RESIDUALS; ++i)
         res[t->k + i] = pr[i];
-    if (jac) {
+    if (jac && t->sheen) {
+        for (int j = 0; j < 2 * PROX_RESIDUALS; ++j)
+            jac[2 * t->k + j] = 0.0;
+        if (t->prox > 0.0) {
+            jac[2 * t->k + 1] = t->prox / fmax(1.0, fabs(t->prox_at[1]));
+            jac[2 * (t->k + 2) + 0] = t->prox / t->prox_at[0];
+        }
+    } else if (jac) {
         for (int j = 0; j < 4 * PROX_RESIDUALS; ++j)
             jac[4 * t->k + j] = 0.0;
         if (t->prox > 0.0) {
@@ -599,11 +724,12 @@ static int residual_fn(void *user, const double *p, double *res, double *jac)
  * and one below bound is the same bits as the full sum).  cost_at: no bound. */
 static double cost_below(const texel *t, const double p[4], double bound)
 {
-    if (!(p[0] > 0.0) || !(p[2] > 0.0) || !(p[0] - p[1] * p[3] > 0.0))
+    if (!texel_params_ok(t, p))
         return INFINITY;
     double c = 0.0;
     for (int k = 0; k < t->k; ++k) {
-        double r = (t->magnitude * ltc_integral_value(&t->lights[k].lobe_poly, p) - t->target[k]) * t->inv_weight[k];
+        const mf_polygon *lp = &t->lights[k].lobe_poly;
+        double r = (t->magnitude * texel_integral_value_v(t, lp->v, lp->n, p) - t->target[k]) * t->inv_weight[k];
         c += r * r;
         if (c >= bound)
             return INFINITY;
@@ -629,6 +755,22 @@ static double cost_at(const texel *t, const double p[4])
 static double closed_form_start(const texel *t, double p[4], double bound)
 {
     double best = INFINITY;
+    if (t->sheen) { /* the sheen family: a on the same log grid, b = 0 and +-2^(j/2), j = -8..6 */
+        p[0] = p[2] = 1.0;
+        p[1] = p[3] = 0.0;
+        for (int i = 0; i <= 20; ++i)
+            for (int j = 0; j <= 30; ++j) {
+                double s = pow(10.0, -4.5 + 0.25 * i);
+                double b = j == 0 ? 0.0 : (j % 2 ? 1.0 : -1.0) * pow(2.0, 0.5 * ((j + 1) / 2 - 9));
+                double q[4] = {fmax(s, t->a_min), b, fmax(s, t->a_min), 0.0};
+                double c = cost_below(t, q, fmin(best, bound));
+                if (c < best) {
+                    best = c;
+                    memcpy(p, q, sizeof q);
+                }
+            }
+        return best;
+    }
     p[0] = p[2] = 1.0;
     p[1] = p[3] = 0.0;
     for (int i = 0; i <= 20; ++i) {
@@ -691,7 +833,28 @@ static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_thet
     out->magnitude_err = t->magnitude_err;
     out->fresnel = t->fresnel;
     double p[4];
-    if (!(t->magnitude > 1e-12)) {
+    if (t->sheen && !(t->magnitude > 0.0)) {
+        /* the sheen family where the albedo underflows to 0 (charlie at alpha 1e-4 short of ~48
+         * deg): the texel shades nothing with any matrix; it keeps the previous texel's shape (the
+         * column's first such texels take the next fitted texel's shape: fill_sheen_column), so
+         * that interpolation towards the fitted texels stays one lobe */
+        double q[4] = {1.0, 0.0, 1.0, 0.0};
+        if (lobe_start && lobe_start[0] > 0.0)
+            memcpy(q, lobe_start, sizeof q);
+        mf_mat3 mv = sheen_matrix(q);
+        for (int i = 0; i < 9; ++i)
+            out->m[i] = mv.m[i / 3][i % 3];
+        out->a = out->c = 1.0 / q[0];
+        out->b = -q[1] / q[0];
+        out->d = 0.0;
+        out->converged = 1;
+        out->iterations = lobe_start ? 0 : -1; /* -1: no shape yet (fill_sheen_column) */
+        if (lobe_out && lobe_start)
+            memcpy(lobe_out, q, sizeof q);
+        texel_free(t);
+        return MF_OK;
+    }
+    if (!t->sheen && !(t->magnitude > 1e-12)) {
         /* no energy (e.g. a sheen lobe of tiny roughness): any matrix fits; store the identity */
         out->a = out->c = 1.0;
         out->m[0] = out->m[4] = out->m[8] = 1.0;
@@ -708,23 +871,45 @@ static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_thet
      * better on the new targets */
     double q[4];
     int warm = lobe_start ? (memcpy(q, lobe_start, sizeof q), 1)
-                          : start && lobe_params(t->lobe, mf_ltc_matrix_general(start), q);
-    if (!warm) {
+               : start && (t->sheen ? sheen_params(mf_ltc_matrix_general(start), q)
+                                    : lobe_params(t->lobe, mf_ltc_matrix_general(start), q));
+    if (t->sheen) {
+        /* the sheen family: the start chosen on the targets from the samples alone, then the
+         * control variate from it, and the proximal pull only when the warm start was chosen.
+         * At low roughness the samples' weights span hundreds of orders of magnitude (effective
+         * sample size ~40-200 of 4096 at alpha <= 0.001 short of 79 deg), and a control variate
+         * from a poor warm start made that start look good on its own targets: charlie 64 x 64,
+         * alpha 2.5e-4, rows 40-57 stayed at a = 6, b = -2000 (cost 25.6 on the sample targets)
+         * where the grid's best is a ~0.1, b = -6 (cost 0.12). */
         texel_targets_raw(t, ws);
-        closed_form_start(t, q, INFINITY);
+        double cq = warm ? cost_at(t, q) : NAN;
+        double c0 = closed_form_start(t, p, isnan(cq) ? INFINITY : cq);
+        int use_warm = warm && cq <= c0;
+        if (use_warm)
+            memcpy(p, q, sizeof p);
+        texel_control_variate(t, ws, p);
+        if (use_warm && q[0] > 0.0) {
+            t->prox = PROX_WEIGHT;
+            memcpy(t->prox_at, q, sizeof q);
+        }
+    } else {
+        if (!warm) {
+            texel_targets_raw(t, ws);
+            closed_form_start(t, q, INFINITY);
+        }
+        texel_control_variate(t, ws, q);
+        t->prox = 0.0;
+        if (warm && q[0] > 0.0 && q[2] > 0.0) { /* (a start from mf_ltcfit_entry_fit may be anything) */
+            t->prox = PROX_WEIGHT;
+            memcpy(t->prox_at, q, sizeof q);
+        }
+        /* the warm start unless some grid point costs less (a NaN warm cost never wins) */
+        double cq = warm ? cost_at(t, q) : NAN;
+        double c0 = closed_form_start(t, p, isnan(cq) ? INFINITY : cq);
+        if (warm && cq <= c0)
+            memcpy(p, q, sizeof p);
     }
-    texel_control_variate(t, ws, q);
-    t->prox = 0.0;
-    if (warm && q[0] > 0.0 && q[2] > 0.0) { /* (a start from mf_ltcfit_entry_fit may be anything) */
-        t->prox = PROX_WEIGHT;
-        memcpy(t->prox_at, q, sizeof q);
-    }
-    /* the warm start unless some grid point costs less (a NaN warm cost never wins) */
-    double cq = warm ? cost_at(t, q) : NAN;
-    double c0 = closed_form_start(t, p, isnan(cq) ? INFINITY : cq);
-    if (warm && cq <= c0)
-        memcpy(p, q, sizeof p);
-    double lower[4] = {A_MIN, -INFINITY, A_MIN, -INFINITY}, upper[4] = {INFINITY, INFINITY, INFINITY, INFINITY};
+    double lower[4] = {t->a_min, -INFINITY, A_MIN, -INFINITY}, upper[4] = {INFINITY, INFINITY, INFINITY, INFINITY};
     mf_solver_options so;
     mf_solver_options_default(&so);
     so.max_iterations = o->max_iterations;
@@ -732,7 +917,7 @@ static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_thet
     so.gradient_tolerance = 1e-14;
     so.parameter_tolerance = 1e-10;
     mf_solver_summary sum;
-    st = mf_solver_least_squares(4, t->k + PROX_RESIDUALS, residual_fn, t, p, lower, upper, &so, &sum);
+    st = mf_solver_least_squares(texel_np(t), t->k + PROX_RESIDUALS, residual_fn, t, p, lower, upper, &so, &sum);
     if (st != MF_OK && st != MF_ERR_NO_CONVERGENCE) {
         texel_free(t);
         return st;
@@ -746,7 +931,7 @@ static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_thet
      * minv_20 between neighbouring texels (the gate's ltc_smooth_jump 1.85x).  So where
      * |m.x| < 0.1 and the fit has d' > 0, the mirror image (a', -b', c', -d') is solved too and
      * kept if its cost is within 1 % (the two costs above differ by 0.3 %). */
-    if (fabs(t->lobe.x) < 0.1 && p[3] > 0.0) {
+    if (!t->sheen && fabs(t->lobe.x) < 0.1 && p[3] > 0.0) {
         double pm[4] = {p[0], -p[1], p[2], -p[3]};
         mf_solver_summary sm;
         mf_status sm_st = mf_solver_least_squares(4, t->k + PROX_RESIDUALS, residual_fn, t, pm, lower, upper, &so, &sm);
@@ -757,7 +942,9 @@ static mf_status fit_texel(const mf_brdf_model *m, double alpha, double cos_thet
             sum = sm;
         }
     }
-    mf_mat3 mv = view_matrix(t->lobe, p);
+    if (t->sheen)
+        p[2] = p[0], p[3] = 0.0;
+    mf_mat3 mv = texel_view_matrix(t, p);
     for (int i = 0; i < 9; ++i)
         out->m[i] = mv.m[i / 3][i % 3];
     /* the view-frame form [[a, 0, b], [0, c, 0], [d, 0, 1]]: M / M22 (NaN if M22 <= 0) */
@@ -1060,6 +1247,25 @@ static int stop_requested(const job *j)
     return j->o->cancel && *j->o->cancel;
 }
 
+/* The sheen family's texels of no shape yet (fit_texel: albedo 0 at the start of a column,
+ * iterations -1) take the shape of the column's first fitted texel. */
+static void fill_sheen_column(mf_ltcfit_entry *col, int n_u)
+{
+    int u0 = 0;
+    while (u0 < n_u && col[u0].iterations == -1)
+        ++u0;
+    if (u0 == n_u)
+        return; /* no texel of the column has energy: they keep the cosine */
+    for (int u = 0; u < u0; ++u) {
+        col[u].a = col[u0].a;
+        col[u].b = col[u0].b;
+        col[u].c = col[u0].c;
+        col[u].d = col[u0].d;
+        memcpy(col[u].m, col[u0].m, sizeof col[u].m);
+        col[u].iterations = 0;
+    }
+}
+
 static void *worker(void *arg)
 {
     job *j = arg;
@@ -1102,7 +1308,7 @@ static void *worker(void *arg)
                            use ? &given[2] : NULL, NULL, have_prev ? lobe_prev : NULL, j->o, j->scr, &ws, &col[u],
                            lobe_prev);
             if (st == MF_OK) {
-                have_prev = 1;
+                have_prev = col[u].iterations != -1; /* (a sheen texel of no shape yet: no lobe_prev) */
                 pthread_mutex_lock(&j->lock);
                 ++j->entries_done;
                 if (j->o->progress)
@@ -1110,6 +1316,8 @@ static void *worker(void *arg)
                 pthread_mutex_unlock(&j->lock);
             }
         }
+        if (st == MF_OK && !stop_requested(j))
+            fill_sheen_column(col, n_u);
         pthread_mutex_lock(&j->lock);
         if (st != MF_OK) {
             if (j->status == MF_OK) {

@@ -20,6 +20,10 @@
 #define GATE_Z 5.5                  /* two-sided 3.8e-8 per test: < 1e-3 family-wise up to 26000 tests */
 #define GATE_QUAD_N 64              /* albedo quadrature: 64 x 64 (error from 32 x 32) */
 #define GATE_REL_FLOOR 0.01         /* relative polygon errors against max(MC, 0.01 albedo) */
+/* The smoothness checks' shape weight: min(1, m / GATE_SHAPE_MAG), m the largest magnitude of the
+ * texels compared (smooth_weight): the absolute magnitude error ltc_albedo_quad accepts below its
+ * floor (GATE_ALBEDO_REL x GATE_ALBEDO_FLOOR = 1e-5) */
+#define GATE_SHAPE_MAG (GATE_ALBEDO_REL * GATE_ALBEDO_FLOOR)
 
 /* Stream tags: each purpose and texel has its own PCG32 stream. */
 enum { STREAM_NORM = 1, STREAM_POLY = 2, STREAM_MC = 3 };
@@ -578,13 +582,98 @@ static void check_normalisation(void *ctx, mf_check *c)
         }
 }
 
-/* Neighbour pairs and triples: every field but "zero", along r then u, in texel order. */
+/* What the smoothness checks read (docs/validation.md, "Smoothness of the shape").  The four matrix
+ * fields and the implied minv_11 = 1 (field index t->nfields) define the LTC up to a positive
+ * scale, so they are read scaled by their largest magnitude, max(1, |minv_00|, |minv_20|,
+ * |minv_02|, |minv_22|): the stored values wherever the implied 1 is the largest (every texel of
+ * every registered model but charlie), and a bounded shape where a lobe held against the horizon
+ * needs a large entry (charlie's ring: minv ~ diag(1, 1, 1 / (2 alpha))).  Other fields as stored. */
+static int is_shape_field(const gate_ctx *g, int f)
+{
+    if (f == g->t->nfields)
+        return 1;
+    for (int k = 0; k < 4; ++k)
+        if (f == g->L.f[k])
+            return 1;
+    return 0;
+}
+
+static const char *smooth_field_name(const gate_ctx *g, int f)
+{
+    return f == g->t->nfields ? "minv_11 (implied 1)" : g->t->fields[f];
+}
+
+static double smooth_value(const gate_ctx *g, int f, int ir, int iu)
+{
+    const double *r = rec(g->t, ir, iu);
+    if (!is_shape_field(g, f))
+        return r[f];
+    double n = 1.0;
+    for (int k = 0; k < 4; ++k) {
+        double v = fabs(r[g->L.f[k]]);
+        if (!isfinite(v))
+            return NAN;
+        n = v > n ? v : n;
+    }
+    return (f == g->t->nfields ? 1.0 : r[f]) / n;
+}
+
+/* The weight of a shape difference among texels whose magnitudes range from lo to hi (1 for every
+ * other field, and where a magnitude is not finite):
+ *   min(1, hi / GATE_SHAPE_MAG) / max(1, log2(hi / lo)).
+ * The first factor: the light a lobe reflects is at most its magnitude, so below GATE_SHAPE_MAG
+ * even a wrong shape shades less than the magnitude error ltc_albedo_quad accepts there.  The
+ * second: the magnitude is the one field whose truth the gate knows (ltc_albedo_quad holds it to
+ * the model's albedo within 1e-3), and where it changes by a factor 2^s > 2 between the texels
+ * compared, the model itself changes by s doublings within one step: the grid resolves it s times
+ * more coarsely than a field that doubles per step, and so the shape may change s times as much
+ * (charlie at alpha 1e-4: albedo 0.25 at 88.2 deg, 17.2 at 89.95 deg, and its lobe's azimuthal
+ * width doubles).  No texel of the other registered models has neighbours' magnitudes a factor
+ * 2 apart, so both factors are 1 for them. */
+static double smooth_weight(const gate_ctx *g, int f, double hi, double lo)
+{
+    if (!is_shape_field(g, f) || !isfinite(hi) || !isfinite(lo))
+        return 1.0;
+    double w = hi < GATE_SHAPE_MAG ? (hi > 0.0 ? hi / GATE_SHAPE_MAG : 0.0) : 1.0;
+    if (!(lo > 0.0))
+        return hi > 0.0 ? 0.0 : w; /* a magnitude 0 beside a positive one: unresolved (log2 infinite) */
+    double s = log2(hi / lo);
+    return s > 1.0 ? w / s : w;
+}
+
+static void magnitude_range(const gate_ctx *g, const int *ir, const int *iu, int n, double *hi, double *lo)
+{
+    *hi = 0.0;
+    *lo = INFINITY;
+    for (int k = 0; k < n; ++k) {
+        double v = fabs(rec(g->t, ir[k], iu[k])[g->L.f[MF_LTC_F_MAGNITUDE]]);
+        if (!isfinite(v)) {
+            *hi = *lo = NAN;
+            return;
+        }
+        *hi = v > *hi ? v : *hi;
+        *lo = v < *lo ? v : *lo;
+    }
+}
+
+static int quad_fresnel(gate_ctx *g, int ir, int iu, mf_result *q);
+
+/* Neighbour pairs and triples: every field but "zero" (the shape read by smooth_value, weighted by
+ * smooth_weight), then the implied minv_11, along r then u, in texel order.  With a model, a jump
+ * of the magnitude or fresnel field above the bound is measured on its error against the model
+ * (as in ltc_smooth_spike): the true albedo itself jumps where it varies faster than a row (charlie
+ * at alpha 1e-4: 8.3e-4 at 86.4 deg, 17.2 at 89.95 deg). */
 static void check_smooth_jump(void *ctx, mf_check *c)
 {
-    const gate_ctx *g = ctx;
+    gate_ctx *g = ctx;
     const mf_table *t = g->t;
-    for (int f = 0; f < t->nfields; ++f) {
-        if (!strcmp(t->fields[f], "zero"))
+    const int mag_field = g->L.f[MF_LTC_F_MAGNITUDE], fres_field = g->L.f[MF_LTC_F_FRESNEL];
+    if (g->model)
+        snprintf(c->what, sizeof c->what, "%s",
+                 "max |neighbour difference| / (16 h), every field (matrix: scaled, weighted; magnitude, fresnel: "
+                 "minus the model's albedo, moment)");
+    for (int f = 0; f <= t->nfields; ++f) {
+        if (f < t->nfields && !strcmp(t->fields[f], "zero"))
             continue;
         for (int axis = 0; axis < 2; ++axis) {
             int dr = axis == 0, du = axis == 1;
@@ -593,12 +682,37 @@ static void check_smooth_jump(void *ctx, mf_check *c)
                 for (int ir = 0; ir < g->nr; ++ir) {
                     if (ir + dr >= g->nr || iu + du >= g->nu)
                         continue;
-                    double a = rec(t, ir, iu)[f], b = rec(t, ir + dr, iu + du)[f];
+                    double a = smooth_value(g, f, ir, iu), b = smooth_value(g, f, ir + dr, iu + du);
                     if (!isfinite(a) || !isfinite(b))
                         continue;
+                    const int tr[2] = {ir, ir + dr}, tu[2] = {iu, iu + du};
+                    double mhi, mlo;
+                    magnitude_range(g, tr, tu, 2, &mhi, &mlo);
+                    double wt = smooth_weight(g, f, mhi, mlo);
                     char w[64];
-                    snprintf(w, sizeof w, "%s along %s", t->fields[f], axis == 0 ? "r" : "u");
-                    record_texel(c, fabs(b - a) / (GATE_JUMP_PER_H * h), w, ir, iu, mf_ltc_table_alpha(t, ir),
+                    snprintf(w, sizeof w, "%s along %s", smooth_field_name(g, f), axis == 0 ? "r" : "u");
+                    double d = fabs(b - a);
+                    int is_fres = f == fres_field && fres_field >= 0;
+                    if (g->model && f < t->nfields && (f == mag_field || is_fres) && d > GATE_JUMP_PER_H * h) {
+                        double e[2];
+                        int ok = 1;
+                        for (int k = 0; k < 2 && ok; ++k) {
+                            mf_result q;
+                            ok = is_fres ? quad_fresnel(g, tr[k], tu[k], &q) : quad_albedo(g, tr[k], tu[k], &q);
+                            if (ok)
+                                e[k] = rec(t, tr[k], tu[k])[f] - q.val;
+                        }
+                        if (!is_fres && !g->qalb) {
+                            out_of_memory(g, c);
+                            return;
+                        }
+                        if (ok) {
+                            d = fabs(e[1] - e[0]);
+                            snprintf(w, sizeof w, "%s - %s along %s", t->fields[f], is_fres ? "moment" : "albedo",
+                                     axis == 0 ? "r" : "u");
+                        }
+                    }
+                    record_texel(c, wt * d / (GATE_JUMP_PER_H * h), w, ir, iu, mf_ltc_table_alpha(t, ir),
                                  mf_ltc_table_cos_theta(t, iu));
                 }
         }
@@ -632,8 +746,8 @@ static void check_smooth_spike(void *ctx, mf_check *c)
         snprintf(c->what, sizeof c->what, "%s",
                  "max excess of a texel outside its 2 neighbours' range / (80 h^2), every field (magnitude, fresnel: "
                  "minus the model's albedo, Schlick moment), both axes");
-    for (int f = 0; f < t->nfields; ++f) {
-        if (!strcmp(t->fields[f], "zero"))
+    for (int f = 0; f <= t->nfields; ++f) {
+        if (f < t->nfields && !strcmp(t->fields[f], "zero"))
             continue;
         for (int axis = 0; axis < 2; ++axis) {
             int dr = axis == 0, du = axis == 1;
@@ -642,12 +756,16 @@ static void check_smooth_spike(void *ctx, mf_check *c)
                 for (int ir = 0; ir < g->nr; ++ir) {
                     if (ir + dr >= g->nr || iu + du >= g->nu || ir - dr < 0 || iu - du < 0)
                         continue;
-                    double a = rec(t, ir, iu)[f], b = rec(t, ir + dr, iu + du)[f];
-                    double l = rec(t, ir - dr, iu - du)[f];
+                    double a = smooth_value(g, f, ir, iu), b = smooth_value(g, f, ir + dr, iu + du);
+                    double l = smooth_value(g, f, ir - dr, iu - du);
                     if (!isfinite(a) || !isfinite(b) || !isfinite(l))
                         continue;
+                    const int t3r[3] = {ir - dr, ir, ir + dr}, t3u[3] = {iu - du, iu, iu + du};
+                    double mhi, mlo;
+                    magnitude_range(g, t3r, t3u, 3, &mhi, &mlo);
+                    double wt = smooth_weight(g, f, mhi, mlo);
                     char w[64];
-                    snprintf(w, sizeof w, "%s along %s", t->fields[f], axis == 0 ? "r" : "u");
+                    snprintf(w, sizeof w, "%s along %s", smooth_field_name(g, f), axis == 0 ? "r" : "u");
                     double lo = l < b ? l : b, hi = l < b ? b : l;
                     double ex = a > hi ? a - hi : (a < lo ? lo - a : 0.0);
                     int is_fres = f == fres_field && fres_field >= 0;
@@ -673,7 +791,7 @@ static void check_smooth_spike(void *ctx, mf_check *c)
                                      axis == 0 ? "r" : "u");
                         }
                     }
-                    record_texel(c, ex / (GATE_SPIKE_PER_H2 * h * h), w, ir, iu, mf_ltc_table_alpha(t, ir),
+                    record_texel(c, wt * ex / (GATE_SPIKE_PER_H2 * h * h), w, ir, iu, mf_ltc_table_alpha(t, ir),
                                  mf_ltc_table_cos_theta(t, iu));
                 }
         }
@@ -866,9 +984,11 @@ const mf_check_def mf_ltc_gate_check_table[MF_LTC_GATE_MAX_CHECKS] = {
      check_energy},
     {"ltc_normalisation", "|integral over the sphere - 1|: exact integrals over 8 rotated octant triangles, every texel",
      GATE_NORM_BOUND, 0, check_normalisation},
-    {"ltc_smooth_jump", "max |neighbour difference| / (16 h) of every field (h: axis spacing)", 1.0, 0,
+    {"ltc_smooth_jump", "max |neighbour difference| / (16 h) of every field, the matrix scaled by its largest entry and "
+                        "weighted by min(1, magnitude / 1e-5) (h: axis spacing)", 1.0, 0,
      check_smooth_jump},
-    {"ltc_smooth_spike", "max excess of a texel outside its 2 neighbours' range / (80 h^2), every field, both axes", 1.0,
+    {"ltc_smooth_spike", "max excess of a texel outside its 2 neighbours' range / (80 h^2), every field (the matrix as in "
+                         "ltc_smooth_jump), both axes", 1.0,
      0, check_smooth_spike},
     {"ltc_albedo_quad",
      "max (|magnitude - albedo| - 4 err) / max(albedo, 0.01), albedo by 64x64 Gauss-Legendre quadrature",
