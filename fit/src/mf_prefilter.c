@@ -1124,11 +1124,6 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
             mf_prefilter_mix_free(&mix);
         }
     }
-    /* one distinct normal (a level-1 footprint on one facet): the mixture is one rotated lobe, there is no
-     * facet to choose, so no continuity solve (the rows are warm-started chains, as without a neighbour) */
-    int uni = st == MF_OK;
-    for (int i = 1; i < nc && uni; ++i)
-        uni = cn[3 * i] == cn[0] && cn[3 * i + 1] == cn[1] && cn[3 * i + 2] == cn[2];
     /* a footprint with a centre of symmetry: the rows phi + pi are the rows phi (fitted once) */
     int half = st == MF_OK && o->n_phi % 2 == 0 && halfturn_symmetric(cn, cw, nc, key) ? o->n_phi / 2 : 0;
     for (int b = 0; b < o->n_phi && st == MF_OK; ++b) {
@@ -1177,7 +1172,7 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
         for (int a = 1; a < o->n_theta; ++a) {
             double th = mf_prefilter_theta(o, a);
             int v = a * o->n_phi + b;
-            const double *nb = b > 0 && !uni ? j->lobes[level - 1] + MF_LTCFIT_ANISO_NPARAMS * (base_idx + v - 1) : NULL;
+            const double *nb = b > 0 ? j->lobes[level - 1] + MF_LTCFIT_ANISO_NPARAMS * (base_idx + v - 1) : NULL;
             mf_ltcfit_aniso_entry e;
             double nbr = nb ? res[v - 1] : -1.0;
             st = fit_row_entry(&mix, &p, th, mir, alb + 2 * v, prev, nb, nbr, &fo, &e);
