@@ -63,7 +63,9 @@
  *     where a single lobe has several fits of similar cost (the two facets of a groove), the
  *     neighbouring azimuths keep the same one instead of flipping between them (a lobe on one
  *     facet next to a lobe on the other is blended by the bilinear view filter into a lobe
- *     between them).
+ *     between them).  The previous azimuth's solve runs first and is kept alone, the other
+ *     solves skipped, when its residual is at most 1.1 times that neighbour's own (revision 5;
+ *     mf_prefilter.c, MF_PREFILTER_ACCEPT).
  *   - symmetric to the map's precision only: a row (theta > 0) whose normals are y-mirror symmetric
  *     on the MF_PREFILTER_MIRROR_TOL_NORMAL grid (3/255: an 8-bit map cannot encode 0) but not on
  *     the fine one is fitted twice, to the snapped symmetric set (zero pattern held) and to the
