@@ -967,8 +967,8 @@ static void store(pjob *j, mf_prefilter_level *lv, size_t idx, const double m[9]
  * the revision-4 rule that solves all of them (bench_prefilter --size 8, 2,205 entries with a
  * neighbour: the neighbour's solve was kept at every entry, and 85 % of them meet this test; no
  * entry that meets it had a kept solve other than the neighbour's), so on such maps the lobes are
- * the same bits at about half the solves.  On the demo groove (8 x 16 views) 981 of 8,344 entries
- * that meet it had kept another solve (nearly all at level 1, where the neighbour's solve was up to
+ * the same bits at about half the solves.  On the demo groove (8 x 16 views) 4,589 of 8,344 entries
+ * meet it, and 981 of those had kept another solve (nearly all at level 1, where the neighbour's solve was up to
  * 65 % worse): prefilter-eval with 4 x 8 views, level 1 mean MSE 2.779e-4 -> 2.788e-4, levels 2-4
  * the same to 4 digits (docs/prefilter.md, "Speed of revision 5").  Skipping the neighbour's solve
  * instead at footprints of one distinct normal cost more (level 1: 3.036e-4) and saved less. */
