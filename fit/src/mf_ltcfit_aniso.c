@@ -1285,11 +1285,13 @@ mf_status mf_ltcfit_aniso_entry_fit_mirrored_two(const mf_brdf_model *model, mf_
 
 /* Several solves of one entry of mf_ltcfit_aniso_entry_fit_mirrored on one preparation: solve i from
  * starts[i] (NULL: the closed-form start), out[i] its result; each solve_entry as in a separate call
- * (bit for bit), the directions, lights and targets prepared once. */
+ * (bit for bit), the directions, lights and targets prepared once.  Solve 0 first; when its residual
+ * is at most accept, the others are not run (*nsolved 1, else nstarts). */
 mf_status mf_ltcfit_aniso_entry_fit_mirrored_multi(const mf_brdf_model *model, mf_brdf_params prm, double theta,
                                                    int mirrors, double magnitude, double magnitude_err,
-                                                   const double *const *starts, int nstarts,
-                                                   const mf_ltcfit_aniso_options *o, mf_ltcfit_aniso_entry *out)
+                                                   const double *const *starts, int nstarts, double accept,
+                                                   const mf_ltcfit_aniso_options *o, mf_ltcfit_aniso_entry *out,
+                                                   int *nsolved)
 {
     if (!model || !model->eval_cos || !check_options(o) || !(prm.alpha_x > 0.0) || !(prm.alpha_y > 0.0) ||
         !(theta >= 0.0 && theta < 0.5 * MF_PI) || !out || !starts || nstarts < 1 || nstarts > 8 ||
@@ -1309,8 +1311,15 @@ mf_status mf_ltcfit_aniso_entry_fit_mirrored_multi(const mf_brdf_model *model, m
         t->mask = w->mask;
         t->mask_ok = 0;
     }
-    for (int i = 0; i < nstarts && st == MF_OK; ++i)
+    int n = 0;
+    for (int i = 0; i < nstarts && st == MF_OK; ++i) {
         st = solve_entry(t, &w->ws, starts[i], NULL, o, &out[i]);
+        n = i + 1;
+        if (st == MF_OK && i == 0 && out[0].residual <= accept)
+            break;
+    }
+    if (nsolved)
+        *nsolved = n;
     free(t);
     return st;
 }

@@ -963,16 +963,30 @@ static void store(pjob *j, mf_prefilter_level *lv, size_t idx, const double m[9]
     pthread_mutex_unlock(&j->lock);
 }
 
+/* The early accept of the continuity rule: the solve from the previous azimuth's lobe is taken alone,
+ * without the solves from the previous elevation's lobe and the closed-form start, when its RMS
+ * residual is at most MF_PREFILTER_ACCEPT times that neighbour's own (stored) residual.  Measured with
+ * the revision-4 rule that solves all of them (bench_prefilter --size 8, 2,205 entries with a
+ * neighbour: the neighbour's solve was kept at every entry, and 85 % of them meet this test; no
+ * entry that meets it had a kept solve other than the neighbour's), so on such maps the lobes are
+ * the same bits at about half the solves.  On the demo groove (8 x 16 views) 4,589 of 8,344 entries
+ * meet it, and 981 of those had kept another solve (nearly all at level 1, where the neighbour's solve was up to
+ * 65 % worse): prefilter-eval with 4 x 8 views, level 1 mean MSE 2.779e-4 -> 2.788e-4, levels 2-4
+ * the same to 4 digits (docs/prefilter.md, "Speed of revision 5").  Skipping the neighbour's solve
+ * instead at footprints of one distinct normal cost more (level 1: 3.036e-4) and saved less. */
+#define MF_PREFILTER_ACCEPT 1.1
+
 /* One entry of a phi row (theta > 0) of the mixture mix at elevation th: solved from prev (the previous
- * elevation's lobe); with nb (the previous azimuth's lobe at th, b > 0) the continuity rule: solves
- * from prev, from nb (and, on grazing rows, from the closed-form start) on one preparation, nb's kept
- * unless its residual exceeds the best one's by more than MF_PREFILTER_CONTINUITY_MARGIN, so that where
- * a footprint's mixture has several single-lobe fits of similar cost (the facets of a groove)
- * neighbouring azimuths keep the same one; without nb, grazing rows (cos theta <
+ * elevation's lobe); with nb (the previous azimuth's lobe at th, b > 0; its residual nb_res) the
+ * continuity rule: solves from nb, from prev (and, on grazing rows, from the closed-form start) on one
+ * preparation, nb's kept unless its residual exceeds the best one's by more than
+ * MF_PREFILTER_CONTINUITY_MARGIN, so that where a footprint's mixture has several single-lobe fits of
+ * similar cost (the facets of a groove) neighbouring azimuths keep the same one; nb's solve alone when
+ * its residual is at most MF_PREFILTER_ACCEPT nb_res.  Without nb, grazing rows (cos theta <
  * MF_PREFILTER_MULTISTART_COS) get the second solve from the closed-form start, the lower residual
  * kept.  alb: the albedo and its error. */
 static mf_status fit_row_entry(mf_prefilter_mix *mix, const mf_brdf_params *p, double th, int mir, const double *alb,
-                               const double *prev, const double *nb, const mf_ltcfit_aniso_options *fo,
+                               const double *prev, const double *nb, double nb_res, const mf_ltcfit_aniso_options *fo,
                                mf_ltcfit_aniso_entry *e)
 {
     mf_status st = mix_set_view(mix, p, mf_vec3_make(sin(th), 0.0, cos(th)));
@@ -982,20 +996,22 @@ static mf_status fit_row_entry(mf_prefilter_mix *mix, const mf_brdf_params *p, d
     if (!nb)
         return grazing ? mf_ltcfit_aniso_entry_fit_mirrored_two(&mix->model, *p, th, mir, alb[0], alb[1], prev, NULL, fo, e)
                        : mf_ltcfit_aniso_entry_fit_mirrored(&mix->model, *p, th, mir, alb[0], alb[1], prev, NULL, fo, e);
-    const double *starts[3] = {prev, nb, NULL};
-    int ns = grazing ? 3 : 2;
+    const double *starts[3] = {nb, prev, NULL};
+    int ns = grazing ? 3 : 2, nsolved = 0;
     mf_ltcfit_aniso_entry ee[3];
-    st = mf_ltcfit_aniso_entry_fit_mirrored_multi(&mix->model, *p, th, mir, alb[0], alb[1], starts, ns, fo, ee);
+    st = mf_ltcfit_aniso_entry_fit_mirrored_multi(&mix->model, *p, th, mir, alb[0], alb[1], starts, ns,
+                                                  nb_res >= 0.0 ? MF_PREFILTER_ACCEPT * nb_res : -1.0, fo, ee,
+                                                  &nsolved);
     if (st != MF_OK)
         return st;
     int best = 0, it = 0;
-    for (int k = 0; k < ns; ++k) {
+    for (int k = 0; k < nsolved; ++k) {
         it += ee[k].iterations;
         if (ee[k].residual < ee[best].residual)
             best = k;
     }
-    if (ee[1].residual <= ee[best].residual * (1.0 + MF_PREFILTER_CONTINUITY_MARGIN))
-        best = 1;
+    if (ee[0].residual <= ee[best].residual * (1.0 + MF_PREFILTER_CONTINUITY_MARGIN))
+        best = 0;
     *e = ee[best];
     e->iterations = it;
     return MF_OK;
@@ -1034,8 +1050,9 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
     double *cw = malloc(sizeof(double) * (size_t)nfoot), *rn = malloc(sizeof(double) * 3 * (size_t)nfoot);
     double *rw = malloc(sizeof(double) * (size_t)nfoot), *alb = malloc(sizeof(double) * 2 * (size_t)nv);
     double *un = malloc(sizeof(double) * 3 * (size_t)nfoot), *uw = malloc(sizeof(double) * (size_t)nfoot);
+    double *res = malloc(sizeof(double) * (size_t)nv); /* the stored entries' residuals (MF_PREFILTER_ACCEPT) */
     qkey *key = malloc(sizeof(qkey) * 2 * (size_t)nfoot);
-    mf_status st = tex && cn && cw && rn && rw && un && uw && alb && key ? MF_OK : MF_ERR_ALLOC;
+    mf_status st = tex && cn && cw && rn && rw && un && uw && alb && key && res ? MF_OK : MF_ERR_ALLOC;
     int nc = 0;
     if (st == MF_OK) {
         int k = 0;
@@ -1163,10 +1180,11 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
             int v = a * o->n_phi + b;
             const double *nb = b > 0 ? j->lobes[level - 1] + MF_LTCFIT_ANISO_NPARAMS * (base_idx + v - 1) : NULL;
             mf_ltcfit_aniso_entry e;
-            st = fit_row_entry(&mix, &p, th, mir, alb + 2 * v, prev, nb, &fo, &e);
+            double nbr = nb ? res[v - 1] : -1.0;
+            st = fit_row_entry(&mix, &p, th, mir, alb + 2 * v, prev, nb, nbr, &fo, &e);
             if (st == MF_OK && two) {
                 mf_ltcfit_aniso_entry es;
-                st = fit_row_entry(&mixs, &p, th, MF_LTCFIT_ANISO_MIRROR_Y, alb + 2 * v, prev, nb, &fo, &es);
+                st = fit_row_entry(&mixs, &p, th, MF_LTCFIT_ANISO_MIRROR_Y, alb + 2 * v, prev, nb, nbr, &fo, &es);
                 if (st == MF_OK) {
                     int it = e.iterations + es.iterations;
                     if (es.residual <= e.residual * (1.0 + MF_PREFILTER_SYMMETRY_MARGIN))
@@ -1181,13 +1199,14 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
                 break;
             }
             store(j, lv, base_idx + v, e.m, e.lobe, alb[2 * v], alb[2 * v + 1], &e, 1);
+            res[v] = e.residual;
             prev = j->lobes[level - 1] + MF_LTCFIT_ANISO_NPARAMS * (base_idx + v);
         }
         if (two)
             mf_prefilter_mix_free(&mixs);
         mf_prefilter_mix_free(&mix);
     }
-    free(tex), free(cn), free(cw), free(rn), free(rw), free(un), free(uw), free(alb), free(key);
+    free(tex), free(cn), free(cw), free(rn), free(rw), free(un), free(uw), free(alb), free(key), free(res);
     return st;
 }
 

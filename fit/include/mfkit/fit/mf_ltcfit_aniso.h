@@ -244,13 +244,14 @@ mf_status mf_ltcfit_aniso_entry_fit_mirrored_two(const mf_brdf_model *model, mf_
 
 /* nstarts (1..8) solves of one entry of mf_ltcfit_aniso_entry_fit_mirrored on one preparation:
  * out[i] is the solve from starts[i] (NULL: the closed-form start), bit for bit the separate call's
- * (lobe_start starts[i], no alt_start).  The caller chooses among them (e.g. mf_prefilter's
- * continuity rule). */
+ * (lobe_start starts[i], no alt_start).  Solve 0 runs first; if its residual is at most accept
+ * (-1: never) the others are skipped.  *nsolved (may be NULL): how many out[] hold solves (1 or
+ * nstarts).  The caller chooses among them (e.g. mf_prefilter's continuity rule). */
 mf_status mf_ltcfit_aniso_entry_fit_mirrored_multi(const mf_brdf_model *model, mf_brdf_params p, double theta,
                                                    int mirrors, double magnitude, double magnitude_err,
-                                                   const double *const *starts, int nstarts,
-                                                   const mf_ltcfit_aniso_options *o,
-                                                   mf_ltcfit_aniso_entry *out) MF_WARN_UNUSED;
+                                                   const double *const *starts, int nstarts, double accept,
+                                                   const mf_ltcfit_aniso_options *o, mf_ltcfit_aniso_entry *out,
+                                                   int *nsolved) MF_WARN_UNUSED;
 
 /* Writes the published layout: a little-endian float32 .npy of shape (n0, n1, n2, n3, 3, 3),
  * C order (the LAST table axis fastest, unlike mf_table's storage), the forward M of each entry

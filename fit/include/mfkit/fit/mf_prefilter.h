@@ -63,7 +63,9 @@
  *     where a single lobe has several fits of similar cost (the two facets of a groove), the
  *     neighbouring azimuths keep the same one instead of flipping between them (a lobe on one
  *     facet next to a lobe on the other is blended by the bilinear view filter into a lobe
- *     between them).
+ *     between them).  The previous azimuth's solve runs first and is kept alone, the other
+ *     solves skipped, when its residual is at most 1.1 times that neighbour's own (revision 5;
+ *     mf_prefilter.c, MF_PREFILTER_ACCEPT).
  *   - symmetric to the map's precision only: a row (theta > 0) whose normals are y-mirror symmetric
  *     on the MF_PREFILTER_MIRROR_TOL_NORMAL grid (3/255: an 8-bit map cannot encode 0) but not on
  *     the fine one is fitted twice, to the snapped symmetric set (zero pattern held) and to the
@@ -108,7 +110,7 @@ extern "C" {
 #define MF_PREFILTER_COS_MIN 0.001
 /* Names the fitted values: bump it whenever they change (objective, starts, constants), so that a
  * resumed `mfkit prefilter` refuses tiles of another revision. */
-#define MF_PREFILTER_REVISION 4
+#define MF_PREFILTER_REVISION 5
 #define MF_PREFILTER_ALBEDO_N 64
 #define MF_PREFILTER_THETA_MAX (0.999 * 0.5 * MF_PI)
 /* Footprints of at least MF_PREFILTER_CLUSTER_MIN texels are fitted to a clustered mixture: cells
