@@ -7,20 +7,27 @@
  * The pipeline (docs/prefilter.md):
  *   tiles   the map is cut into --tile x --tile regions, each fitted for the levels whose
  *           footprints lie inside it; every texel of a higher level is a tile of its own (its
- *           footprint).  mf_prefilter_run_from fits a tile; a footprint's lobes depend only on its
+ *           footprint).  mf_prefilter_run_tile fits a tile; a footprint's lobes depend only on its
  *           normals and the options, so the tiling does not change a bit of the output.
+ *   albedos before the tiles, the top-level albedos of every region block (mf_prefilter_albedo_level,
+ *           DIR/.prefilter-work/albedo_<b>.bin); a footprint tile reduces its footprint's albedos
+ *           from its blocks' (the mean of the children's, in the library's fixed order), so it
+ *           holds no level-0 albedos.  Done in the first slice, whatever --max-tiles.
  *   work    each finished tile is written atomically to DIR/.prefilter-work/tile_<k>.bin, the
  *           checkpoint: a rerun of the same command (same map, options and fitter revision,
  *           recorded in run.txt there) skips the tiles present.  SIGINT/SIGTERM and --max-tiles
  *           stop between tiles and keep the checkpoint.
  *   ranks   under mpirun (built with MFKIT_WITH_MPI) rank r of K fits every K-th tile from the
- *           r-th, largest footprints first; after a barrier rank 0 assembles.  One process and K
+ *           r-th, largest footprints first (and every K-th albedo block before them, then a
+ *           barrier); after a barrier rank 0 assembles.  One process and K
  *           ranks fit the same tiles with the same code: the same bits.
  *   output  rank 0 streams every level's .npy (matrices, magnitudes, albedos) (header first, then rows, read tile by tile) and
  *           its three EXR view atlases, writes the lookup snippets and prefilter.json, and commits
  *           them all together (mf_io_atomic_commit_all); then removes the work directory.
  * Memory: the map's normals, the fits of the tiles in flight (--threads N fits N tiles at once
- * when there are enough: each its footprints' albedo cache and lobes) and one row of a level.
+ * when there are enough: a region tile its texels' albedos and its lobes, a footprint tile its
+ * sub-map and one fit, whose clustering holds 80 bytes per footprint texel for a moment) and the
+ * albedo blocks (16 bytes per block and view).
  * Gate: rank 0 keeps the assembled levels (44 bytes per lobe, 96 more during the gate) and runs
  * mf_prefilter_gate_run_ref over them before committing; its result goes into prefilter.json.
  * Tables: --base both (the default) runs the pipeline twice, the specular GGX table into DIR, then the
