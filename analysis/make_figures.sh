@@ -122,8 +122,12 @@ if [ -x "$bin/render_prefilter_scenes" ] && [ -x "$build/bin/mfkit" ]; then
     /usr/bin/python3 "$src/analysis/prefilter_scenes_ssim.py" "$work/scenes" --csv "$work/ssim.csv" >/dev/null
     { echo "# command=mfkit prefilter tests/data/normalmaps/vgroove_16.png --base ggx --views 4x8 --threads 2 --out PF; render_prefilter_scenes --prefilter PF --out SC; prefilter_scenes_ssim.py SC (analysis/make_figures.sh), mfkit=$ver, seed=1, date=$(date -u +%Y-%m-%dT%H:%M:%SZ)"
       tail -n +2 "$work/ssim.csv"; } >"$data/prefilter_scenes_ssim.csv"
+    # the same renders' error against the light's size (about 65 s of CPU; figure prefilter_scenes_lights)
+    echo "== analysis/prefilter_scenes_lights.sh"
+    (cd "$src" && analysis/prefilter_scenes_lights.sh "$build" "$work/lights.csv.gz")
+    gzip -dc "$work/lights.csv.gz" >"$data/prefilter_scenes_lights.csv"
 else
-    skipped+=("prefilter_scenes: $bin/render_prefilter_scenes or $build/bin/mfkit not built (needs Ceres and OpenImageIO)")
+    skipped+=("prefilter_scenes, prefilter_scenes_lights: $bin/render_prefilter_scenes or $build/bin/mfkit not built (needs Ceres and OpenImageIO)")
 fi
 echo "== plot.py"
 MFKIT_FIGURE_GATES=$gates /usr/bin/python3 "$src/analysis/plot.py" "$data" "$out"

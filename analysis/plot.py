@@ -915,5 +915,44 @@ def plot_prefilter_scenes_ssim(d, out_dir, made):
 KINDS = KINDS + ((("scene", "distance", "method", "ssim", "ssim_image"), plot_prefilter_scenes_ssim),)
 
 
+def plot_prefilter_scenes_lights(d, out_dir, made):
+    """analysis/prefilter_scenes_lights.sh: the scene renders' error against the size of the quad light
+    (the thesis' error-against-light-size graphs, Nahmias 2022, Ch. 4.1.3), near-normal and grazing scene.
+    Left of each pair: image MSE against the per-texel LTC truth, averaged over the camera distances
+    whose mean level of detail is at least 1 (the prefiltered levels; nearer, every method shades level
+    0 alike); right: the relative RMS error there (MSE grows with the light's power, the relative error
+    does not)."""
+    methods = [("mfkit", "mfkit lobes", "C3"), ("naive", "naive (MIP normal)", "C0"),
+               ("toksvig", "Toksvig", "C1"), ("leadr", "LEADR", "C2")]
+    scenes = [s for s in ("normal", "grazing") if np.any(d["scene"] == s)]
+    lights = np.unique(d["light_half_side"])
+    fig, axes = new_figure(2, len(scenes), width=5.0, height=4.0)
+    for i, sc in enumerate(scenes):
+        far = (d["scene"] == sc) & (d["mean_lod"] >= 1.0)
+        nd = len(np.unique(d["distance"][far]))
+        for j, (col, ylabel) in enumerate((("mse", "image MSE vs per-texel LTC truth"),
+                                           ("rel_rms", "relative RMS error"))):
+            ax = axes[i][j]
+            for key, label, colour in methods:
+                ys = [np.mean(d[col][far & (d["method"] == key) & (d["light_half_side"] == h)]) for h in lights]
+                ax.plot(lights, np.maximum(ys, 1e-12), "o-", color=colour, label=label)
+            ax.set_xscale("log", base=2)
+            ax.set_xticks(lights)
+            ax.set_xticklabels(["%g" % h for h in lights])
+            ax.set_yscale("log")
+            ax.set_xlabel("light half side (plane units)")
+            ax.set_ylabel(ylabel + " (mean over %d distances)" % nd, fontsize=8)
+            ax.set_title("%s view" % ("near-normal (scene 1)" if sc == "normal" else "grazing (scene 2)"))
+            ax.grid(True, which="both", alpha=0.3)
+            ax.legend(fontsize=7)
+    finish(fig, d, out_dir, "prefilter_scenes_lights", made,
+           note="distances with mean level of detail >= 1 only (nearer ones shade level 0 alike)")
+
+
+# before prefilter_scenes' entry: this file has its columns too (and light_half_side)
+KINDS = ((("light_half_side", "scene", "distance", "mean_lod", "method", "mse", "rel_rms"),
+          plot_prefilter_scenes_lights),) + KINDS
+
+
 if __name__ == "__main__":
     sys.exit(main(sys.argv))

@@ -120,8 +120,14 @@ d = plot.Data.__new__(plot.Data)
 d.path, d.header = "/x/ltc_texels_ggx.csv", ["command=study_ltc_texels --stride 4 --out /x/ltc_texels.csv /r/a.csv /t/b.exr, mfkit=0.1.0"]
 assert plot._texel_tables(d) == ["/r/a.csv", "/t/b.exr"], plot._texel_tables(d)
 EOF
+# the committed light-size sweep (analysis/prefilter_scenes_lights.sh): its own figure, not prefilter_scenes'
+# (the file has that figure's columns too)
+lights_csv=$src/notebooks_data/prefilter_scenes_lights.csv.gz
+[ -f "$lights_csv" ] || fail "$lights_csv is missing"
+gzip -dc "$lights_csv" >"$tmp/data/prefilter_scenes_lights.csv" || fail "$lights_csv: not gzip"
 MFKIT_FIGURE_GATES=$tmp/gates.tsv "$py" "$src/analysis/plot.py" "$tmp/data" "$tmp/fig" || fail "plot.py exited with $?"
-for name in smith_walter_g1 smith_gaussian_lambda furnace_microfacet furnace_curves furnace_models \
+[ ! -e "$tmp/fig/prefilter_scenes.png" ] || fail "prefilter_scenes_lights.csv was drawn as prefilter_scenes"
+for name in prefilter_scenes_lights smith_walter_g1 smith_gaussian_lambda furnace_microfacet furnace_curves furnace_models \
     proxy_alpha_error proxy_alpha_curves ggx_rect_error leadr_grid_convergence $ltc_figs $sh_figs $half_figs; do
     for ext in png pdf; do
         [ -s "$tmp/fig/$name.$ext" ] || fail "missing or empty $name.$ext"

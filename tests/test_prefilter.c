@@ -339,6 +339,73 @@ static void test_clusters(void)
     mf_prefilter_levels_free(b, nb);
 }
 
+/* The albedo pyramid (mf_prefilter_albedo_level, mf_prefilter_run_tile) on an 8 x 8 map of random
+ * normals, 2 x 2 views: (a) each level's albedo is the mean of its texels' one-texel albedos
+ * (mf_prefilter_texel_albedo, the same table lookups) summed in row order, to 1e-13 relative: the
+ * pyramid sums in another order, and 64 terms of about 1 differ by at most 64 rounding errors
+ * (64 x 1.1e-16 = 7e-15); (b) the stored float albedo is that value rounded; (c) the top level fitted
+ * from the level-1 or level-2 albedos alone gives the same bits as from level 0; (d) a base level not
+ * below the first level is refused. */
+static void test_albedo_pyramid(void)
+{
+    enum { W = 8 };
+    double n[W * W * 3];
+    mf_pcg32 rng;
+    mf_pcg32_seed(&rng, 7, 3);
+    for (int t = 0; t < W * W; ++t) {
+        double x = 1.2 * (mf_pcg32_next_double(&rng) - 0.5), y = 1.2 * (mf_pcg32_next_double(&rng) - 0.5);
+        double l = sqrt(x * x + y * y + 1.0);
+        n[3 * t] = x / l, n[3 * t + 1] = y / l, n[3 * t + 2] = 1.0 / l;
+    }
+    mf_prefilter_options o;
+    mf_prefilter_options_default(&o);
+    o.n_theta = 2, o.n_phi = 2;
+    const int nv = 4;
+    char msg[256];
+    double lev[3][2 * 16 * 4];
+    double worst = 0.0;
+    for (int k = 1; k <= 3; ++k) {
+        CHECK(mf_prefilter_albedo_level(n, W, W, &o, k, lev[k - 1], msg, sizeof msg) == MF_OK);
+        int lw = W >> k, f = 1 << k;
+        for (int r = 0; r < lw; ++r)
+            for (int c = 0; c < lw; ++c)
+                for (int v = 0; v < nv; ++v) {
+                    double th = mf_prefilter_theta(&o, v / o.n_phi), ph = mf_prefilter_phi(&o, v % o.n_phi);
+                    mf_vec3 wo = mf_vec3_make(sin(th) * cos(ph), sin(th) * sin(ph), cos(th));
+                    double sum = 0.0;
+                    for (int y = r * f; y < (r + 1) * f; ++y)
+                        for (int x = c * f; x < (c + 1) * f; ++x) {
+                            mf_result a;
+                            CHECK(mf_prefilter_texel_albedo(o.alpha, n + 3 * (y * W + x), wo, 0, &a) == MF_OK);
+                            sum += a.val;
+                        }
+                    double want = sum / (f * f), got = lev[k - 1][2 * ((r * lw + c) * nv + v)];
+                    worst = fmax(worst, fabs(got - want) / want);
+                }
+    }
+    printf("albedo pyramid: worst relative difference from the row-order mean %.3g\n", worst);
+    CHECK(worst <= 1e-13);
+    mf_prefilter_level *a, *b, *c;
+    int na, nb, nc;
+    CHECK(mf_prefilter_run_from(n, W, W, &o, 3, &a, &na, msg, sizeof msg) == MF_OK);
+    CHECK(mf_prefilter_run_tile(n, W, W, &o, 3, lev[0], 1, &b, &nb, msg, sizeof msg) == MF_OK);
+    CHECK(mf_prefilter_run_tile(n, W, W, &o, 3, lev[1], 2, &c, &nc, msg, sizeof msg) == MF_OK);
+    CHECK(na == 3 && nb == 3 && nc == 3);
+    for (int v = 0; v < nv; ++v)
+        CHECK(a[2].albedo[v] == (float)lev[2][2 * v]);
+    CHECK(memcmp(a[2].m, b[2].m, 9 * nv * sizeof(float)) == 0 && memcmp(a[2].m, c[2].m, 9 * nv * sizeof(float)) == 0);
+    CHECK(memcmp(a[2].magnitude, b[2].magnitude, nv * sizeof(float)) == 0 &&
+          memcmp(a[2].magnitude, c[2].magnitude, nv * sizeof(float)) == 0);
+    CHECK(memcmp(a[2].albedo, b[2].albedo, nv * sizeof(float)) == 0 &&
+          memcmp(a[2].albedo, c[2].albedo, nv * sizeof(float)) == 0);
+    CHECK(a[2].worst_albedo_err == b[2].worst_albedo_err && a[2].worst_albedo_err == c[2].worst_albedo_err);
+    mf_prefilter_levels_free(a, na);
+    mf_prefilter_levels_free(b, nb);
+    mf_prefilter_levels_free(c, nc);
+    CHECK(mf_prefilter_run_tile(n, W, W, &o, 2, lev[1], 2, &c, &nc, msg, sizeof msg) == MF_ERR_DOMAIN && c == NULL);
+    CHECK(strstr(msg, "albedo base level 2") != NULL);
+}
+
 int main(void)
 {
     test_constant();
@@ -347,5 +414,6 @@ int main(void)
     test_diffuse();
     test_gate();
     test_clusters();
+    test_albedo_pyramid();
     MF_TEST_MAIN_END();
 }

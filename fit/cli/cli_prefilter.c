@@ -7,20 +7,27 @@
  * The pipeline (docs/prefilter.md):
  *   tiles   the map is cut into --tile x --tile regions, each fitted for the levels whose
  *           footprints lie inside it; every texel of a higher level is a tile of its own (its
- *           footprint).  mf_prefilter_run_from fits a tile; a footprint's lobes depend only on its
+ *           footprint).  mf_prefilter_run_tile fits a tile; a footprint's lobes depend only on its
  *           normals and the options, so the tiling does not change a bit of the output.
+ *   albedos before the tiles, the top-level albedos of every region block (mf_prefilter_albedo_level,
+ *           DIR/.prefilter-work/albedo_<b>.bin); a footprint tile reduces its footprint's albedos
+ *           from its blocks' (the mean of the children's, in the library's fixed order), so it
+ *           holds no level-0 albedos.  Done in the first slice, whatever --max-tiles.
  *   work    each finished tile is written atomically to DIR/.prefilter-work/tile_<k>.bin, the
  *           checkpoint: a rerun of the same command (same map, options and fitter revision,
  *           recorded in run.txt there) skips the tiles present.  SIGINT/SIGTERM and --max-tiles
  *           stop between tiles and keep the checkpoint.
  *   ranks   under mpirun (built with MFKIT_WITH_MPI) rank r of K fits every K-th tile from the
- *           r-th, largest footprints first; after a barrier rank 0 assembles.  One process and K
+ *           r-th, largest footprints first (and every K-th albedo block before them, then a
+ *           barrier); after a barrier rank 0 assembles.  One process and K
  *           ranks fit the same tiles with the same code: the same bits.
  *   output  rank 0 streams every level's .npy (matrices, magnitudes, albedos) (header first, then rows, read tile by tile) and
  *           its three EXR view atlases, writes the lookup snippets and prefilter.json, and commits
  *           them all together (mf_io_atomic_commit_all); then removes the work directory.
  * Memory: the map's normals, the fits of the tiles in flight (--threads N fits N tiles at once
- * when there are enough: each its footprints' albedo cache and lobes) and one row of a level.
+ * when there are enough: a region tile its texels' albedos and its lobes, a footprint tile its
+ * sub-map and one fit, whose clustering holds 80 bytes per footprint texel for a moment), the
+ * albedo blocks (16 bytes per block and view) and a few rows of each level.
  * Gate: rank 0 streams the levels row by row from the tiles into the output files and the gate
  * (mf_prefilter_gate_stream_*: mf_prefilter_gate_run_ref's result, holding a few rows per level)
  * before committing; its result goes into prefilter.json.
@@ -214,26 +221,107 @@ static void tile_path(char *out, size_t size, const char *dir, long k)
     snprintf(out, size, "%s/" PF_WORK "/tile_%07ld.bin", dir, k);
 }
 
-/* Fits tile t and writes its file atomically.  Returns a CLI exit code (0 ok), message printed. */
-static int pf_run_tile(const double *normals, int W, const mf_prefilter_options *o, const pf_tile *t,
-                       const char *path, const char *input)
+/* The albedo base: the albedos (value, error per view) of the top level lr of every region block
+ * (rw x rh texels, nbx x nby of them, row-major), computed once per block
+ * (mf_prefilter_albedo_level, work file albedo_<b>.bin) and read by every rank; a footprint tile
+ * reduces its footprint's albedos from its blocks' (mf_prefilter_run_tile), so it holds no level-0
+ * albedos.  alb NULL: no footprint tiles. */
+typedef struct { int rw, rh, lr, nbx, nby; double *alb; } pf_base;
+#define PF_ALB_MAGIC "MFPFALB1"
+
+static void block_path(char *out, size_t size, const char *dir, long b)
+{
+    snprintf(out, size, "%s/" PF_WORK "/albedo_%07ld.bin", dir, b);
+}
+
+/* Block b's albedo base, written atomically.  Returns a CLI exit code (0 ok), message printed. */
+static int pf_run_block(const double *normals, int W, const mf_prefilter_options *o, const pf_base *ab, long b,
+                        const char *path, const char *input)
 {
     char msg[1024];
-    double *sub = malloc(sizeof(double) * 3 * (size_t)t->w * t->h);
-    if (!sub)
+    size_t nv = (size_t)o->n_theta * o->n_phi;
+    int x0 = (int)(b % ab->nbx) * ab->rw, y0 = (int)(b / ab->nbx) * ab->rh;
+    double *sub = malloc(sizeof(double) * 3 * (size_t)ab->rw * ab->rh), *out = malloc(sizeof(double) * 2 * nv);
+    if (!sub || !out) {
+        free(sub), free(out);
         return CLI_EXIT_IO + 0 * cli_error(k_cmd, "out of memory");
+    }
+    for (int y = 0; y < ab->rh; ++y)
+        memcpy(sub + 3 * (size_t)y * ab->rw, normals + 3 * ((size_t)(y0 + y) * W + x0), sizeof(double) * 3 * ab->rw);
+    mf_status st = mf_prefilter_albedo_level(sub, ab->rw, ab->rh, o, ab->lr, out, msg, sizeof msg);
+    free(sub);
+    if (st != MF_OK) {
+        free(out);
+        int rc = cli_error(k_cmd, "%s: albedos of the block at texel (%d, %d), %d x %d: %s", input, x0, y0, ab->rw, ab->rh,
+                           msg[0] ? msg : mf_status_str(st));
+        return st == MF_ERR_DOMAIN ? rc : st == MF_ERR_ALLOC ? CLI_EXIT_IO : CLI_EXIT_FIT;
+    }
+    mf_io_atomic a;
+    int ok = mf_io_atomic_begin(&a, path, msg, sizeof msg) == MF_OK;
+    if (ok) {
+        ok = fwrite(PF_ALB_MAGIC, 1, 8, a.file) == 8 && fwrite(out, sizeof(double), 2 * nv, a.file) == 2 * nv;
+        if (!ok) {
+            snprintf(msg, sizeof msg, "%.900s: write failed", path);
+            mf_io_atomic_abort(&a);
+        } else {
+            ok = mf_io_atomic_commit(&a, msg, sizeof msg) == MF_OK;
+        }
+    }
+    free(out);
+    return ok ? 0 : cli_error(k_cmd, "%s", msg) * 0 + CLI_EXIT_IO;
+}
+
+/* Reads every block's albedo base into ab->alb.  Returns a CLI exit code, message printed. */
+static int pf_read_base(const char *dir, size_t nv, pf_base *ab)
+{
+    long nb = (long)ab->nbx * ab->nby;
+    ab->alb = malloc(sizeof(double) * 2 * nv * (size_t)nb);
+    if (!ab->alb)
+        return CLI_EXIT_IO + 0 * cli_error(k_cmd, "out of memory");
+    for (long b = 0; b < nb; ++b) {
+        char path[4400], magic[8];
+        block_path(path, sizeof path, dir, b);
+        FILE *f = fopen(path, "rb");
+        int ok = f && fread(magic, 1, 8, f) == 8 && !memcmp(magic, PF_ALB_MAGIC, 8) &&
+                 fread(ab->alb + 2 * nv * (size_t)b, sizeof(double), 2 * nv, f) == 2 * nv && fgetc(f) == EOF;
+        if (f)
+            fclose(f);
+        if (!ok)
+            return CLI_EXIT_IO + 0 * cli_error(k_cmd, "%s: %s", path, f ? "not an albedo work file of this run" : strerror(errno));
+    }
+    return 0;
+}
+
+/* Fits tile t and writes its file atomically.  Returns a CLI exit code (0 ok), message printed. */
+static int pf_run_tile(const double *normals, int W, const mf_prefilter_options *o, const pf_tile *t,
+                       const pf_base *ab, const char *path, const char *input)
+{
+    char msg[1024];
+    size_t nv = (size_t)o->n_theta * o->n_phi;
+    double *sub = malloc(sizeof(double) * 3 * (size_t)t->w * t->h);
+    /* a footprint tile: its blocks' albedo base (a whole number of blocks, cbx x cby) */
+    int cbx = t->w / ab->rw, cby = t->h / ab->rh;
+    int use = ab->alb && t->first > ab->lr && t->w % ab->rw == 0 && t->h % ab->rh == 0;
+    double *base = use ? malloc(sizeof(double) * 2 * nv * (size_t)cbx * cby) : NULL;
+    if (!sub || (use && !base)) {
+        free(sub), free(base);
+        return CLI_EXIT_IO + 0 * cli_error(k_cmd, "out of memory");
+    }
     for (int y = 0; y < t->h; ++y)
         memcpy(sub + 3 * (size_t)y * t->w, normals + 3 * ((size_t)(t->y0 + y) * W + t->x0), sizeof(double) * 3 * t->w);
+    for (int by = 0; use && by < cby; ++by)
+        memcpy(base + 2 * nv * (size_t)by * cbx,
+               ab->alb + 2 * nv * ((size_t)(t->y0 / ab->rh + by) * ab->nbx + (size_t)(t->x0 / ab->rw)),
+               sizeof(double) * 2 * nv * (size_t)cbx);
     mf_prefilter_level *lv = NULL;
     int nl = 0;
-    mf_status st = mf_prefilter_run_from(sub, t->w, t->h, o, t->first, &lv, &nl, msg, sizeof msg);
-    free(sub);
+    mf_status st = mf_prefilter_run_tile(sub, t->w, t->h, o, t->first, base, use ? ab->lr : 0, &lv, &nl, msg, sizeof msg);
+    free(sub), free(base);
     if (st != MF_OK) {
         int rc = cli_error(k_cmd, "%s: tile at texel (%d, %d), %d x %d: %s", input, t->x0, t->y0, t->w, t->h,
                            msg[0] ? msg : mf_status_str(st));
         return st == MF_ERR_DOMAIN ? rc : st == MF_ERR_ALLOC ? CLI_EXIT_IO : CLI_EXIT_FIT;
     }
-    size_t nv = (size_t)o->n_theta * o->n_phi;
     int nrec = t->last - t->first + 1;
     pf_rec rec[16];
     int64_t off = 8 + 4 + (int64_t)sizeof(pf_rec) * nrec;
@@ -274,6 +362,8 @@ typedef struct {
     int W;
     mf_prefilter_options o; /* o.threads: per tile */
     const pf_tile *tiles;
+    const pf_base *ab; /* the albedo base; with blocks = 1, the queue's items are its blocks */
+    int blocks;
     const char *dir, *input;
     long *todo, ntodo, next, max_tiles;
     int rc, stopped;
@@ -298,8 +388,12 @@ static void *pf_worker(void *arg)
         if (k < 0)
             return NULL;
         char path[4400];
-        tile_path(path, sizeof path, q->dir, k);
-        int r = pf_run_tile(q->normals, q->W, &q->o, &q->tiles[k], path, q->input);
+        if (q->blocks)
+            block_path(path, sizeof path, q->dir, k);
+        else
+            tile_path(path, sizeof path, q->dir, k);
+        int r = q->blocks ? pf_run_block(q->normals, q->W, &q->o, q->ab, k, path, q->input)
+                          : pf_run_tile(q->normals, q->W, &q->o, &q->tiles[k], q->ab, path, q->input);
         if (r) {
             pthread_mutex_lock(&q->lock);
             if (!q->rc)
@@ -1155,6 +1249,7 @@ static int pf_table(const cli_val *v, const char *input, const char *dir, int la
     int rc = 0;
     double *normals = NULL;
     pf_tile *tiles = NULL;
+    pf_base ab = {0, 0, 0, 0, 0, NULL};
     if (img.channels != 3 && img.channels != 4) {
         rc = cli_error(k_cmd, "%s: a normal map needs 3 channels (R, G, B = n.x, n.y, n.z, or 4 with alpha), it has %d",
                        input, img.channels);
@@ -1241,6 +1336,50 @@ static int pf_table(const cli_val *v, const char *input, const char *dir, int la
     if (rc)
         goto done;
     pf_unmute(); /* a tile's error is its rank's own */
+    struct sigaction sa, old_int, old_term;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = pf_on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &old_int);
+    sigaction(SIGTERM, &sa, &old_term);
+    struct timespec t0, t1;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+
+    /* the albedo base of the footprint tiles: this rank's blocks not in the checkpoint (all of them,
+     * whatever --max-tiles: one pass of one-texel albedos over the map), then a barrier, then every
+     * rank reads all blocks */
+    ab.rw = W < T ? W : T, ab.rh = H < T ? H : T;
+    ab.lr = ilog2_levels(ab.rw, ab.rh), ab.nbx = W / ab.rw, ab.nby = H / ab.rh;
+    int stopped_a = 0;
+    if (nl > ab.lr) {
+        long nb = (long)ab.nbx * ab.nby;
+        pf_queue qa;
+        memset(&qa, 0, sizeof qa);
+        qa.todo = malloc(sizeof(long) * (size_t)(nb / mpi->size + 1));
+        if (!qa.todo)
+            rc = CLI_EXIT_IO, cli_error(k_cmd, "out of memory");
+        for (long b = mpi->rank; b < nb && qa.todo; b += mpi->size) {
+            char path[4400];
+            block_path(path, sizeof path, dir, b);
+            if (access(path, F_OK) != 0)
+                qa.todo[qa.ntodo++] = b;
+        }
+        qa.normals = normals, qa.W = W, qa.ab = &ab, qa.blocks = 1, qa.dir = dir, qa.input = input;
+        qa.max_tiles = -1;
+        int wa = qa.ntodo < o.threads ? (int)(qa.ntodo > 0 ? qa.ntodo : 1) : o.threads;
+        qa.o = o;
+        qa.o.threads = o.threads / wa > 0 ? o.threads / wa : 1;
+        if (!rc)
+            pf_run_queue(&qa, wa);
+        free(qa.todo);
+        if (!rc)
+            rc = qa.rc;
+        stopped_a = qa.stopped;
+    }
+    rc = pf_mpi_max(mpi, rc); /* the barrier: every rank's blocks are written */
+    stopped_a = pf_mpi_max(mpi, stopped_a);
+    if (!rc && !stopped_a && nl > ab.lr)
+        rc = pf_read_base(dir, (size_t)o.n_theta * o.n_phi, &ab);
 
     /* this rank's tiles not in the checkpoint, largest footprints (the last tiles) first: the
      * longest jobs start first, and a first --max-tiles slice meets the memory peak */
@@ -1258,21 +1397,16 @@ static int pf_table(const cli_val *v, const char *input, const char *dir, int la
         else
             q.todo[q.ntodo++] = ntiles - 1 - i;
     }
-    q.normals = normals, q.W = W, q.tiles = tiles, q.dir = dir, q.input = input, q.max_tiles = max_tiles;
+    q.normals = normals, q.W = W, q.tiles = tiles, q.ab = &ab, q.dir = dir, q.input = input;
+    q.max_tiles = max_tiles;
     /* several tiles at once when there are enough (a footprint tile is one fit job: threads inside it
      * would idle), else the threads inside the tiles; the bits depend on neither */
     int workers = q.ntodo < o.threads ? (int)(q.ntodo > 0 ? q.ntodo : 1) : o.threads;
     q.o = o;
     q.o.threads = o.threads / workers > 0 ? o.threads / workers : 1;
-    struct sigaction sa, old_int, old_term;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = pf_on_signal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, &old_int);
-    sigaction(SIGTERM, &sa, &old_term);
-    struct timespec t0, t1;
-    clock_gettime(CLOCK_MONOTONIC, &t0);
-    if (!rc)
+    if (stopped_a)
+        q.stopped = stopped_a;
+    else if (!rc)
         pf_run_queue(&q, workers);
     clock_gettime(CLOCK_MONOTONIC, &t1);
     sigaction(SIGINT, &old_int, NULL);
@@ -1309,6 +1443,7 @@ static int pf_table(const cli_val *v, const char *input, const char *dir, int la
     }
     rc = pf_mpi_bcast(mpi, rc);
 done:
+    free(ab.alb);
     free(normals);
     free(tiles);
     mf_image_free(&img);

@@ -688,8 +688,10 @@ typedef struct {
     const mf_brdf_model *base;
     mf_prefilter_level *levels;
     double **lobes; /* per level: the lobe-frame parameters of every entry (the children's starts) */
-    /* albedo cache: per level-0 texel and view, the one-texel albedo (value, error) */
-    double *alb, *alb_err;
+    /* albedo cache: per level-0 texel and view, the one-texel albedo and its error, interleaved
+     * (alb[2 (t nv + v)], alb[2 (t nv + v) + 1]) */
+    double *alb;
+    double **lalb; /* per level l >= 1 (lalb[l - 1]): the footprints' albedos, the same layout */
     int *uniq;    /* per texel: the index of the first texel with its (bitwise) normal */
     int job_kind; /* 0: albedo cache over texels, 1: fits over the footprints of one level */
     int level;    /* job_kind 1 */
@@ -735,7 +737,7 @@ static mf_status albedo_texel(pjob *j, int t)
             for (int b = 0; b < o->n_phi; ++b) {
                 size_t k = (size_t)t * nv + a * o->n_phi + b;
                 mf_status st = texel_albedo_table(o->alpha, n, r, view_dir(mf_prefilter_theta(o, a), mf_prefilter_phi(o, b)),
-                                                  &j->alb[k], &j->alb_err[k]);
+                                                  &j->alb[2 * k], &j->alb[2 * k + 1]);
                 if (st != MF_OK)
                     return st;
             }
@@ -750,8 +752,8 @@ static mf_status albedo_texel(pjob *j, int t)
         for (int b = 0; b < o->n_phi && st == MF_OK; ++b) {
             mf_result r;
             st = mf_prefilter_mix_albedo(&one, &p, view_dir(mf_prefilter_theta(o, a), mf_prefilter_phi(o, b)), &r);
-            j->alb[(size_t)t * nv + a * o->n_phi + b] = r.val;
-            j->alb_err[(size_t)t * nv + a * o->n_phi + b] = r.err;
+            j->alb[2 * ((size_t)t * nv + a * o->n_phi + b)] = r.val;
+            j->alb[2 * ((size_t)t * nv + a * o->n_phi + b) + 1] = r.err;
         }
     mf_prefilter_mix_free(&one);
     return st;
@@ -1046,13 +1048,15 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
     fo.max_iterations = o->max_iterations;
     fo.seed = o->seed;
     mf_brdf_params p = base_params(o);
+    /* the per-component arrays (rn .. key) are sized by the component count nc, known after the
+     * clustering: bounded for the largest footprints (one per occupied slope cell) */
     double *tex = malloc(sizeof(double) * 3 * (size_t)nfoot), *cn = malloc(sizeof(double) * 3 * (size_t)nfoot);
-    double *cw = malloc(sizeof(double) * (size_t)nfoot), *rn = malloc(sizeof(double) * 3 * (size_t)nfoot);
-    double *rw = malloc(sizeof(double) * (size_t)nfoot), *alb = malloc(sizeof(double) * 2 * (size_t)nv);
-    double *un = malloc(sizeof(double) * 3 * (size_t)nfoot), *uw = malloc(sizeof(double) * (size_t)nfoot);
+    double *cw = malloc(sizeof(double) * (size_t)nfoot), *rn = NULL;
+    double *rw = NULL, *alb = malloc(sizeof(double) * 2 * (size_t)nv);
+    double *un = NULL, *uw = NULL;
     double *res = malloc(sizeof(double) * (size_t)nv); /* the stored entries' residuals (MF_PREFILTER_ACCEPT) */
-    qkey *key = malloc(sizeof(qkey) * 2 * (size_t)nfoot);
-    mf_status st = tex && cn && cw && rn && rw && un && uw && alb && key && res ? MF_OK : MF_ERR_ALLOC;
+    qkey *key = NULL;
+    mf_status st = tex && cn && cw && alb && res ? MF_OK : MF_ERR_ALLOC;
     int nc = 0;
     if (st == MF_OK) {
         int k = 0;
@@ -1070,17 +1074,22 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
                 cw[i] = 1.0 / nfoot;
             nc = nfoot;
         }
-        /* the magnitudes: the exact mixture of the texels' albedos (not of the clusters') */
-        for (int v = 0; v < nv; ++v) {
-            double a = 0.0, e = 0.0;
-            for (int y = row * fh; y < (row + 1) * fh; ++y)
-                for (int x = col * fw; x < (col + 1) * fw; ++x) {
-                    size_t q = (size_t)y * j->width + x;
-                    a += j->alb[q * nv + v];
-                    e += j->alb_err[q * nv + v];
-                }
-            alb[2 * v] = a / nfoot, alb[2 * v + 1] = e / nfoot;
-        }
+        /* the magnitudes: the exact mixture of the texels' albedos (not of the clusters'), from the
+         * level's albedo pyramid (albedo_reduce) */
+        memcpy(alb, j->lalb[level - 1] + 2 * ((size_t)row * lv->width + col) * nv, sizeof(double) * 2 * (size_t)nv);
+    }
+    free(tex);
+    tex = NULL;
+    if (st == MF_OK && nc < nfoot) { /* give the footprint-sized memory back */
+        double *c2 = realloc(cn, sizeof(double) * 3 * (size_t)nc), *w2 = realloc(cw, sizeof(double) * (size_t)nc);
+        cn = c2 ? c2 : cn, cw = w2 ? w2 : cw;
+    }
+    if (st == MF_OK) {
+        rn = malloc(sizeof(double) * 3 * (size_t)nc), rw = malloc(sizeof(double) * (size_t)nc);
+        un = malloc(sizeof(double) * 3 * (size_t)nc), uw = malloc(sizeof(double) * (size_t)nc);
+        key = malloc(sizeof(qkey) * 2 * (size_t)nc);
+        if (!rn || !rw || !un || !uw || !key)
+            st = MF_ERR_ALLOC;
     }
     size_t base_idx = ((size_t)row * lv->width + col) * nv;
     /* theta = 0: once, at phi = 0.  Its symmetries only on the fine MF_PREFILTER_MIRROR_TOL grid: this
@@ -1260,17 +1269,105 @@ mf_status mf_prefilter_run(const double *normals, int width, int height, const m
     return mf_prefilter_run_from(normals, width, height, o, 1, levels, nlevels, msg, msg_size);
 }
 
-mf_status mf_prefilter_run_from(const double *normals, int width, int height, const mf_prefilter_options *o,
-                                int first_level, mf_prefilter_level **levels, int *nlevels, char *msg,
-                                size_t msg_size)
+/* The albedos of the level above the w x h level src (per texel and view, value and error
+ * interleaved, as pjob.alb): each texel's the mean of its children (2 x 2, or 2 x 1 / 1 x 2 once a
+ * dimension is 1), summed row by row.  The effective BRDF is the equal-weight mixture of its texels'
+ * base lobes (Nahmias 2022, Eq. 2.36), so its albedo, the mean of its texels' albedos, is also the
+ * mean of its children's: every level is reduced from the one below it in this one order, whatever
+ * the tile that holds it, so the bits do not depend on the tiling (and level 1, summed in the
+ * texels' row order, is what summing a footprint's texels gives). */
+static double *albedo_reduce(const double *src, int w, int h, size_t nv, int *ow, int *oh)
 {
-    if (msg && msg_size)
-        msg[0] = '\0';
+    int dw = w > 1 ? w / 2 : 1, dh = h > 1 ? h / 2 : 1, fx = w / dw, fy = h / dh;
+    double *d = malloc(sizeof(double) * 2 * (size_t)dw * dh * nv);
+    if (!d)
+        return NULL;
+    for (int r = 0; r < dh; ++r)
+        for (int c = 0; c < dw; ++c)
+            for (size_t v = 0; v < nv; ++v) {
+                double a = 0.0, e = 0.0;
+                for (int y = r * fy; y < (r + 1) * fy; ++y)
+                    for (int x = c * fx; x < (c + 1) * fx; ++x) {
+                        const double *s = src + 2 * (((size_t)y * w + x) * nv + v);
+                        a += s[0], e += s[1];
+                    }
+                double *t = d + 2 * (((size_t)r * dw + c) * nv + v);
+                t[0] = a / (fx * fy), t[1] = e / (fx * fy);
+            }
+    *ow = dw, *oh = dh;
+    return d;
+}
+
+/* j->lalb[l - 1] for the levels first_level..j->nlevels: from the albedos of level base_level
+ * (base, max(w >> b, 1) x max(h >> b, 1) texels), or, base NULL, from the one-texel albedos of
+ * level 0 (texels with bitwise equal normals share them: the first one computes them).  Each level
+ * below first_level is freed once the next one is built, so the memory is the cache of level 0 (or
+ * of base_level) and the next level up. */
+static mf_status albedo_pyramid(pjob *j, const double *base, int base_level, int first_level)
+{
+    size_t ntex = (size_t)j->width * j->height, nv = (size_t)j->o->n_theta * j->o->n_phi;
+    const double *cur = base;
+    double *own = NULL;
+    int cw = j->width >> base_level > 0 ? j->width >> base_level : 1;
+    int ch = j->height >> base_level > 0 ? j->height >> base_level : 1;
+    mf_status st = MF_OK;
+    if (!base) {
+        base_level = 0, cw = j->width, ch = j->height;
+        j->alb = malloc(sizeof(double) * 2 * ntex * nv);
+        j->uniq = malloc(sizeof(int) * ntex);
+        qkey *key = malloc(sizeof *key * ntex);
+        if (!j->alb || !j->uniq || !key) {
+            free(key);
+            return MF_ERR_ALLOC;
+        }
+        for (size_t t = 0; t < ntex; ++t) {
+            for (int c = 0; c < 3; ++c)
+                memcpy(&key[t].k[c], j->normals + 3 * t + c, sizeof(double));
+            key[t].k[3] = (int64_t)t;
+        }
+        qsort(key, ntex, sizeof *key, qkey_cmp);
+        for (size_t i = 0; i < ntex;) {
+            size_t e = i;
+            while (e < ntex && !memcmp(key[e].k, key[i].k, 3 * sizeof(int64_t)))
+                j->uniq[key[e++].k[3]] = (int)key[i].k[3]; /* the smallest index: the first in the run */
+            i = e;
+        }
+        free(key);
+        st = run_pass(j, 0, (long)ntex);
+        if (st != MF_OK)
+            return st;
+        for (size_t t = 0; t < ntex; ++t)
+            if (j->uniq[t] != (int)t)
+                memcpy(j->alb + 2 * t * nv, j->alb + 2 * (size_t)j->uniq[t] * nv, sizeof(double) * 2 * nv);
+        free(j->uniq);
+        j->uniq = NULL;
+        cur = own = j->alb;
+        j->alb = NULL;
+    }
+    for (int l = base_level + 1; l <= j->nlevels; ++l) {
+        int nw, nh;
+        double *next = albedo_reduce(cur, cw, ch, nv, &nw, &nh);
+        free(own);
+        own = NULL;
+        if (!next)
+            return MF_ERR_ALLOC;
+        cur = next, cw = nw, ch = nh;
+        if (l >= first_level)
+            j->lalb[l - 1] = next;
+        else
+            own = next;
+    }
+    free(own);
+    return st;
+}
+
+/* The checks of mf_prefilter_run_tile's map and options; MF_ERR_DOMAIN with msg. */
+static mf_status check_run(const double *normals, int width, int height, const mf_prefilter_options *o, char *msg,
+                           size_t msg_size)
+{
 #define FAIL(...) (msg && msg_size ? (void)snprintf(msg, msg_size, __VA_ARGS__) : (void)0), MF_ERR_DOMAIN
-    if (!normals || !o || !levels || !nlevels)
+    if (!normals || !o)
         return FAIL("null argument");
-    *levels = NULL;
-    *nlevels = 0;
     if (o->base != MF_PREFILTER_BASE_GGX && o->base != MF_PREFILTER_BASE_LAMBERT)
         return FAIL("base %d: need MF_PREFILTER_BASE_GGX or MF_PREFILTER_BASE_LAMBERT", o->base);
     if (o->base == MF_PREFILTER_BASE_GGX && !(o->alpha > 0.0 && o->alpha <= 1.0))
@@ -1291,26 +1388,94 @@ mf_status mf_prefilter_run_from(const double *normals, int width, int height, co
                         t / width, n[0], n[1], n[2]);
     }
 #undef FAIL
-    const mf_brdf_model *base = mf_brdf_model_find(o->base == MF_PREFILTER_BASE_LAMBERT ? "lambert" : "ggx");
-    if (!base)
-        return MF_ERR_INTERNAL;
+    return MF_OK;
+}
+
+static int count_levels(int width, int height)
+{
     int nl = 0;
     while ((width >> nl) > 1 || (height >> nl) > 1)
         ++nl;
+    return nl;
+}
+
+mf_status mf_prefilter_albedo_level(const double *normals, int width, int height, const mf_prefilter_options *o,
+                                    int level, double *out, char *msg, size_t msg_size)
+{
+    if (msg && msg_size)
+        msg[0] = '\0';
+    mf_status st = check_run(normals, width, height, o, msg, msg_size);
+    if (st != MF_OK)
+        return st;
+    int nl = count_levels(width, height);
+    if (!out || level < 1 || level > nl) {
+        if (msg && msg_size)
+            snprintf(msg, msg_size, "level %d not in 1..%d", level, nl);
+        return MF_ERR_DOMAIN;
+    }
+    const mf_brdf_model *base = mf_brdf_model_find(o->base == MF_PREFILTER_BASE_LAMBERT ? "lambert" : "ggx");
+    double *lalb[16] = {0};
+    if (!base)
+        return MF_ERR_INTERNAL;
+    pjob j;
+    memset(&j, 0, sizeof j);
+    j.normals = normals, j.width = width, j.height = height, j.nlevels = level, j.o = o, j.base = base;
+    j.lalb = lalb, j.msg = msg, j.msg_size = msg_size;
+    pthread_mutex_init(&j.lock, NULL);
+    st = albedo_pyramid(&j, NULL, 0, level);
+    pthread_mutex_destroy(&j.lock);
+    if (st == MF_OK) {
+        size_t n = (size_t)(width >> level > 0 ? width >> level : 1) * (height >> level > 0 ? height >> level : 1);
+        memcpy(out, lalb[level - 1], sizeof(double) * 2 * n * o->n_theta * o->n_phi);
+    }
+    free(j.alb), free(j.uniq), free(lalb[level - 1]);
+    return st;
+}
+
+mf_status mf_prefilter_run_from(const double *normals, int width, int height, const mf_prefilter_options *o,
+                                int first_level, mf_prefilter_level **levels, int *nlevels, char *msg,
+                                size_t msg_size)
+{
+    return mf_prefilter_run_tile(normals, width, height, o, first_level, NULL, 0, levels, nlevels, msg, msg_size);
+}
+
+mf_status mf_prefilter_run_tile(const double *normals, int width, int height, const mf_prefilter_options *o,
+                                int first_level, const double *albedo_base, int base_level,
+                                mf_prefilter_level **levels, int *nlevels, char *msg, size_t msg_size)
+{
+    if (msg && msg_size)
+        msg[0] = '\0';
+    if (!levels || !nlevels) {
+        if (msg && msg_size)
+            snprintf(msg, msg_size, "null argument");
+        return MF_ERR_DOMAIN;
+    }
+    *levels = NULL;
+    *nlevels = 0;
+    mf_status st = check_run(normals, width, height, o, msg, msg_size);
+    if (st != MF_OK)
+        return st;
+    const mf_brdf_model *base = mf_brdf_model_find(o->base == MF_PREFILTER_BASE_LAMBERT ? "lambert" : "ggx");
+    if (!base)
+        return MF_ERR_INTERNAL;
+    int nl = count_levels(width, height);
     if (first_level < 1 || first_level > nl) {
         if (msg && msg_size)
             snprintf(msg, msg_size, "first level %d not in 1..%d", first_level, nl);
         return MF_ERR_DOMAIN;
     }
+    if (albedo_base && (base_level < 0 || base_level >= first_level)) {
+        if (msg && msg_size)
+            snprintf(msg, msg_size, "albedo base level %d not in 0..%d", base_level, first_level - 1);
+        return MF_ERR_DOMAIN;
+    }
     mf_prefilter_level *lv = calloc((size_t)nl, sizeof *lv);
     double **lobes = calloc((size_t)nl, sizeof *lobes);
-    size_t ntex = (size_t)width * height, nv = (size_t)o->n_theta * o->n_phi;
+    double **lalb = calloc((size_t)nl, sizeof *lalb);
+    size_t nv = (size_t)o->n_theta * o->n_phi;
     pjob j;
     memset(&j, 0, sizeof j);
-    j.alb = malloc(sizeof(double) * ntex * nv);
-    j.alb_err = malloc(sizeof(double) * ntex * nv);
-    j.uniq = malloc(sizeof(int) * ntex);
-    mf_status st = lv && lobes && j.alb && j.alb_err && j.uniq ? MF_OK : MF_ERR_ALLOC;
+    st = lv && lobes && lalb ? MF_OK : MF_ERR_ALLOC;
     for (int l = 0; l < nl && st == MF_OK; ++l) {
         lv[l].level = l + 1;
         lv[l].width = width >> (l + 1) > 0 ? width >> (l + 1) : 1;
@@ -1330,28 +1495,6 @@ mf_status mf_prefilter_run_from(const double *normals, int width, int height, co
             st = MF_ERR_ALLOC;
     }
     if (st == MF_OK) {
-        /* texels with bitwise equal normals share their albedos: the first one computes them
-         * (sorted keys: n log n) */
-        qkey *key = malloc(sizeof *key * ntex);
-        if (!key)
-            st = MF_ERR_ALLOC;
-        for (size_t t = 0; key && t < ntex; ++t) {
-            for (int c = 0; c < 3; ++c)
-                memcpy(&key[t].k[c], normals + 3 * t + c, sizeof(double));
-            key[t].k[3] = (int64_t)t;
-        }
-        if (key) {
-            qsort(key, ntex, sizeof *key, qkey_cmp);
-            for (size_t i = 0; i < ntex;) {
-                size_t e = i;
-                while (e < ntex && !memcmp(key[e].k, key[i].k, 3 * sizeof(int64_t)))
-                    j.uniq[key[e++].k[3]] = (int)key[i].k[3]; /* the smallest index: the first in the run */
-                i = e;
-            }
-        }
-        free(key);
-    }
-    if (st == MF_OK) {
         j.normals = normals;
         j.width = width;
         j.height = height;
@@ -1360,25 +1503,24 @@ mf_status mf_prefilter_run_from(const double *normals, int width, int height, co
         j.base = base;
         j.levels = lv;
         j.lobes = lobes;
+        j.lalb = lalb;
         j.msg = msg;
         j.msg_size = msg_size;
         pthread_mutex_init(&j.lock, NULL);
-        st = run_pass(&j, 0, (long)ntex);
-        if (st == MF_OK) {
-            for (size_t t = 0; t < ntex; ++t)
-                if (j.uniq[t] != (int)t) {
-                    memcpy(j.alb + t * nv, j.alb + (size_t)j.uniq[t] * nv, sizeof(double) * nv);
-                    memcpy(j.alb_err + t * nv, j.alb_err + (size_t)j.uniq[t] * nv, sizeof(double) * nv);
-                }
-            /* coarse to fine: each level's fits read the parent level's lobes */
-            for (int l = nl; l >= 1 && st == MF_OK; --l) {
-                j.level = l;
-                st = run_pass(&j, 1, (long)lv[l - 1].width * lv[l - 1].height);
-            }
+        st = albedo_pyramid(&j, albedo_base, base_level, first_level);
+        /* coarse to fine: each level's fits read the parent level's lobes */
+        for (int l = nl; l >= first_level && st == MF_OK; --l) {
+            j.level = l;
+            st = run_pass(&j, 1, (long)lv[l - 1].width * lv[l - 1].height);
+            free(lalb[l - 1]);
+            lalb[l - 1] = NULL;
         }
         pthread_mutex_destroy(&j.lock);
     }
-    free(j.alb), free(j.alb_err), free(j.uniq);
+    free(j.alb), free(j.uniq);
+    for (int l = 0; lalb && l < nl; ++l)
+        free(lalb[l]);
+    free(lalb);
     for (int l = 0; lobes && l < nl; ++l)
         free(lobes[l]);
     free(lobes);

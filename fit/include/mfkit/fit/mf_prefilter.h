@@ -245,6 +245,30 @@ mf_status mf_prefilter_run_from(const double *normals, int width, int height, co
                                 int first_level, mf_prefilter_level **levels, int *nlevels, char *msg,
                                 size_t msg_size) MF_WARN_UNUSED;
 
+/* The effective BRDF's albedos of a level: a footprint's is the mean of its texels' one-texel
+ * albedos (Nahmias 2022, Eq. 2.36: an equal-weight mixture), computed as the mean of its children's
+ * at the level below (2 x 2 children, 2 x 1 once a dimension is 1), level by level from level 0.
+ * That order is fixed, so a level's albedos do not depend on the tile that computes them, and a tile
+ * can start from the albedos of a level below its first one instead of its level-0 texels':
+ * mf_prefilter_run_tile.  Memory: the cache of level 0 (16 bytes per texel and view) and the next
+ * level up. */
+
+/* The albedos of level `level` (1..log2(max(width, height))) of a width x height map: out gets, per
+ * texel of that level (rows from the top) and view (i_theta, i_phi), the albedo and its quadrature
+ * error estimate, 2 * max(width >> level, 1) * max(height >> level, 1) * n_theta * n_phi doubles.
+ * The `mfkit prefilter` pipeline computes them once per region tile (its top level), so that the
+ * footprint tiles above never hold level-0 albedos. */
+mf_status mf_prefilter_albedo_level(const double *normals, int width, int height, const mf_prefilter_options *o,
+                                    int level, double *out, char *msg, size_t msg_size) MF_WARN_UNUSED;
+
+/* mf_prefilter_run_from with the albedos of level base_level (0 <= base_level < first_level; the
+ * layout of mf_prefilter_albedo_level's output for this sub-map) given: the tile's albedos are
+ * reduced from them, so it computes no one-texel albedos.  albedo_base NULL: from level 0 (as
+ * mf_prefilter_run_from).  The same bits either way. */
+mf_status mf_prefilter_run_tile(const double *normals, int width, int height, const mf_prefilter_options *o,
+                                int first_level, const double *albedo_base, int base_level,
+                                mf_prefilter_level **levels, int *nlevels, char *msg, size_t msg_size) MF_WARN_UNUSED;
+
 /* The gate before export (mf_prefilter_gate_run), over all levels of one table.  Lights: quads of
  * half-width 0.05, 0.2 and 0.8 about the view's mirror direction and about the normal (aligned
  * frame); a lobe's shading is magnitude * its LTC integral (one-sided, clipped at the horizon).
