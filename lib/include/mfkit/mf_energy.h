@@ -165,7 +165,10 @@ mf_status mf_energy_kulla_conty_gate(const mf_table *t, double storage_u, mf_che
 /* dielectric: finite; E_r, E_t >= 0, E_r + E_t <= 1 at every texel; E_r and E_t against
  * mf_energy_dielectric_reference at every mu of the 4 corner (alpha, eta) columns and one mu of every
  * other column, both sides; the white furnace of the compensation lobe on E = E_r + E_t (as
- * kulla_conty's) at every mu of 3 x 3 (alpha, eta) columns, both sides. */
+ * kulla_conty's) at every mu of 3 x 3 (alpha, eta) columns, both sides (diel_furnace); at the same
+ * texels the furnace of E_r + E_t + the lobe split into reflection and transmission
+ * (mf_energy_dielectric_ms_split), and per column the reciprocity of the transmitted flux,
+ * T(eta) = eta^2 T(1/eta), single scattering plus lobe (diel_split). */
 mf_status mf_energy_dielectric_gate(const mf_table *t, double storage_u, mf_check *checks, int cap,
                                     int *count) MF_WARN_UNUSED;
 /* The gates' check tables (for the registry). */
