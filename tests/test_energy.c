@@ -545,6 +545,7 @@ static void favg_dielectric(void)
  * |Q24 - Q16| understated its error 4 times at alpha 0.05, eta 1.33.)  *b: the rule's estimate plus the
  * largest albedo bound met. */
 typedef struct {
+    mf_ndf_type nt;
     double alpha, eta, a, len, maxerr;
 } tavg_ctx;
 
@@ -555,12 +556,12 @@ static double tavg_f(double u, void *user)
     if (!(mu > 0.0) || !(w > 0.0))
         return 0.0;
     mf_result r, tr;
-    CHECK(mf_albedo_dielectric(mf_ndf_make(MF_NDF_GGX, c->alpha, c->alpha), MF_G2_JOINT, fmin(mu, 1.0), c->eta, &r, &tr) == MF_OK);
+    CHECK(mf_albedo_dielectric(mf_ndf_make(c->nt, c->alpha, c->alpha), MF_G2_JOINT, fmin(mu, 1.0), c->eta, &r, &tr) == MF_OK);
     c->maxerr = fmax(c->maxerr, tr.err);
     return 2.0 * mu * w * tr.val;
 }
 
-static double transmit_avg_adaptive(double alpha, double eta, double *b)
+static double transmit_avg_adaptive(mf_ndf_type nt, double alpha, double eta, double *b)
 {
     double k[5] = {0.0, 1.0}, sum = 0.0;
     int n = 2;
@@ -575,7 +576,7 @@ static double transmit_avg_adaptive(double alpha, double eta, double *b)
                 k[j] = k[j - 1], k[j - 1] = x;
             }
     }
-    tavg_ctx c = {alpha, eta, 0.0, 0.0, 0.0};
+    tavg_ctx c = {nt, alpha, eta, 0.0, 0.0, 0.0};
     *b = 0.0;
     for (int p = 0; p + 1 < n; ++p) {
         if (!(k[p + 1] > k[p]))
@@ -599,15 +600,16 @@ static double transmit_avg_adaptive(double alpha, double eta, double *b)
  *    test has power): x = 1/2 (the Fresnel average alone), eta^2 on the wrong side, and the transmitted
  *    fraction 1 - F_avg on both sides (the compensation split like a smooth interface's energy);
  *  - the lobes pointwise: the reflected one symmetric in (mu_o, mu_i), the transmitted one reciprocal,
- *    K(eta; o -> i) = eta^2 K(1/eta; i -> o), to rounding (1e-14 relative). */
-static void dielectric_split(void)
+ *    K(eta; o -> i) = eta^2 K(1/eta; i -> o), to rounding (1e-14 relative).
+ * One (ndf, alpha, eta) case per call; dielectric_split runs 4 GGX cases (CI) or, in the slow test
+ * test_energy_dielectric_split, both NDFs over 6 alphas (1e-3 .. 1) x 6 etas (1.002 .. 2.88). */
+static void split_case(mf_ndf_type nt, double alpha, double eta, int verbose, double *worst_ratio, double *worst_wrong_ratio)
 {
-    const double cases[][2] = {{0.3, 1.5}, {1.0, 1.5}, {0.6, 2.88}, {0.05, 1.33}};
-    for (int c = 0; c < 4; ++c) {
-        double alpha = cases[c][0], eta = cases[c][1], e2 = eta * eta;
+    {
+        double e2 = eta * eta;
         mf_result ea, ei, fa, fi;
-        CHECK(mf_energy_dielectric_eavg(MF_NDF_GGX, MF_G2_JOINT, alpha, eta, &ea) == MF_OK);
-        CHECK(mf_energy_dielectric_eavg(MF_NDF_GGX, MF_G2_JOINT, alpha, 1.0 / eta, &ei) == MF_OK);
+        CHECK(mf_energy_dielectric_eavg(nt, MF_G2_JOINT, alpha, eta, &ea) == MF_OK);
+        CHECK(mf_energy_dielectric_eavg(nt, MF_G2_JOINT, alpha, 1.0 / eta, &ei) == MF_OK);
         CHECK(mf_energy_favg_dielectric(eta, &fa) == MF_OK);
         CHECK(mf_energy_favg_dielectric(1.0 / eta, &fi) == MF_OK);
         double to, ti;
@@ -624,7 +626,7 @@ static void dielectric_split(void)
         }
         /* the averaged transmitted flux per side: E_t averaged plus the lobe's t (1 - E_avg); bound: the
          * average's plus t times the E_avg bound */
-        double tbo, tbi, tao = transmit_avg_adaptive(alpha, eta, &tbo), tai = transmit_avg_adaptive(alpha, 1.0 / eta, &tbi);
+        double tbo, tbi, tao = transmit_avg_adaptive(nt, alpha, eta, &tbo), tai = transmit_avg_adaptive(nt, alpha, 1.0 / eta, &tbi);
         double fo = tao + to * (1.0 - ea.val), fin = tai + ti * (1.0 - ei.val);
         double tol = tbo + to * ea.err + e2 * (tbi + ti * ei.err), worst_wrong = INFINITY;
         for (int w = 0; w < 3; ++w) {
@@ -632,16 +634,20 @@ static void dielectric_split(void)
             double wtol = tbo + wrong[w][0] * ea.err + e2 * (tbi + wrong[w][1] * ei.err);
             worst_wrong = fmin(worst_wrong, fabs(wfo - e2 * wfi) / wtol);
         }
-        printf("dielectric split alpha %g eta %g: E_avg %.9f / %.9f, t %.6f / %.6f; flux out %.12f, eta^2 x in %.12f: "
-               "|diff| / tolerance %.3g (tolerance %.2e); the wrong splits' smallest ratio %.3g\n",
-               alpha, eta, ea.val, ei.val, to, ti, fo, e2 * fin, fabs(fo - e2 * fin) / tol, tol, worst_wrong);
+        if (verbose || !(fabs(fo - e2 * fin) <= tol) || !(worst_wrong > 10.0))
+            printf("dielectric split %s alpha %g eta %g: E_avg %.9f / %.9f, t %.6f / %.6f; flux out %.12f, eta^2 x in %.12f: "
+                   "|diff| / tolerance %.3g (tolerance %.2e); the wrong splits' smallest ratio %.3g\n",
+                   nt == MF_NDF_GGX ? "ggx" : "beckmann", alpha, eta, ea.val, ei.val, to, ti, fo, e2 * fin,
+                   fabs(fo - e2 * fin) / tol, tol, worst_wrong);
+        *worst_ratio = fmax(*worst_ratio, fabs(fo - e2 * fin) / tol);
+        *worst_wrong_ratio = fmin(*worst_wrong_ratio, worst_wrong);
         CHECK(fabs(fo - e2 * fin) <= tol);
         CHECK(worst_wrong > 10.0);
         /* the lobes pointwise */
         for (int p = 0; p < 3; ++p) {
             double muo = (double[]){0.9, 0.3, 0.05}[p], mui = (double[]){0.2, 0.7, 0.99}[p];
             mf_result ro, tro, ri, tri, rx, trx, rix, trix;
-            mf_ndf ndf = mf_ndf_make(MF_NDF_GGX, alpha, alpha);
+            mf_ndf ndf = mf_ndf_make(nt, alpha, alpha);
             CHECK(mf_albedo_dielectric(ndf, MF_G2_JOINT, muo, eta, &ro, &tro) == MF_OK);      /* E(mu_o), outside */
             CHECK(mf_albedo_dielectric(ndf, MF_G2_JOINT, mui, eta, &rx, &trx) == MF_OK);      /* E(mu_i), outside */
             CHECK(mf_albedo_dielectric(ndf, MF_G2_JOINT, mui, 1.0 / eta, &ri, &tri) == MF_OK); /* E_inv(mu_i) */
@@ -655,6 +661,27 @@ static void dielectric_split(void)
             (void)eiv_o;
         }
     }
+}
+
+static void dielectric_split(int full)
+{
+    double worst = 0.0, wrong = INFINITY;
+    int count = 0;
+    if (!full) {
+        const double cases[][2] = {{0.3, 1.5}, {1.0, 1.5}, {0.6, 2.88}, {0.05, 1.33}};
+        for (int c = 0; c < 4; ++c, ++count)
+            split_case(MF_NDF_GGX, cases[c][0], cases[c][1], 1, &worst, &wrong);
+    } else { /* the slow test: both NDFs over alpha 1e-3 .. 1 and eta 1.002 .. 2.88 (the table's range) */
+        const double al[] = {1e-3, 0.01, 0.1, 0.3, 0.6, 1.0}, et[] = {1.002, 1.05, 1.33, 1.5, 2.0, 2.88};
+        for (int n = 0; n < 2; ++n)
+            for (int a = 0; a < 6; ++a)
+                for (int e = 0; e < 6; ++e, ++count)
+                    split_case(n ? MF_NDF_BECKMANN : MF_NDF_GGX, al[a], et[e], 0, &worst, &wrong);
+    }
+    printf("dielectric split: %d (ndf, alpha, eta) cases, worst |T(eta) - eta^2 T(1/eta)| / tolerance %.3g; the wrong splits "
+           "fail by at least %.3g times their tolerance\n", count, worst, wrong);
+    if (full)
+        return;
     double t;
     CHECK(mf_energy_dielectric_ms_split(1.5, 1.5, 0.9, 0.1, 0.6, &t) == MF_ERR_DOMAIN);
     CHECK(mf_energy_dielectric_ms_split(1.5, 0.9, 0.9, 0.1, -0.1, &t) == MF_ERR_DOMAIN);
@@ -698,6 +725,11 @@ int main(int argc, char **argv)
         dielectric_rule(1);
         MF_TEST_MAIN_END();
     }
+    if (argc > 1 && !strcmp(argv[1], "split-full")) { /* the slow test: the split over the table's range */
+        favg_dielectric();
+        dielectric_split(1);
+        MF_TEST_MAIN_END();
+    }
     albedo_vs_reference();
     charlie_vs_reference();
     dielectric();
@@ -707,7 +739,7 @@ int main(int argc, char **argv)
     dfg_identity();
     furnace();
     favg_dielectric();
-    dielectric_split();
+    dielectric_split(0);
     dielectric_split_gate();
     MF_TEST_MAIN_END();
 }
