@@ -158,8 +158,10 @@ mf_status mf_energy_dielectric_ms_split(double eta, double eavg, double eavg_inv
 
 double mf_energy_kc_lobe(double weight, double e_o, double e_i, double eavg_i)
 {
-    /* (1 - E(mu_o)) (1 - E(mu_i)) / (pi (1 - E_avg)) [Kulla and Conty 2017], times the split's weight */
-    return eavg_i < 1.0 ? weight * (1.0 - e_o) * (1.0 - e_i) / (MF_PI * (1.0 - eavg_i)) : 0.0;
+    /* (1 - E(mu_o)) (1 - E(mu_i)) / (pi (1 - E_avg)) [Kulla and Conty 2017], times the split's weight;
+     * each factor clamped at 0 (a nearly smooth surface's E may round above 1 within its bound), which
+     * keeps the lobe symmetric and reciprocal */
+    return eavg_i < 1.0 ? weight * fmax(0.0, 1.0 - e_o) * fmax(0.0, 1.0 - e_i) / (MF_PI * (1.0 - eavg_i)) : 0.0;
 }
 
 /* ---- tables --------------------------------------------------------------------------------- */

@@ -94,7 +94,8 @@ mf_status mf_energy_favg_dielectric(double eta, mf_result *out) MF_WARN_UNUSED;
  * MF_ERR_DOMAIN for arguments out of range. */
 mf_status mf_energy_dielectric_ms_split(double eta, double eavg, double eavg_inv, double favg, double favg_inv,
                                         double *t) MF_WARN_UNUSED;
-/* weight (1 - e_o) (1 - e_i) / (pi (1 - eavg_i)) [Kulla and Conty 2017]; 0 if eavg_i >= 1. */
+/* weight max(0, 1 - e_o) max(0, 1 - e_i) / (pi (1 - eavg_i)) [Kulla and Conty 2017] (the clamps: an E
+ * that rounds above 1 gives 0, not a negative lobe); 0 if eavg_i >= 1. */
 double mf_energy_kc_lobe(double weight, double e_o, double e_i, double eavg_i);
 
 /* ---- the dielectric table (kind "dielectric") ---- */
