@@ -30,16 +30,22 @@
 
 /* The table a program measures: read from table_path, or (NULL) fitted with o.  1: fitted (r holds
  * the fit's result), 0: read, -1: an error (printed, prefixed with prog). */
-static inline int abench_table_get(const char *prog, const char *table_path, const mf_ltcfit_aniso_options *o,
-                                   mf_table *t, mf_ltcfit_aniso_result *r)
+static inline int abench_table_get_u(const char *prog, const char *table_path, const mf_ltcfit_aniso_options *o,
+                                     mf_table *t, mf_ltcfit_aniso_result *r, double *storage_u)
 {
     char msg[256];
+    if (storage_u)
+        *storage_u = 0.0; /* a table fitted in memory: doubles */
     if (table_path) {
-        if (mf_table_read(table_path, t, NULL, msg, sizeof msg) != MF_OK) {
+        mf_table_file_info info;
+        memset(&info, 0, sizeof info);
+        if (mf_table_read(table_path, t, &info, msg, sizeof msg) != MF_OK) {
             fprintf(stderr, "%s: %s\n", prog, msg); /* msg names the file */
             return -1;
         }
         printf("mfkit table read from %s\n", table_path);
+        if (storage_u) /* every table file mfkit writes stores float32 or halves */
+            *storage_u = mf_table_storage_roundoff(info.half_float);
         return 0;
     }
     if (mf_ltcfit_aniso_table(mf_brdf_model_find("ggx"), o, t, r, msg, sizeof msg) != MF_OK) {
@@ -47,6 +53,13 @@ static inline int abench_table_get(const char *prog, const char *table_path, con
         return -1;
     }
     return 1;
+}
+
+/* The same without the storage rounding. */
+static inline int abench_table_get(const char *prog, const char *table_path, const mf_ltcfit_aniso_options *o,
+                                   mf_table *t, mf_ltcfit_aniso_result *r)
+{
+    return abench_table_get_u(prog, table_path, o, t, r, NULL);
 }
 
 enum { ABENCH_Q = 12 };

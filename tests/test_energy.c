@@ -506,11 +506,238 @@ static void furnace(void)
     mf_table_free(&t);
 }
 
+/* ---- the split of the dielectric compensation between reflection and transmission ---------------- */
+
+/* F_avg of the exact dielectric: against the conductor routine with k = 0 (another Fresnel formula,
+ * another integration, eta > 1 only) and the two sides' identity 1 - F_avg(1/eta) = (1 - F_avg(eta)) /
+ * eta^2 (a uniform radiance L outside sends pi L (1 - F_avg(eta)) in; in equilibrium the radiance inside
+ * is eta^2 L and sends pi eta^2 L (1 - F_avg(1/eta)) out).  Tolerance 1e-13: both are quadratures to
+ * 1e-14 of smooth integrands (the kink at the critical angle mapped away). */
+static void favg_dielectric(void)
+{
+    const double etas[] = {1.0, 1.002, 1.1, 1.5, 2.0, 2.88, 4.0};
+    double worst = 0.0;
+    for (int e = 0; e < 7; ++e) {
+        mf_result f, fi, fc;
+        CHECK(mf_energy_favg_dielectric(etas[e], &f) == MF_OK);
+        CHECK(mf_energy_favg_dielectric(1.0 / etas[e], &fi) == MF_OK);
+        CHECK(mf_energy_favg_conductor(etas[e], 0.0, &fc) == MF_OK);
+        double d = fabs((1.0 - fi.val) - (1.0 - f.val) / (etas[e] * etas[e]));
+        worst = fmax(worst, fmax(d, fabs(f.val - fc.val)));
+        if (!(d <= 1e-13) || !(fabs(f.val - fc.val) <= 1e-13))
+            printf("F_avg eta %g: %.16f (conductor k = 0: %.16f), 1/eta: %.16f, identity off by %.2e\n", etas[e], f.val, fc.val,
+                   fi.val, d);
+        CHECK(d <= 1e-13);
+        CHECK(fabs(f.val - fc.val) <= 1e-13);
+    }
+    mf_result f;
+    CHECK(mf_energy_favg_dielectric(1.5, &f) == MF_OK);
+    printf("F_avg dielectric: F_avg(1.5) %.12f, F_avg(1/1.5) %.12f; worst identity / conductor difference %.2e (tolerance 1e-13)\n",
+           f.val, 1.0 - (1.0 - f.val) / 2.25, worst);
+    CHECK(mf_energy_favg_dielectric(0.0, &f) == MF_ERR_DOMAIN);
+    CHECK(mf_energy_favg_dielectric(NAN, &f) == MF_ERR_DOMAIN);
+}
+
+/* 2 integral_0^1 E_t(mu) mu dmu by adaptive Gauss-Kronrod (mf_quad_adaptive, 1e-10 per panel) on panels
+ * ending on the kinks of E_t(mu), found here from the geometry (eta < 1: mu = eta, sqrt(1 - eta^2),
+ * 2 eta sqrt(1 - eta^2); docs/tables.md), each mapped by the cubic mu = a + (b - a)(3 u^2 - 2 u^3), flat
+ * at both ends.  (The Gauss-Legendre rule of transmit_avg is not accurate enough at small alpha: its
+ * |Q24 - Q16| understated its error 4 times at alpha 0.05, eta 1.33.)  *b: the rule's estimate plus the
+ * largest albedo bound met. */
+typedef struct {
+    mf_ndf_type nt;
+    double alpha, eta, a, len, maxerr;
+} tavg_ctx;
+
+static double tavg_f(double u, void *user)
+{
+    tavg_ctx *c = user;
+    double mu = c->a + c->len * u * u * (3.0 - 2.0 * u), w = 6.0 * c->len * u * (1.0 - u);
+    if (!(mu > 0.0) || !(w > 0.0))
+        return 0.0;
+    mf_result r, tr;
+    CHECK(mf_albedo_dielectric(mf_ndf_make(c->nt, c->alpha, c->alpha), MF_G2_JOINT, fmin(mu, 1.0), c->eta, &r, &tr) == MF_OK);
+    c->maxerr = fmax(c->maxerr, tr.err);
+    return 2.0 * mu * w * tr.val;
+}
+
+static double transmit_avg_adaptive(mf_ndf_type nt, double alpha, double eta, double *b)
+{
+    double k[5] = {0.0, 1.0}, sum = 0.0;
+    int n = 2;
+    if (eta < 1.0) {
+        double mc = sqrt(1.0 - eta * eta), c3[3] = {eta, mc, 2.0 * eta * mc};
+        for (int i = 0; i < 3; ++i)
+            if (c3[i] > 1e-6 && c3[i] < 1.0 - 1e-9)
+                k[n++] = c3[i];
+        for (int i = 1; i < n; ++i) /* insertion sort */
+            for (int j = i; j > 0 && k[j] < k[j - 1]; --j) {
+                double x = k[j];
+                k[j] = k[j - 1], k[j - 1] = x;
+            }
+    }
+    tavg_ctx c = {nt, alpha, eta, 0.0, 0.0, 0.0};
+    *b = 0.0;
+    for (int p = 0; p + 1 < n; ++p) {
+        if (!(k[p + 1] > k[p]))
+            continue;
+        c.a = k[p], c.len = k[p + 1] - k[p];
+        mf_result q;
+        CHECK(mf_quad_adaptive(tavg_f, &c, 0.0, 1.0, 1e-10, 0.0, 400, &q) == MF_OK);
+        sum += q.val;
+        *b += q.err;
+    }
+    *b += c.maxerr;
+    return sum;
+}
+
+/* The split [Kulla and Conty 2017] (mf_energy_dielectric_ms_split):
+ *  - each side's fractions in [0, 1]; x + x' = 1 for the pair (t = (1 - F_avg) x);
+ *  - the transmitted flux of the whole compensated BSDF balances, T(eta) = eta^2 T(1/eta), with the
+ *    single scattering averaged by this file's own Gauss-Legendre rule; tolerance: that rule's
+ *    |Q24 - Q16| and the albedo bounds, plus t times each E_avg bound;
+ *  - three other splits one might write fail the same balance by far more than that tolerance (the
+ *    test has power): x = 1/2 (the Fresnel average alone), eta^2 on the wrong side, and the transmitted
+ *    fraction 1 - F_avg on both sides (the compensation split like a smooth interface's energy),
+ *    each wherever it moves the averaged transmitted flux by more than 1e-6 (near eta = 1 and for
+ *    nearly smooth surfaces they are nearly right);
+ *  - the lobes pointwise: the reflected one symmetric in (mu_o, mu_i), the transmitted one reciprocal,
+ *    K(eta; o -> i) = eta^2 K(1/eta; i -> o), to rounding (1e-14 relative).
+ * One (ndf, alpha, eta) case per call; dielectric_split runs 4 GGX cases (CI) or, in the slow test
+ * test_energy_dielectric_split, both NDFs over 6 alphas (1e-3 .. 1) x 6 etas (1.002 .. 2.88). */
+static void split_case(mf_ndf_type nt, double alpha, double eta, int verbose, double *worst_ratio, double *worst_wrong_ratio)
+{
+    {
+        double e2 = eta * eta;
+        mf_result ea, ei, fa, fi;
+        CHECK(mf_energy_dielectric_eavg(nt, MF_G2_JOINT, alpha, eta, &ea) == MF_OK);
+        CHECK(mf_energy_dielectric_eavg(nt, MF_G2_JOINT, alpha, 1.0 / eta, &ei) == MF_OK);
+        CHECK(mf_energy_favg_dielectric(eta, &fa) == MF_OK);
+        CHECK(mf_energy_favg_dielectric(1.0 / eta, &fi) == MF_OK);
+        double to, ti;
+        CHECK(mf_energy_dielectric_ms_split(eta, ea.val, ei.val, fa.val, fi.val, &to) == MF_OK);
+        CHECK(mf_energy_dielectric_ms_split(1.0 / eta, ei.val, ea.val, fi.val, fa.val, &ti) == MF_OK);
+        CHECK(to >= 0.0 && to <= 1.0 && ti >= 0.0 && ti <= 1.0);
+        CHECK_ABS(to / (1.0 - fa.val) + ti / (1.0 - fi.val), 1.0, 1e-15);
+        CHECK_REL(to * (1.0 - ea.val), e2 * ti * (1.0 - ei.val), 1e-14);
+        /* the balance of the whole BSDF, and of the three wrong splits */
+        double wrong[3][2] = {{0.5 * (1.0 - fa.val), 0.5 * (1.0 - fi.val)}, {0, 0}, {1.0 - fa.val, 1.0 - fi.val}};
+        {
+            double a = (1.0 - fi.val) * (1.0 - ei.val) / e2, b = (1.0 - fa.val) * (1.0 - ea.val); /* eta^2 misplaced */
+            wrong[1][0] = (1.0 - fa.val) * a / (a + b), wrong[1][1] = (1.0 - fi.val) * b / (a + b);
+        }
+        /* the averaged transmitted flux per side: E_t averaged plus the lobe's t (1 - E_avg); bound: the
+         * average's plus t times the E_avg bound */
+        double tbo, tbi, tao = transmit_avg_adaptive(nt, alpha, eta, &tbo), tai = transmit_avg_adaptive(nt, alpha, 1.0 / eta, &tbi);
+        double fo = tao + to * (1.0 - ea.val), fin = tai + ti * (1.0 - ei.val);
+        double tol = tbo + to * ea.err + e2 * (tbi + ti * ei.err), worst_wrong = INFINITY;
+        for (int w = 0; w < 3; ++w) {
+            double wfo = tao + wrong[w][0] * (1.0 - ea.val), wfi = tai + wrong[w][1] * (1.0 - ei.val);
+            double wtol = tbo + wrong[w][0] * ea.err + e2 * (tbi + wrong[w][1] * ei.err);
+            /* near eta = 1 or where almost nothing is missing a wrong split is nearly right: it must
+             * fail wherever it moves the transmitted flux by more than 1e-6 */
+            double moved = fabs(wrong[w][0] - to) * (1.0 - ea.val) + e2 * fabs(wrong[w][1] - ti) * (1.0 - ei.val);
+            if (moved > 1e-6)
+                worst_wrong = fmin(worst_wrong, fabs(wfo - e2 * wfi) / wtol);
+        }
+        if (verbose || !(fabs(fo - e2 * fin) <= tol) || !(worst_wrong > 10.0))
+            printf("dielectric split %s alpha %g eta %g: E_avg %.9f / %.9f, t %.6f / %.6f; flux out %.12f, eta^2 x in %.12f: "
+                   "|diff| / tolerance %.3g (tolerance %.2e); the wrong splits' smallest ratio %.3g\n",
+                   nt == MF_NDF_GGX ? "ggx" : "beckmann", alpha, eta, ea.val, ei.val, to, ti, fo, e2 * fin,
+                   fabs(fo - e2 * fin) / tol, tol, worst_wrong);
+        *worst_ratio = fmax(*worst_ratio, fabs(fo - e2 * fin) / tol);
+        *worst_wrong_ratio = fmin(*worst_wrong_ratio, worst_wrong);
+        CHECK(fabs(fo - e2 * fin) <= tol);
+        CHECK(worst_wrong > 10.0);
+        /* the lobes pointwise */
+        for (int p = 0; p < 3; ++p) {
+            double muo = (double[]){0.9, 0.3, 0.05}[p], mui = (double[]){0.2, 0.7, 0.99}[p];
+            mf_result ro, tro, ri, tri, rx, trx, rix, trix;
+            mf_ndf ndf = mf_ndf_make(nt, alpha, alpha);
+            CHECK(mf_albedo_dielectric(ndf, MF_G2_JOINT, muo, eta, &ro, &tro) == MF_OK);      /* E(mu_o), outside */
+            CHECK(mf_albedo_dielectric(ndf, MF_G2_JOINT, mui, eta, &rx, &trx) == MF_OK);      /* E(mu_i), outside */
+            CHECK(mf_albedo_dielectric(ndf, MF_G2_JOINT, mui, 1.0 / eta, &ri, &tri) == MF_OK); /* E_inv(mu_i) */
+            CHECK(mf_albedo_dielectric(ndf, MF_G2_JOINT, muo, 1.0 / eta, &rix, &trix) == MF_OK);
+            double eo = ro.val + tro.val, ex = rx.val + trx.val, eiv = ri.val + tri.val, eiv_o = rix.val + trix.val;
+            CHECK_REL(mf_energy_kc_lobe(1.0 - to, eo, ex, ea.val), mf_energy_kc_lobe(1.0 - to, ex, eo, ea.val), 1e-15);
+            /* light from mu_o outside into mu_i inside, and back */
+            double k_out = mf_energy_kc_lobe(to, eo, eiv, ei.val), k_in = mf_energy_kc_lobe(ti, eiv, eo, ea.val);
+            /* not 0 = 0: wherever both missing energies exceed their bounds the lobe is positive (at
+             * alpha 1e-3 E may round to 1 or above within its bound, and the lobe is then 0) */
+            if (1.0 - eo > ro.err + tro.err && 1.0 - eiv > ri.err + tri.err)
+                CHECK(k_out > 0.0);
+            CHECK(k_out >= 0.0 && k_in >= 0.0);
+            CHECK_REL(k_out, e2 * k_in, 1e-14);
+            (void)eiv_o;
+        }
+    }
+}
+
+static void dielectric_split(int full)
+{
+    double worst = 0.0, wrong = INFINITY;
+    int count = 0;
+    if (!full) {
+        const double cases[][2] = {{0.3, 1.5}, {1.0, 1.5}, {0.6, 2.88}, {0.05, 1.33}};
+        for (int c = 0; c < 4; ++c, ++count)
+            split_case(MF_NDF_GGX, cases[c][0], cases[c][1], 1, &worst, &wrong);
+    } else { /* the slow test: both NDFs over alpha 1e-3 .. 1 and eta 1.002 .. 2.88 (the table's range) */
+        const double al[] = {1e-3, 0.01, 0.1, 0.3, 0.6, 1.0}, et[] = {1.002, 1.05, 1.33, 1.5, 2.0, 2.88};
+        for (int n = 0; n < 2; ++n)
+            for (int a = 0; a < 6; ++a)
+                for (int e = 0; e < 6; ++e, ++count)
+                    split_case(n ? MF_NDF_BECKMANN : MF_NDF_GGX, al[a], et[e], 0, &worst, &wrong);
+    }
+    printf("dielectric split: %d (ndf, alpha, eta) cases, worst |T(eta) - eta^2 T(1/eta)| / tolerance %.3g; the wrong splits "
+           "fail by at least %.3g times their tolerance\n", count, worst, wrong);
+    if (full)
+        return;
+    double t;
+    CHECK(mf_energy_dielectric_ms_split(1.5, 1.5, 0.9, 0.1, 0.6, &t) == MF_ERR_DOMAIN);
+    CHECK(mf_energy_dielectric_ms_split(1.5, 0.9, 0.9, 0.1, -0.1, &t) == MF_ERR_DOMAIN);
+    /* no energy missing inside: the balance forbids transmitting the outside's compensation */
+    CHECK(mf_energy_dielectric_ms_split(1.5, 0.9, 1.0, 0.1, 0.6, &t) == MF_OK && t == 0.0);
+}
+
+/* the gate of a 2 x 2 x 2 table computed in memory: diel_split passes; E_avg_inv of one column 1e-6
+ * high (100 times its bound, about 1e-8) fails it (and the furnace) */
+static void dielectric_split_gate(void)
+{
+    mf_table t;
+    CHECK(mf_energy_dielectric_table(&t, MF_NDF_GGX, MF_G2_JOINT, 2, 2, 2, NULL, NULL) == MF_OK);
+    mf_check ch[8];
+    int n = 0;
+    mf_status st = mf_table_kind_gate(&t, NULL, NULL, ch, 8, &n);
+    int split = -1;
+    for (int i = 0; i < n; ++i) {
+        if (!strcmp(ch[i].name, "diel_split"))
+            split = i;
+        if (!ch[i].passed)
+            printf("%s: worst %g at %s\n", ch[i].name, ch[i].worst, ch[i].worst_at);
+    }
+    CHECK(st == MF_OK && split >= 0);
+    if (split >= 0)
+        printf("dielectric gate 2^3: diel_split worst %.3g of its bound at %s\n", ch[split].worst, ch[split].worst_at);
+    for (int i = 0; i < 2; ++i) /* column (j 0, k 0), both mu, the inside's E_avg */
+        t.data[i * MF_DIELECTRIC_NFIELDS + 12] += 1e-6;
+    st = mf_table_kind_gate(&t, NULL, NULL, ch, 8, &n);
+    CHECK(st == MF_ERR_CHECK_FAILED && split >= 0 && split < n && !ch[split].passed);
+    if (split >= 0 && split < n)
+        printf("dielectric gate 2^3, E_avg_inv + 1e-6: diel_split %s, worst %.3g at %s\n", ch[split].passed ? "pass" : "fail",
+               ch[split].worst, ch[split].worst_at);
+    mf_table_free(&t);
+}
+
 int main(int argc, char **argv)
 {
     if (argc > 1 && !strcmp(argv[1], "dielectric-full")) { /* the slow test: the rule's whole grid */
         diel_events();
         dielectric_rule(1);
+        MF_TEST_MAIN_END();
+    }
+    if (argc > 1 && !strcmp(argv[1], "split-full")) { /* the slow test: the split over the table's range */
+        favg_dielectric();
+        dielectric_split(1);
         MF_TEST_MAIN_END();
     }
     albedo_vs_reference();
@@ -521,5 +748,8 @@ int main(int argc, char **argv)
     dielectric_rule(0);
     dfg_identity();
     furnace();
+    favg_dielectric();
+    dielectric_split(0);
+    dielectric_split_gate();
     MF_TEST_MAIN_END();
 }

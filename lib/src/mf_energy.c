@@ -3,6 +3,7 @@
 #include "mfkit/mf_quad.h"
 #include "mfkit/mf_table_kind.h"
 
+#include <float.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -105,6 +106,62 @@ mf_status mf_energy_favg_conductor(double eta, double k, mf_result *out)
         return MF_ERR_DOMAIN;
     cond_ctx c = {eta, k};
     return mf_quad_adaptive(favg_integrand, &c, 0.0, 1.0, 1e-13, 0.0, MF_QUAD_MAX_INTERVALS, out);
+}
+
+/* F_avg of the exact dielectric: 2 integral_0^1 F(mu) mu dmu.  For eta < 1, F = 1 below the critical
+ * cosine mu_c = sqrt(1 - eta^2) (that piece is mu_c^2 exactly) and F has a square-root kink at mu_c
+ * (cos theta_t = sqrt(mu^2 - mu_c^2) / eta), so above it mu = mu_c + u^2 makes the integrand smooth. */
+typedef struct {
+    double eta, org;
+} fdiel_ctx;
+
+static double favg_diel_f(double u, void *user)
+{
+    const fdiel_ctx *c = user;
+    double mu = fmin(1.0, c->org + u * u);
+    return 2.0 * mu * mf_fresnel_dielectric(c->eta, mu) * 2.0 * u;
+}
+
+mf_status mf_energy_favg_dielectric(double eta, mf_result *out)
+{
+    out->val = out->err = NAN;
+    if (!(eta > 0.0) || !isfinite(eta))
+        return MF_ERR_DOMAIN;
+    double mc2 = eta < 1.0 ? (1.0 - eta) * (1.0 + eta) : 0.0, mc = sqrt(mc2);
+    fdiel_ctx c = {eta, mc};
+    mf_status st = mf_quad_adaptive(favg_diel_f, &c, 0.0, sqrt(1.0 - mc), 1e-14, 0.0, MF_QUAD_MAX_INTERVALS, out);
+    out->val += mc2;
+    out->err += 4.0 * DBL_EPSILON;
+    return st;
+}
+
+/* The split of Kulla and Conty 2017 (the dielectric part of their energy compensation): of the
+ * compensation energy 1 - E(mu_o) on the view's side, the fraction t goes into transmission,
+ *   t = (1 - F_avg(eta)) x,  x = A / (A + B),  A = eta^2 (1 - F_avg(1/eta)) (1 - E_avg(1/eta)),
+ *   B = (1 - F_avg(eta)) (1 - E_avg(eta)),
+ * which on the other side (eta -> 1/eta) gives x' = B / (A + B) = 1 - x, their pair (x, 1 - x); it makes
+ * the compensation's transmitted flux balance: t (1 - E_avg(eta)) = eta^2 t' (1 - E_avg(1/eta))
+ * (docs/math.md, "Splitting the dielectric compensation"). */
+mf_status mf_energy_dielectric_ms_split(double eta, double eavg, double eavg_inv, double favg, double favg_inv,
+                                        double *t)
+{
+    *t = NAN;
+    if (!(eta > 0.0) || !isfinite(eta) || !(eavg >= 0.0 && eavg <= 1.0 + 1e-6) || !(eavg_inv >= 0.0 && eavg_inv <= 1.0 + 1e-6)
+        || !(favg >= 0.0 && favg <= 1.0) || !(favg_inv >= 0.0 && favg_inv <= 1.0))
+        return MF_ERR_DOMAIN;
+    double a = eta * eta * (1.0 - favg_inv) * fmax(0.0, 1.0 - eavg_inv), b = (1.0 - favg) * fmax(0.0, 1.0 - eavg);
+    /* no compensation energy on either side: any split is exact; take the Fresnel one (x = 1/2 of both) */
+    double x = a + b > 0.0 ? a / (a + b) : 0.5;
+    *t = (1.0 - favg) * x;
+    return MF_OK;
+}
+
+double mf_energy_kc_lobe(double weight, double e_o, double e_i, double eavg_i)
+{
+    /* (1 - E(mu_o)) (1 - E(mu_i)) / (pi (1 - E_avg)) [Kulla and Conty 2017], times the split's weight;
+     * each factor clamped at 0 (a nearly smooth surface's E may round above 1 within its bound), which
+     * keeps the lobe symmetric and reciprocal */
+    return eavg_i < 1.0 ? weight * fmax(0.0, 1.0 - e_o) * fmax(0.0, 1.0 - e_i) / (MF_PI * (1.0 - eavg_i)) : 0.0;
 }
 
 /* ---- tables --------------------------------------------------------------------------------- */
@@ -211,6 +268,7 @@ typedef struct {
     mf_ndf_type ndf;
     mf_g2_form g2;
     double u; /* storage unit roundoff: each stored value may be off by u |value| beyond its bound */
+    struct diel_avgs *avgs; /* dielectric gate: the independent averages of the furnace columns (or NULL) */
 } gate_ctx;
 
 static int gate_setup(const mf_table *t, const char *kind, gate_ctx *g)
@@ -384,6 +442,7 @@ static mf_status run_gate(const mf_table *t, const char *kind, const mf_check_de
     if (gate_setup(t, kind, &g) != 0)
         return MF_ERR_DOMAIN;
     g.u = storage_u > 0.0 ? storage_u : 0.0;
+    g.avgs = NULL;
     return mf_check_run_defs(defs, n, &g, 0, checks, cap, count);
 }
 
@@ -454,6 +513,7 @@ typedef struct {
     int smooth, failed; /* the map of the current panel: smooth (cubic) or one-sided square */
     double org, len;    /* the panel (smooth: [org, org + len]) or the kink it is mapped towards */
     int dir;            /* one-sided: mu = org + dir u^2 */
+    int trans_only;     /* integrate E_t alone instead of E = E_r + E_t */
 } eavg_ctx;
 
 /* the integrand of E_avg = int 2 mu E(mu) dmu in the panel's variable:
@@ -473,8 +533,9 @@ static double eavg_f(double x, void *user)
     }
     if (!(mu > 0.0) || !(w > 0.0))
         return 0.0;
-    mf_result e;
-    if (diel_total(c->ndf, c->g2, c->alpha, fmin(mu, 1.0), c->eta, &e) != MF_OK) {
+    mf_result e, r;
+    if (c->trans_only ? mf_albedo_dielectric(mf_ndf_make(c->ndf, c->alpha, c->alpha), c->g2, fmin(mu, 1.0), c->eta, &r, &e)
+                      : diel_total(c->ndf, c->g2, c->alpha, fmin(mu, 1.0), c->eta, &e)) {
         c->failed = 1;
         return NAN;
     }
@@ -491,12 +552,12 @@ static double eavg_f(double x, void *user)
  * panels took 150 points and the whole panel under the cubic map also 150); smooth = 1 (the gate's
  * independent recomputation, other nodes) maps each panel whole with the cubic map.  err = the
  * rules' estimates + the largest albedo bound met (the weight 2 mu integrates to 1). */
-static mf_status diel_eavg_adaptive(mf_ndf_type ndf, mf_g2_form g2, double alpha, double eta, int smooth, double tol,
-                                    double *val, double *bound)
+static mf_status diel_avg_adaptive(mf_ndf_type ndf, mf_g2_form g2, double alpha, double eta, int smooth, int trans_only,
+                                   double tol, double *val, double *bound)
 {
     double bp[5];
     int nb = diel_panels(eta, bp);
-    eavg_ctx c = {ndf, g2, alpha, eta, 0.0, smooth, 0, 0.0, 0.0, 0};
+    eavg_ctx c = {ndf, g2, alpha, eta, 0.0, smooth, 0, 0.0, 0.0, 0, trans_only};
     double sum = 0.0, err = 0.0;
     int pieces = smooth ? nb - 1 : 2 * (nb - 1);
     for (int p = 0; p + 1 < nb; ++p)
@@ -516,6 +577,12 @@ static mf_status diel_eavg_adaptive(mf_ndf_type ndf, mf_g2_form g2, double alpha
     *val = sum;
     *bound = err + c.max_err;
     return MF_OK;
+}
+
+static mf_status diel_eavg_adaptive(mf_ndf_type ndf, mf_g2_form g2, double alpha, double eta, int smooth, double tol,
+                                    double *val, double *bound)
+{
+    return diel_avg_adaptive(ndf, g2, alpha, eta, smooth, 0, tol, val, bound);
 }
 
 #define DIEL_EAVG_TOL 1e-8
@@ -1125,40 +1192,154 @@ static void diel_reference(void *vctx, mf_check *c)
         }
 }
 
+/* The furnace columns: a 3 x 3 sample of (alpha, eta) columns (both ends and the middle of each axis),
+ * each with its independent averages (other nodes and intervals than the table's), computed once for
+ * diel_furnace and diel_split. */
+#define DIEL_NCOLS 9
+struct diel_avgs {
+    int have[DIEL_NCOLS][2][2];                       /* [column][side][0: E, 1: E_t] */
+    double val[DIEL_NCOLS][2][2], bound[DIEL_NCOLS][2][2];
+};
+
+/* column index cj + 3 ck -> (j, k); 0 if it repeats an earlier column (tables smaller than 3) */
+static int diel_col(const mf_table *t, int col, int *j, int *k)
+{
+    int nr = t->axes[1].size, nz = t->axes[2].size, cj = col % 3, ck = col / 3;
+    *j = cj * (nr - 1) / 2, *k = ck * (nz - 1) / 2;
+    return !((cj > 0 && *j == (cj - 1) * (nr - 1) / 2) || (ck > 0 && *k == (ck - 1) * (nz - 1) / 2));
+}
+
+/* 2 integral_0^1 X(mu) mu dmu (X = E or, trans, E_t) of the column's side, recomputed by the adaptive
+ * rule in mu with each kink panel mapped whole by the smooth cubic (other nodes than the table's) */
+static int diel_col_avg(const gate_ctx *g, int col, int side, int trans, double *val, double *bound)
+{
+    struct diel_avgs *a = g->avgs;
+    if (!a->have[col][side][trans]) {
+        int j, k;
+        diel_col(g->t, col, &j, &k);
+        double alpha = axis_value(g->t, 1, j), eta0 = mf_energy_dielectric_eta(axis_value(g->t, 2, k));
+        if (diel_avg_adaptive(g->ndf, g->g2, alpha, side ? 1.0 / eta0 : eta0, 1, trans, 0.5 * DIEL_EAVG_TOL,
+                              &a->val[col][side][trans], &a->bound[col][side][trans]) != MF_OK)
+            return -1;
+        a->have[col][side][trans] = 1;
+    }
+    *val = a->val[col][side][trans];
+    *bound = a->bound[col][side][trans];
+    return 0;
+}
+
 /* the white furnace of the Kulla-Conty lobe built on the total single scattering E = E_r + E_t (F
  * exact; the interface is lossless, so the compensation must restore 1):
- * |E(mu_o) + (1 - E(mu_o)) (1 - E_avg') / (1 - E_avg) - 1| / bound at every mu of a 3 x 3 sample
- * of (alpha, eta) columns, both sides, E_avg' recomputed by the adaptive rule in mu instead of
- * sqrt(mu) (other nodes and intervals than the table's) from fresh albedos */
+ * |E(mu_o) + (1 - E(mu_o)) (1 - E_avg') / (1 - E_avg) - 1| / bound at every mu of the furnace columns,
+ * both sides, E_avg' recomputed by the adaptive rule in mu instead of sqrt(mu) (other nodes and
+ * intervals than the table's) from fresh albedos */
 static void diel_furnace(void *vctx, mf_check *c)
 {
     const gate_ctx *g = vctx;
     const mf_table *t = g->t;
-    int nr = t->axes[1].size, nz = t->axes[2].size;
-    for (int ck = 0; ck < 3; ++ck)
-        for (int cj = 0; cj < 3; ++cj) {
-            int j = cj * (nr - 1) / 2, k = ck * (nz - 1) / 2;
-            if ((cj > 0 && j == (cj - 1) * (nr - 1) / 2) || (ck > 0 && k == (ck - 1) * (nz - 1) / 2))
-                continue; /* a column already checked (small tables) */
-            double alpha = axis_value(t, 1, j), eta0 = mf_energy_dielectric_eta(axis_value(t, 2, k));
-            for (int side = 0; side < 2; ++side) {
-                double eta = side ? 1.0 / eta0 : eta0, avg, avg_b;
-                if (diel_eavg_adaptive(g->ndf, g->g2, alpha, eta, 1, 0.5 * DIEL_EAVG_TOL, &avg, &avg_b) != MF_OK) {
-                    mf_check_fail(c, "albedo failed");
-                    return;
-                }
-                for (int i = 0; i < t->axes[0].size; ++i) {
-                    const double *r = drec(t, i, j, k) + 7 * side;
-                    double e = r[4], ea = r[5];
-                    double total = e + (1.0 - e) * (1.0 - avg) / (1.0 - ea);
-                    double be = r[1] + r[3] + g->u * (fabs(r[0]) + fabs(r[2]) + fabs(e)), bea = r[6] + g->u * fabs(ea);
-                    double bound = be + (1.0 - e) * (avg_b + bea + 1e-12) / (1.0 - ea) * (1.0 + (1.0 - avg) / (1.0 - ea));
-                    double v = (ea < 1.0 && bound >= 0.0) ? fabs(total - 1.0) / (bound + 1e-13) : INFINITY;
-                    mf_check_recordf(c, v, "texel (%d, %d, %d)%s: alpha %.6g, eta %.6g, 1 - total %.3g", i, j, k,
-                                     side ? " inside" : "", alpha, eta, 1.0 - total);
-                }
+    for (int col = 0; col < DIEL_NCOLS; ++col) {
+        int j, k;
+        if (!diel_col(t, col, &j, &k))
+            continue; /* a column already checked (small tables) */
+        double alpha = axis_value(t, 1, j), eta0 = mf_energy_dielectric_eta(axis_value(t, 2, k));
+        for (int side = 0; side < 2; ++side) {
+            double eta = side ? 1.0 / eta0 : eta0, avg, avg_b;
+            if (diel_col_avg(g, col, side, 0, &avg, &avg_b) != 0) {
+                mf_check_fail(c, "albedo failed");
+                return;
+            }
+            for (int i = 0; i < t->axes[0].size; ++i) {
+                const double *r = drec(t, i, j, k) + 7 * side;
+                double e = r[4], ea = r[5];
+                double total = e + (1.0 - e) * (1.0 - avg) / (1.0 - ea);
+                double be = r[1] + r[3] + g->u * (fabs(r[0]) + fabs(r[2]) + fabs(e)), bea = r[6] + g->u * fabs(ea);
+                double bound = be + (1.0 - e) * (avg_b + bea + 1e-12) / (1.0 - ea) * (1.0 + (1.0 - avg) / (1.0 - ea));
+                double v = (ea < 1.0 && bound >= 0.0) ? fabs(total - 1.0) / (bound + 1e-13) : INFINITY;
+                mf_check_recordf(c, v, "texel (%d, %d, %d)%s: alpha %.6g, eta %.6g, 1 - total %.3g", i, j, k,
+                                 side ? " inside" : "", alpha, eta, 1.0 - total);
             }
         }
+    }
+}
+
+/* The split of the compensation between reflection and transmission [Kulla and Conty 2017]
+ * (mf_energy_dielectric_ms_split), at the furnace columns, with the exact Fresnel:
+ * (1) the white furnace of the whole BSDF seen from each side: E_r + E_t + the reflected lobe (1 - t)
+ *     (1 - E(mu_o)) (1 - E(mu_i)) / (pi (1 - E_avg)) integrated over the view's hemisphere + the
+ *     transmitted lobe t (1 - E(mu_o)) (1 - E_inv(mu_i)) / (pi (1 - E_avg_inv)) integrated over the
+ *     other one must be 1 at every mu, both sides.  The lobes' integrals use the averages recomputed
+ *     independently (their E_avg' / E_avg_inv'), so the transmitted lobe reads the other side's column:
+ *     a wrong or swapped E_avg_inv fails here;
+ * (2) reciprocity of the transmission: in equilibrium the radiance inside is eta^2 times the radiance
+ *     outside, so the flux each side sends through the interface balances, T(eta) = eta^2 T(1/eta),
+ *     where T = the cosine-weighted average of the transmitted energy, single scattering (E_t averaged,
+ *     recomputed from fresh albedos) plus the transmitted lobe's t (1 - E_avg') (1 - E_avg_inv') /
+ *     (1 - E_avg_inv): one value per column;
+ * (3) 0 <= t <= 1 on both sides.
+ * Each value is |residual| / its bound, the bound propagated (exactly, not to first order) from the
+ * stored bounds, the storage rounding and the recomputed averages' bounds. */
+static void diel_split(void *vctx, mf_check *c)
+{
+    const gate_ctx *g = vctx;
+    const mf_table *t = g->t;
+    for (int col = 0; col < DIEL_NCOLS; ++col) {
+        int j, k;
+        if (!diel_col(t, col, &j, &k))
+            continue;
+        double alpha = axis_value(t, 1, j), eta0 = mf_energy_dielectric_eta(axis_value(t, 2, k)), e2 = eta0 * eta0;
+        double av[2], avb[2], tv[2], tvb[2], ea[2], bea[2], ts[2];
+        mf_result fa[2];
+        int bad = 0;
+        for (int side = 0; side < 2; ++side) {
+            const double *r = drec(t, 0, j, k) + 7 * side;
+            ea[side] = r[5];
+            bea[side] = r[6] + g->u * fabs(r[5]);
+            bad |= diel_col_avg(g, col, side, 0, &av[side], &avb[side]) != 0;
+            bad |= diel_col_avg(g, col, side, 1, &tv[side], &tvb[side]) != 0;
+            bad |= mf_energy_favg_dielectric(side ? 1.0 / eta0 : eta0, &fa[side]) != MF_OK;
+        }
+        for (int side = 0; side < 2 && !bad; ++side)
+            bad |= mf_energy_dielectric_ms_split(side ? 1.0 / eta0 : eta0, ea[side], ea[1 - side], fa[side].val,
+                                                 fa[1 - side].val, &ts[side]) != MF_OK;
+        if (bad || !(ea[0] < 1.0) || !(ea[1] < 1.0)) {
+            mf_check_recordf(c, INFINITY, "column (%d, %d): alpha %.6g, eta %.6g: %s", j, k, alpha, eta0,
+                             bad ? "an average or the split failed" : "E_avg >= 1 leaves no lobe");
+            continue;
+        }
+        for (int side = 0; side < 2; ++side) {
+            int o = 1 - side;
+            mf_check_recordf(c, (ts[side] >= 0.0 && ts[side] <= 1.0) ? 0.0 : INFINITY,
+                             "column (%d, %d)%s: transmitted fraction %.6g", j, k, side ? " inside" : "", ts[side]);
+            /* the lobes' integrals relative to 1 - E(mu_o) and their bounds: (1 - A') / (1 - A) with
+             * |A' - A| <= dA, so |(1 - A') / (1 - A) - 1| <= dA / (1 - A) */
+            double ls = (1.0 - av[side]) / (1.0 - ea[side]), lo = (1.0 - av[o]) / (1.0 - ea[o]);
+            double dls = (avb[side] + bea[side] + 1e-12) / (1.0 - ea[side]), dlo = (avb[o] + bea[o] + 1e-12) / (1.0 - ea[o]);
+            for (int i = 0; i < t->axes[0].size; ++i) {
+                const double *r = drec(t, i, j, k) + 7 * side;
+                double e = r[4];
+                double total = e + (1.0 - e) * ((1.0 - ts[side]) * ls + ts[side] * lo);
+                double be = r[1] + r[3] + g->u * (fabs(r[0]) + fabs(r[2]) + fabs(e));
+                double bound = be * fabs(1.0 - ((1.0 - ts[side]) * ls + ts[side] * lo)) + (1.0 - e) * ((1.0 - ts[side]) * dls + ts[side] * dlo);
+                mf_check_recordf(c, fabs(total - 1.0) / (bound + 1e-13), "texel (%d, %d, %d)%s: alpha %.6g, eta %.6g, t %.6g, 1 - total %.3g",
+                                 i, j, k, side ? " inside" : "", alpha, side ? 1.0 / eta0 : eta0, ts[side], 1.0 - total);
+            }
+        }
+        /* (2): the transmitted flux; ms - t (1 - E_avg) = t [(E_avg - A') (1 - B') + (1 - E_avg) (E_avg_inv - B')] /
+         * (1 - E_avg_inv) with A', B' the recomputed averages, and t_out (1 - E_avg) = eta^2 t_in (1 - E_avg_inv)
+         * by the split's construction (to rounding: 1e-15 relative) */
+        double flux[2], fb[2];
+        for (int side = 0; side < 2; ++side) {
+            int o = 1 - side;
+            double ms = ts[side] * (1.0 - av[side]) * (1.0 - av[o]) / (1.0 - ea[o]);
+            double msb = ts[side] * ((avb[side] + bea[side]) * (1.0 - av[o]) + (1.0 - ea[side]) * (avb[o] + bea[o])) / (1.0 - ea[o]);
+            flux[side] = tv[side] + ms;
+            fb[side] = tvb[side] + msb + 1e-15 * (tv[side] + ms);
+        }
+        double bound = fb[0] + e2 * fb[1] + 2.0 * (fa[0].err + e2 * fa[1].err) + 1e-13;
+        mf_check_recordf(c, fabs(flux[0] - e2 * flux[1]) / bound,
+                         "column (%d, %d): alpha %.6g, eta %.6g: transmitted flux %.12g out, eta^2 x %.12g in", j, k, alpha,
+                         eta0, flux[0], e2 * flux[1]);
+    }
 }
 
 const mf_check_def mf_energy_dielectric_checks[] = {
@@ -1171,6 +1352,10 @@ const mf_check_def mf_energy_dielectric_checks[] = {
      1.0, 0, diel_reference},
     {"diel_furnace", "|1 - (E_r + E_t + compensation lobe)| / its propagated bound (white furnace), 3 x 3 columns x 2 sides", 1.0, 0,
      diel_furnace},
+    {"diel_split",
+     "the compensation split into reflection and transmission (Kulla-Conty): |1 - (E_r + E_t + both lobes)| and "
+     "|T(eta) - eta^2 T(1/eta)| of the transmitted flux / their propagated bounds, 3 x 3 columns x 2 sides",
+     1.0, 0, diel_split},
 };
 const int mf_energy_dielectric_nchecks = MF_ENERGY_DIELECTRIC_NCHECKS;
 
@@ -1184,5 +1369,8 @@ mf_status mf_energy_dielectric_gate(const mf_table *t, double storage_u, mf_chec
         return MF_ERR_DOMAIN;
     g.t = t;
     g.u = storage_u > 0.0 ? storage_u : 0.0;
+    struct diel_avgs avgs;
+    memset(&avgs, 0, sizeof avgs);
+    g.avgs = &avgs;
     return mf_check_run_defs(mf_energy_dielectric_checks, mf_energy_dielectric_nchecks, &g, 0, checks, cap, count);
 }

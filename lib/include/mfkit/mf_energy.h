@@ -70,11 +70,39 @@ double mf_energy_favg_schlick(double f0);
 /* F_avg of the exact conductor (mf_fresnel_conductor) by adaptive Gauss-Kronrod to 1e-13. */
 mf_status mf_energy_favg_conductor(double eta, double k, mf_result *out) MF_WARN_UNUSED;
 
+/* F_avg of the exact dielectric (mf_fresnel_dielectric), 2 integral_0^1 F(mu) mu dmu, eta = n_other /
+ * n_view > 0: closed form below the critical cosine, adaptive Gauss-Kronrod to 1e-14 above it (mapped
+ * smooth at its square-root kink).  The two sides obey 1 - F_avg(1/eta) = (1 - F_avg(eta)) / eta^2
+ * (tested; docs/math.md). */
+mf_status mf_energy_favg_dielectric(double eta, mf_result *out) MF_WARN_UNUSED;
+
+/* Splitting the dielectric compensation lobe [Kulla and Conty 2017, the dielectric part of their
+ * energy compensation]: of the missing energy 1 - E(mu_o) seen from the side where the relative index
+ * is eta (eta = n_other / n_view), the fraction *t is transmitted and 1 - *t reflected:
+ *   t = (1 - F_avg(eta)) A / (A + B),  A = eta^2 (1 - F_avg(1/eta)) (1 - E_avg(1/eta)),
+ *   B = (1 - F_avg(eta)) (1 - E_avg(eta)).
+ * eavg = E_avg(eta) (this side, total E = E_r + E_t), eavg_inv = E_avg(1/eta) (the other side), favg,
+ * favg_inv = F_avg(eta), F_avg(1/eta).  The other side's fraction is the same call with the pairs
+ * swapped and 1/eta; the two make the compensation's transmitted flux balance,
+ * t (1 - E_avg(eta)) = eta^2 t' (1 - E_avg(1/eta)) (reciprocity: docs/math.md).  With the dielectric
+ * table: on the outside eta = the z axis' eta, eavg = E_avg, eavg_inv = E_avg_inv; inside the pairs
+ * swap.  The lobes, per unit projected solid angle of wi, in the table's energy units (E_t is the
+ * transmitted energy; a BTDF in radiance units scales the transmission as its own E_t):
+ *   reflection    mf_energy_kc_lobe(1 - t, E(mu_o), E(mu_i), E_avg)        (wi on the view's side)
+ *   transmission  mf_energy_kc_lobe(t, E(mu_o), E_inv(mu_i), E_avg_inv)    (wi on the other side)
+ * with E = E_r + E_t; each integrates over its hemisphere to its weight times 1 - E(mu_o).
+ * MF_ERR_DOMAIN for arguments out of range. */
+mf_status mf_energy_dielectric_ms_split(double eta, double eavg, double eavg_inv, double favg, double favg_inv,
+                                        double *t) MF_WARN_UNUSED;
+/* weight max(0, 1 - e_o) max(0, 1 - e_i) / (pi (1 - eavg_i)) [Kulla and Conty 2017] (the clamps: an E
+ * that rounds above 1 gives 0, not a negative lobe); 0 if eavg_i >= 1. */
+double mf_energy_kc_lobe(double weight, double e_o, double e_i, double eavg_i);
+
 /* ---- the dielectric table (kind "dielectric") ---- */
 #define MF_DIELECTRIC_DEFAULT_SIZE 16
 #define MF_DIELECTRIC_NFIELDS 14
 extern const char *const mf_dielectric_table_fields[MF_DIELECTRIC_NFIELDS];
-#define MF_ENERGY_DIELECTRIC_NCHECKS 4
+#define MF_ENERGY_DIELECTRIC_NCHECKS 5
 /* eta of the z axis: 1 + 2 z^2 (Cycles' z = sqrt((eta - 1) / 2)). */
 double mf_energy_dielectric_eta(double z);
 /* E_avg = 2 integral_0^1 (E_r + E_t)(mu) mu dmu by global-adaptive Gauss-Kronrod to 1e-8 (at most
@@ -138,7 +166,10 @@ mf_status mf_energy_kulla_conty_gate(const mf_table *t, double storage_u, mf_che
 /* dielectric: finite; E_r, E_t >= 0, E_r + E_t <= 1 at every texel; E_r and E_t against
  * mf_energy_dielectric_reference at every mu of the 4 corner (alpha, eta) columns and one mu of every
  * other column, both sides; the white furnace of the compensation lobe on E = E_r + E_t (as
- * kulla_conty's) at every mu of 3 x 3 (alpha, eta) columns, both sides. */
+ * kulla_conty's) at every mu of 3 x 3 (alpha, eta) columns, both sides (diel_furnace); at the same
+ * texels the furnace of E_r + E_t + the lobe split into reflection and transmission
+ * (mf_energy_dielectric_ms_split), and per column the reciprocity of the transmitted flux,
+ * T(eta) = eta^2 T(1/eta), single scattering plus lobe (diel_split). */
 mf_status mf_energy_dielectric_gate(const mf_table *t, double storage_u, mf_check *checks, int cap,
                                     int *count) MF_WARN_UNUSED;
 /* The gates' check tables (for the registry). */

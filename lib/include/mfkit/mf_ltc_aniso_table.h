@@ -84,7 +84,10 @@ int mf_ltc_aniso_layout_ok(const mf_table *t, char *why, size_t why_size);
  *   ltca_energy         magnitude <= 1 + 1e-5, 0 <= fresnel <= magnitude + 1e-5       (model-free)
  *   ltca_normalisation  |integral of the LTC of minv over the sphere - 1| <= 1e-6: the sum of its
  *                       exact integrals over the 8 octant triangles of a rotated frame (model-free)
- *   ltca_inverse        max |minv m - I| / (|minv|_F |m|_F) <= 1e-12: minv is m's inverse      (model-free)
+ *   ltca_inverse        minv is m's inverse: per element, |(minv m - I)_ab| <= 1e-12 |minv|_F |m|_F
+ *                       + (s + 8 eps) (|minv| |m|)_ab, s = (2 u + u^2) / (1 - u)^2 the storage rounding
+ *                       of the product's terms (u = unit_roundoff below; 0 in memory); the measure is
+ *                       the worst ratio, bound 1                                       (model-free)
  *   ltca_smooth_jump    |difference| of m00..m22 and magnitude between neighbours along each of
  *                       the 4 axes, and across phi = 0 and phi = pi/2 to the mirrored neighbour
  *                       (S M S of the entry beside the boundary), <= 16 h (h = 1/(n - 1): the
@@ -110,9 +113,9 @@ typedef struct mf_ltc_aniso_gate_options {
     /* outputs (may be NULL): polygon error aggregates in units of the albedo */
     double *mean_abs_out, *mean_rel_out;
     double unit_roundoff;   /* storage rounding of the table's values (mf_table_storage_roundoff: 2^-24
-                             * for a float32 file; default 0, a table in memory): ltca_inverse's bound
-                             * adds 3 u (each product term of minv m carries <= 2 u, and the sum is
-                             * bounded by |minv| |m| by Cauchy-Schwarz) */
+                             * for a float32 file, 2^-11 for halves; default 0, a table in memory):
+                             * ltca_inverse allows each term of minv m its storage rounding, 2 u + u^2
+                             * relative (see above) */
 } mf_ltc_aniso_gate_options;
 
 #define MF_LTC_ANISO_GATE_MAX_CHECKS 9
