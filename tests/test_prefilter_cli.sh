@@ -83,4 +83,16 @@ expect_error "views 0x2 refused" 2 "\-\-views" prefilter "$map" --views 0x2 --ou
 expect_error "missing map" 3 "nonexistent" prefilter "$tmp/nonexistent.png" --out "$tmp/bad2"
 ok '[ ! -e "$tmp/bad1" ] && [ ! -e "$tmp/bad2" ] && [ ! -e "$tmp/bad3" ] && [ ! -e "$tmp/bad4" ] && [ ! -e "$tmp/bad5" ]' "refusals create no output directory: $(ls "$tmp")"
 
+# progress on a terminal (`script` from util-linux gives the command a tty): the specular table's lobe
+# count reaches its total (2 x 2 views: 4 x (64 + 16 + 4 + 1) = 340 lobes) and the assembly is
+# announced; --quiet, and a stderr that is not a terminal (the runs above), show none
+script -qec "\"$mfkit\" prefilter \"$map\" --base ggx --views 2x2 --threads 2 --out \"$tmp/pg\"" /dev/null \
+    >"$tmp/pg.log" 2>&1; rc=$?
+ok '[ $rc -eq 0 ] && tr "\r" "\n" <"$tmp/pg.log" | grep -q "specular: 340 lobes fitted" &&
+    grep -q "specular: assembling the levels" "$tmp/pg.log"' "progress on a terminal (rc=$rc): $(tr '\r' '\n' <"$tmp/pg.log" | head -3)"
+script -qec "\"$mfkit\" prefilter \"$map\" --base ggx --views 2x2 --threads 2 --quiet --out \"$tmp/pq\"" /dev/null \
+    >"$tmp/pq.log" 2>&1; rc=$?
+ok '[ $rc -eq 0 ] && ! grep -q "lobes fitted\|assembling" "$tmp/pq.log"' "--quiet: no progress (rc=$rc)"
+ok '! grep -q "lobes fitted\|assembling" "$tmp/pf.log"' "no progress when stderr is not a terminal"
+
 finish test_prefilter_cli

@@ -51,7 +51,7 @@ static const char *const k_green_names[] = {"up", "down", NULL};
 static const char *const k_encoding_names[] = {"auto", "unorm", "raw", NULL};
 static const char *const k_base_names[] = {"ggx", "lambert", "both", NULL};
 
-enum { P_OUT, P_ROUGHNESS, P_VIEWS, P_GREEN, P_ENCODING, P_TOLERANCE, P_THREADS, P_SAMPLES, P_TILE, P_MAX_TILES, P_BASE, P_NO_KEEP_ALBEDO, P_FORCE, P_DIFFUSE_VIEWS, P_NOPTS };
+enum { P_OUT, P_ROUGHNESS, P_VIEWS, P_GREEN, P_ENCODING, P_TOLERANCE, P_THREADS, P_SAMPLES, P_TILE, P_MAX_TILES, P_BASE, P_NO_KEEP_ALBEDO, P_FORCE, P_DIFFUSE_VIEWS, P_QUIET, P_NOPTS };
 static const cli_opt k_opts[P_NOPTS] = {
     {.name = "--out", .metavar = "DIR", .kind = CLI_OPT_STRING, .required = 1,
      .help = "output directory (created if missing)"},
@@ -83,6 +83,7 @@ static const cli_opt k_opts[P_NOPTS] = {
      .help = "write the tables even when the gate fails (the manifest marks them: \"forced\": true)"},
     {.name = "--diffuse-views", .metavar = "TxP", .kind = CLI_OPT_STRING, .def = "2x4",
      .help = "the diffuse table's views with --base both (--views sets the specular table's)"},
+    {.name = "--quiet", .kind = CLI_OPT_FLAG, .help = "no progress on stderr (shown only on a terminal anyway)"},
 };
 static const cli_command k_prefilter_cmd = {
     .name = "prefilter",
@@ -134,6 +135,7 @@ int cli_prefilter(int argc, char **argv)
 #include <errno.h>
 #include <pthread.h>
 #include <signal.h>
+#include <stdatomic.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -369,6 +371,45 @@ typedef struct {
     int rc, stopped;
     pthread_mutex_t lock;
 } pf_queue;
+
+/* Progress of the fits on a terminal (rank 0; --quiet: none): lobes stored by this process against
+ * the lobes of the tiles it has to fit, at most twice a second. */
+static int g_pf_quiet;
+typedef struct {
+    int show;
+    const char *what;
+    long total;
+    _Atomic long done, last_ms;
+    struct timespec t0;
+} pf_progress;
+
+static long pf_ms_since(const struct timespec *t0)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (long)(t.tv_sec - t0->tv_sec) * 1000 + (long)((t.tv_nsec - t0->tv_nsec) / 1000000);
+}
+
+static void pf_progress_cb(void *user, long n)
+{
+    pf_progress *p = user;
+    long d = atomic_fetch_add(&p->done, n) + n, ms = pf_ms_since(&p->t0), last = atomic_load(&p->last_ms);
+    if (ms - last < 500 || !atomic_compare_exchange_strong(&p->last_ms, &last, ms))
+        return;
+    double pct = p->total > 0 ? 100.0 * (double)d / (double)p->total : 100.0;
+    fprintf(stderr, "\rmfkit prefilter: %s: %ld of %ld lobes (%.0f%%), %.0f s ", p->what, d, p->total,
+            pct > 100.0 ? 100.0 : pct, 1e-3 * (double)ms);
+}
+
+/* The lobes of tile t: every level of it, nv views each (a level narrower than the tile's 2^l
+ * texels holds one texel along that axis). */
+static long pf_tile_lobes(const pf_tile *t, long nv)
+{
+    long n = 0;
+    for (int l = t->first; l <= t->last; ++l)
+        n += (long)((t->w >> l) > 0 ? t->w >> l : 1) * ((t->h >> l) > 0 ? t->h >> l : 1) * nv;
+    return n;
+}
 
 static void *pf_worker(void *arg)
 {
@@ -1196,6 +1237,7 @@ static int pf_main(int argc, char **argv, const pf_mpi *mpi)
     long max_tiles = v[P_MAX_TILES].set ? (long)v[P_MAX_TILES].i : -1;
     int green_down = v[P_GREEN].set && v[P_GREEN].i == 1;
     int encoding = v[P_ENCODING].set ? (int)v[P_ENCODING].i : 0;
+    g_pf_quiet = v[P_QUIET].set;
     mf_prefilter_options o[2];
     char sub[4200];
     snprintf(sub, sizeof sub, "%s/diffuse", dir);
@@ -1404,10 +1446,22 @@ static int pf_table(const cli_val *v, const char *input, const char *dir, int la
     int workers = q.ntodo < o.threads ? (int)(q.ntodo > 0 ? q.ntodo : 1) : o.threads;
     q.o = o;
     q.o.threads = o.threads / workers > 0 ? o.threads / workers : 1;
+    pf_progress prog = {.show = !g_pf_quiet && mpi->rank == 0 && isatty(fileno(stderr)),
+                        .what = lambert ? "diffuse" : "specular"};
+    atomic_init(&prog.done, 0);
+    atomic_init(&prog.last_ms, -1000);
+    clock_gettime(CLOCK_MONOTONIC, &prog.t0);
+    for (long i = 0; i < q.ntodo; ++i)
+        prog.total += pf_tile_lobes(&tiles[q.todo[i]], (long)o.n_theta * o.n_phi);
+    if (prog.show)
+        q.o.progress = pf_progress_cb, q.o.progress_user = &prog;
     if (stopped_a)
         q.stopped = stopped_a;
     else if (!rc)
         pf_run_queue(&q, workers);
+    if (prog.show && atomic_load(&prog.done) > 0)
+        fprintf(stderr, "\rmfkit prefilter: %s: %ld lobes fitted in %.0f s%*s\n", prog.what, atomic_load(&prog.done),
+                1e-3 * (double)pf_ms_since(&prog.t0), 20, "");
     clock_gettime(CLOCK_MONOTONIC, &t1);
     sigaction(SIGINT, &old_int, NULL);
     sigaction(SIGTERM, &old_term, NULL);
@@ -1437,6 +1491,8 @@ static int pf_table(const cli_val *v, const char *input, const char *dir, int la
         goto done;
     if (mpi->rank == 0) {
         pf_assembly A = {dir, input, W, H, nl, T, &o, plans, ntiles, mpi->size, lambert, v[P_FORCE].set, normals};
+        if (prog.show)
+            fprintf(stderr, "mfkit prefilter: %s: assembling the levels and running the gate\n", prog.what);
         rc = pf_assemble(&A, secs, resumed);
         if (!rc && !keep_work)
             pf_remove_work(dir);

@@ -963,6 +963,8 @@ static void store(pjob *j, mf_prefilter_level *lv, size_t idx, const double m[9]
     lv->iterations += e->iterations;
     lv->lobes++;
     pthread_mutex_unlock(&j->lock);
+    if (j->o->progress)
+        j->o->progress(j->o->progress_user, 1);
 }
 
 /* The early accept of the continuity rule: the solve from the previous azimuth's lobe is taken alone,

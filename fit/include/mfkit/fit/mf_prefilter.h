@@ -209,6 +209,11 @@ typedef struct mf_prefilter_options {
                             fails on such tables at grazing views: measured up to 0.17 lost) */
     double cluster_cell; /* slope-space cell of the normal clusters, in units of alpha (GGX) or of
                             MF_PREFILTER_CLUSTER_LAMBERT (default MF_PREFILTER_CLUSTER_CELL); 0: none */
+    /* Progress: called with 1 after each stored lobe, from the worker threads (so it must be thread
+     * safe), outside the library's locks; NULL (the default): not called.  It does not change the
+     * result. */
+    void (*progress)(void *user, long lobes);
+    void *progress_user;
 } mf_prefilter_options;
 
 void mf_prefilter_options_default(mf_prefilter_options *o);
