@@ -56,23 +56,42 @@ static inline double mf_prefilter_lookup_value_(const mf_prefilter_lookup_levels
     return q < 9 ? (double)l->m[9 * idx + (size_t)q] : (double)l->mag[idx];
 }
 
+/* The filter's cell: the view corners (elevation row a0, azimuth column p0) and MIP levels (l0) around
+ * (theta, phi, lod) with their linear weights, shared by both lookups. */
+typedef struct {
+    int a0, p0, l0;
+    double wa[2], wp[2], wl[2];
+} mf_prefilter_lookup_cell_;
+
+static inline mf_prefilter_lookup_cell_ mf_prefilter_lookup_cell(const mf_prefilter_lookup_levels *s, double lod,
+                                                                 double theta, double phi)
+{
+    const int nt = s->n_theta, np = s->n_phi;
+    mf_prefilter_lookup_cell_ c;
+    double ft = fmin(fmax(theta / MF_PREFILTER_THETA_MAX, 0.0), 1.0) * (nt - 1);
+    c.a0 = (int)ft < nt - 2 ? (int)ft : nt - 2;
+    double fp = fmod(phi / (2.0 * MF_PI) * np, (double)np);
+    if (fp < 0)
+        fp += np;
+    c.p0 = (int)fp < np - 1 ? (int)fp : np - 1;
+    c.wa[0] = 1.0 - (ft - c.a0), c.wa[1] = ft - c.a0;
+    c.wp[0] = 1.0 - (fp - c.p0), c.wp[1] = fp - c.p0;
+    double l = fmin(fmax(lod - 1.0, 0.0), s->nlev - 1.0);
+    c.l0 = (int)floor(l);
+    c.wl[0] = 1.0 - (l - c.l0), c.wl[1] = l - c.l0;
+    return c;
+}
+
 /* The lookup at texture coordinates (u, v) (u along the columns, v down the rows; any real: REPEAT),
  * level of detail lod (log2 of the footprint in level-0 texels), view (theta, phi) in the tangent
  * frame.  M[9] and *magnitude receive the filtered entries. */
 static inline void mf_prefilter_lookup(const mf_prefilter_lookup_levels *s, double u, double v, double lod, double theta,
                                        double phi, double M[9], double *magnitude)
 {
-    const int nt = s->n_theta, np = s->n_phi;
-    double ft = fmin(fmax(theta / MF_PREFILTER_THETA_MAX, 0.0), 1.0) * (nt - 1);
-    int a0 = (int)ft < nt - 2 ? (int)ft : nt - 2;
-    double fp = fmod(phi / (2.0 * MF_PI) * np, (double)np);
-    if (fp < 0)
-        fp += np;
-    int p0 = (int)fp < np - 1 ? (int)fp : np - 1;
-    double wa[2] = {1.0 - (ft - a0), ft - a0}, wp[2] = {1.0 - (fp - p0), fp - p0};
-    double l = fmin(fmax(lod - 1.0, 0.0), s->nlev - 1.0);
-    int l0 = (int)floor(l);
-    double wl[2] = {1.0 - (l - l0), l - l0};
+    const int np = s->n_phi;
+    const mf_prefilter_lookup_cell_ c = mf_prefilter_lookup_cell(s, lod, theta, phi);
+    const int a0 = c.a0, p0 = c.p0, l0 = c.l0;
+    const double *wa = c.wa, *wp = c.wp, *wl = c.wl;
     double acc[10] = {0};
     for (int il = 0; il < 2; ++il) {
         int lv = l0 + il < s->nlev ? l0 + il : s->nlev - 1;
@@ -116,17 +135,10 @@ static inline int mf_prefilter_lookup_taps(const mf_prefilter_lookup_levels *s, 
                                            double theta, double phi, int split, double M[32 * 9], double mag[32],
                                            double w[32])
 {
-    const int nt = s->n_theta, np = s->n_phi;
-    double ft = fmin(fmax(theta / MF_PREFILTER_THETA_MAX, 0.0), 1.0) * (nt - 1);
-    int a0 = (int)ft < nt - 2 ? (int)ft : nt - 2;
-    double fp = fmod(phi / (2.0 * MF_PI) * np, (double)np);
-    if (fp < 0)
-        fp += np;
-    int p0 = (int)fp < np - 1 ? (int)fp : np - 1;
-    double wa[2] = {1.0 - (ft - a0), ft - a0}, wp[2] = {1.0 - (fp - p0), fp - p0};
-    double l = fmin(fmax(lod - 1.0, 0.0), s->nlev - 1.0);
-    int l0 = (int)floor(l);
-    double wl[2] = {1.0 - (l - l0), l - l0};
+    const int np = s->n_phi;
+    const mf_prefilter_lookup_cell_ c = mf_prefilter_lookup_cell(s, lod, theta, phi);
+    const int a0 = c.a0, p0 = c.p0, l0 = c.l0;
+    const double *wa = c.wa, *wp = c.wp, *wl = c.wl;
     int nx = split & MF_PREFILTER_SPLIT_TEXEL ? 4 : 1, nl = split & MF_PREFILTER_SPLIT_LEVEL ? 2 : 1,
         nv = split & MF_PREFILTER_SPLIT_VIEW ? 4 : 1, ntap = nx * nl * nv;
     double acc[32 * 10] = {0};
