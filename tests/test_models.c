@@ -839,6 +839,37 @@ static void test_charlie_small_roughness(void)
     }
     mf_table_free(&t);
 
+    /* ltc_albedo_mc on a table read from a float32 file: texel (0, 0) at alpha 1e-4, 51.37 deg (albedo
+     * ~4e-257, the 32 x 32 table's texel (0, 19)) stores its magnitude rounded to float32, i.e. 0.
+     * The check allows the storage floor 2^-149 (GATE_MAG_STORAGE); without it the texel read 5.7
+     * on charlie's exported 32 x 32 table.  The other texels hold the model's albedo in float32. */
+    CHECK(mf_ltc_table_create_range(&t, 2, 0.0, 1.0, 2, 19.0 / 31.0, 1.0) == MF_OK);
+    for (int iu = 0; iu < 2; ++iu)
+        for (int ir = 0; ir < 2; ++ir) {
+            double ct = mf_ltc_table_cos_theta(&t, iu), *r = t.data + (size_t)(ir + 2 * iu) * (size_t)t.nfields;
+            mf_brdf_params p = mf_brdf_params_iso(mf_ltc_table_alpha(&t, ir));
+            mf_result q;
+            CHECK(mf_model_albedo(m, &p, mf_ltc_gate_view(ct), MF_MODEL_ALBEDO_N, &q) == MF_OK);
+            r[MF_LTC_F_MINV_00] = r[MF_LTC_F_MINV_22] = 1.0;
+            r[MF_LTC_F_MINV_20] = r[MF_LTC_F_MINV_02] = 0.0;
+            r[MF_LTC_F_MAGNITUDE] = (double)(float)q.val;
+            if (ir == 0 && iu == 0)
+                CHECK(q.val > 0.0 && q.val < 1e-250 && r[MF_LTC_F_MAGNITUDE] == 0.0); /* the case */
+        }
+    n = 0;
+    gs = mf_ltc_gate_run(&t, m, &o, checks, MF_LTC_GATE_MAX_CHECKS, &n);
+    CHECK(gs == MF_OK || gs == MF_ERR_CHECK_FAILED); /* identity matrices fail the polygon checks */
+    mc = NULL;
+    for (int i = 0; i < n; ++i)
+        if (!strcmp(checks[i].name, "ltc_albedo_mc"))
+            mc = &checks[i];
+    CHECK(mc != NULL);
+    if (mc) {
+        printf("  charlie 2 x 2 in float32, ltc_albedo_mc worst %.3g at %s\n", mc->worst, mc->worst_at);
+        CHECK(mc->worst <= 1.0);
+    }
+    mf_table_free(&t);
+
     /* The gate's Monte Carlo at a texel of albedo ~4e-257 (charlie, alpha 1e-4, 51.37 deg: the
      * 32 x 32 table's texel (0, 19)): the weights' squares underflowed to 0, se was 0, and the
      * sampling noise alone (the four estimates below lie 17 % under to 13 % over the rule) read as

@@ -20,6 +20,12 @@
 #define GATE_Z 5.5                  /* two-sided 3.8e-8 per test: < 1e-3 family-wise up to 26000 tests */
 #define GATE_QUAD_N 64              /* albedo quadrature: 64 x 64 (error from 32 x 32) */
 #define GATE_REL_FLOOR 0.01         /* relative polygon errors against max(MC, 0.01 albedo) */
+/* The storage floor of a magnitude: the smallest float32 denormal, 2^-149.  A table exported as
+ * float32 stores a magnitude below it as 0 (charlie's albedo at alpha 1e-4 reaches 1e-257), so a
+ * file's magnitude, and the shading it scales (an LTC integral is at most 1), may be off by this
+ * much in absolute terms; the Monte Carlo checks allow it.  It changes no comparison of a value
+ * above about 1e-29 in double precision. */
+#define GATE_MAG_STORAGE 0x1p-149
 /* The smoothness checks' shape weight: min(1, m / GATE_SHAPE_MAG), m the largest magnitude of the
  * texels compared (smooth_weight): the absolute magnitude error ltc_albedo_quad accepts below its
  * floor (GATE_ALBEDO_REL x GATE_ALBEDO_FLOOR = 1e-5) */
@@ -891,7 +897,7 @@ static int polygon_pass(gate_ctx *g)
                     ent = NAN; /* a NaN case (mf_check.h); the aggregates count it as infinite */
                 if (!isfinite(d))
                     d = INFINITY;
-                double ex = d - GATE_Z * se[i];
+                double ex = d - GATE_Z * se[i] - GATE_MAG_STORAGE;
                 ex = (ex > 0.0 ? ex : 0.0) / albedo;
                 ent += ex;
                 double rden = mc[i] > GATE_REL_FLOOR * albedo ? mc[i] : GATE_REL_FLOOR * albedo;
@@ -942,7 +948,7 @@ static void check_albedo_mc(void *ctx, mf_check *c)
         /* magnitude and MC albedo both exactly 0 (a sheen texel whose albedo underflows, every
          * sample's weight 0, se 0): exact agreement, 0, not 0/0; any other NaN stays NaN */
         double diff = fabs(e->mag - e->alb.val);
-        record_entry(c, e, diff == 0.0 ? 0.0 : diff / (GATE_Z * e->alb.err + 1e-3 * fabs(e->mag)),
+        record_entry(c, e, diff == 0.0 ? 0.0 : diff / (GATE_Z * e->alb.err + 1e-3 * fabs(e->mag) + GATE_MAG_STORAGE),
                      e->mag > e->alb.val ? "magnitude above MC" : "magnitude below MC");
     }
 }
@@ -950,7 +956,7 @@ static void check_albedo_mc(void *ctx, mf_check *c)
 static void check_polygon_mean(void *ctx, mf_check *c)
 {
     gate_ctx *g = ctx;
-    snprintf(c->what, sizeof c->what, "mean over polygons of max(0, |LTC - MC| - 5.5 se) / albedo (budget %g)",
+    snprintf(c->what, sizeof c->what, "mean over polygons of max(0, |LTC - MC| - 5.5 se - 2^-149) / albedo (budget %g)",
              g->budget_mean);
     c->bound = g->budget_mean;
     if (!need_polygon_pass(g, c))
@@ -967,7 +973,7 @@ static void check_polygon_mean(void *ctx, mf_check *c)
 static void check_polygon_entry(void *ctx, mf_check *c)
 {
     gate_ctx *g = ctx;
-    snprintf(c->what, sizeof c->what, "worst texel's mean of max(0, |LTC - MC| - 5.5 se) / albedo (budget %g)",
+    snprintf(c->what, sizeof c->what, "worst texel's mean of max(0, |LTC - MC| - 5.5 se - 2^-149) / albedo (budget %g)",
              g->budget_entry);
     c->bound = g->budget_entry;
     if (!need_polygon_pass(g, c))
@@ -993,11 +999,11 @@ const mf_check_def mf_ltc_gate_check_table[MF_LTC_GATE_MAX_CHECKS] = {
     {"ltc_albedo_quad",
      "max (|magnitude - albedo| - 4 err) / max(albedo, 0.01), albedo by 64x64 Gauss-Legendre quadrature",
      GATE_ALBEDO_REL, 1, check_albedo_quad},
-    {"ltc_albedo_mc", "max |magnitude - MC albedo| / (5.5 se + 1e-3 magnitude), independent MC", 1.0, 1,
+    {"ltc_albedo_mc", "max |magnitude - MC albedo| / (5.5 se + 1e-3 magnitude + 2^-149), independent MC", 1.0, 1,
      check_albedo_mc},
-    {"ltc_polygon_mean", "mean over polygons of max(0, |LTC - MC| - 5.5 se) / albedo", MF_LTC_GATE_POLYGON_MEAN, 1,
+    {"ltc_polygon_mean", "mean over polygons of max(0, |LTC - MC| - 5.5 se - 2^-149) / albedo", MF_LTC_GATE_POLYGON_MEAN, 1,
      check_polygon_mean},
-    {"ltc_polygon_entry", "worst texel's mean of max(0, |LTC - MC| - 5.5 se) / albedo", MF_LTC_GATE_POLYGON_ENTRY, 1,
+    {"ltc_polygon_entry", "worst texel's mean of max(0, |LTC - MC| - 5.5 se - 2^-149) / albedo", MF_LTC_GATE_POLYGON_ENTRY, 1,
      check_polygon_entry},
 };
 #define N_GATE_CHECKS MF_LTC_GATE_MAX_CHECKS
