@@ -82,6 +82,19 @@ static inline mf_prefilter_lookup_cell_ mf_prefilter_lookup_cell(const mf_prefil
     return c;
 }
 
+/* The bilinear filter's texels of one level at (u, v): the lower corner (x0, y0), wrapped (REPEAT),
+ * and the weights along x and y. */
+static inline void mf_prefilter_lookup_texels_(const mf_prefilter_lookup_level *L1, double u, double v, int *x0, int *y0,
+                                               double wx[2], double wy[2])
+{
+    double xf = u * L1->w - 0.5, yf = v * L1->h - 0.5;
+    double x0f = floor(xf), y0f = floor(yf);
+    *x0 = mf_prefilter_lookup_wrap_((int)fmod(x0f, (double)L1->w), L1->w);
+    *y0 = mf_prefilter_lookup_wrap_((int)fmod(y0f, (double)L1->h), L1->h);
+    wx[0] = 1.0 - (xf - x0f), wx[1] = xf - x0f;
+    wy[0] = 1.0 - (yf - y0f), wy[1] = yf - y0f;
+}
+
 /* The lookup at texture coordinates (u, v) (u along the columns, v down the rows; any real: REPEAT),
  * level of detail lod (log2 of the footprint in level-0 texels), view (theta, phi) in the tangent
  * frame.  M[9] and *magnitude receive the filtered entries. */
@@ -96,11 +109,9 @@ static inline void mf_prefilter_lookup(const mf_prefilter_lookup_levels *s, doub
     for (int il = 0; il < 2; ++il) {
         int lv = l0 + il < s->nlev ? l0 + il : s->nlev - 1;
         const mf_prefilter_lookup_level *L1 = &s->lev[lv];
-        double xf = u * L1->w - 0.5, yf = v * L1->h - 0.5;
-        double x0f = floor(xf), y0f = floor(yf);
-        int x0 = mf_prefilter_lookup_wrap_((int)fmod(x0f, (double)L1->w), L1->w);
-        int y0 = mf_prefilter_lookup_wrap_((int)fmod(y0f, (double)L1->h), L1->h);
-        double wx[2] = {1.0 - (xf - x0f), xf - x0f}, wy[2] = {1.0 - (yf - y0f), yf - y0f};
+        int x0, y0;
+        double wx[2], wy[2];
+        mf_prefilter_lookup_texels_(L1, u, v, &x0, &y0, wx, wy);
         for (int ia = 0; ia < 2; ++ia)
             for (int ip = 0; ip < 2; ++ip)
                 for (int iy = 0; iy < 2; ++iy)
@@ -147,11 +158,9 @@ static inline int mf_prefilter_lookup_taps(const mf_prefilter_lookup_levels *s, 
     for (int il = 0; il < 2; ++il) {
         int lv = l0 + il < s->nlev ? l0 + il : s->nlev - 1;
         const mf_prefilter_lookup_level *L1 = &s->lev[lv];
-        double xf = u * L1->w - 0.5, yf = v * L1->h - 0.5;
-        double x0f = floor(xf), y0f = floor(yf);
-        int x0 = mf_prefilter_lookup_wrap_((int)fmod(x0f, (double)L1->w), L1->w);
-        int y0 = mf_prefilter_lookup_wrap_((int)fmod(y0f, (double)L1->h), L1->h);
-        double wx[2] = {1.0 - (xf - x0f), xf - x0f}, wy[2] = {1.0 - (yf - y0f), yf - y0f};
+        int x0, y0;
+        double wx[2], wy[2];
+        mf_prefilter_lookup_texels_(L1, u, v, &x0, &y0, wx, wy);
         for (int ia = 0; ia < 2; ++ia)
             for (int ip = 0; ip < 2; ++ip)
                 for (int iy = 0; iy < 2; ++iy)
