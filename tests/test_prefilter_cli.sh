@@ -95,4 +95,12 @@ script -qec "\"$mfkit\" prefilter \"$map\" --base ggx --views 2x2 --threads 2 --
 ok '[ $rc -eq 0 ] && ! grep -q "lobes fitted\|assembling" "$tmp/pq.log"' "--quiet: no progress (rc=$rc)"
 ok '! grep -q "lobes fitted\|assembling" "$tmp/pf.log"' "no progress when stderr is not a terminal"
 
+# --seed: the default is 1 (the same files as the progress run above, which had no --seed); another
+# seed scrambles the fits' directions otherwise, so the lobes change, and the manifest records it
+"$mfkit" prefilter "$map" --base ggx --views 2x2 --threads 2 --seed 1 --out "$tmp/s1" >/dev/null 2>&1; rc1=$?
+"$mfkit" prefilter "$map" --base ggx --views 2x2 --threads 2 --seed 2 --out "$tmp/s2" >/dev/null 2>&1; rc2=$?
+ok '[ $rc1 -eq 0 ] && [ $rc2 -eq 0 ] && cmp -s "$tmp/s1/ltc_mip1.npy" "$tmp/pg/ltc_mip1.npy" &&
+    ! cmp -s "$tmp/s2/ltc_mip1.npy" "$tmp/s1/ltc_mip1.npy" && grep -q "\"seed\": 2" "$tmp/s2/prefilter.json"' \
+   "--seed 1 is the default, --seed 2 changes the lobes and is recorded (rc $rc1, $rc2)"
+
 finish test_prefilter_cli

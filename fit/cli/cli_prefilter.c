@@ -51,7 +51,7 @@ static const char *const k_green_names[] = {"up", "down", NULL};
 static const char *const k_encoding_names[] = {"auto", "unorm", "raw", NULL};
 static const char *const k_base_names[] = {"ggx", "lambert", "both", NULL};
 
-enum { P_OUT, P_ROUGHNESS, P_VIEWS, P_GREEN, P_ENCODING, P_TOLERANCE, P_THREADS, P_SAMPLES, P_TILE, P_MAX_TILES, P_BASE, P_NO_KEEP_ALBEDO, P_FORCE, P_DIFFUSE_VIEWS, P_QUIET, P_NOPTS };
+enum { P_OUT, P_ROUGHNESS, P_VIEWS, P_GREEN, P_ENCODING, P_TOLERANCE, P_THREADS, P_SAMPLES, P_TILE, P_MAX_TILES, P_BASE, P_NO_KEEP_ALBEDO, P_FORCE, P_DIFFUSE_VIEWS, P_QUIET, P_SEED, P_NOPTS };
 static const cli_opt k_opts[P_NOPTS] = {
     {.name = "--out", .metavar = "DIR", .kind = CLI_OPT_STRING, .required = 1,
      .help = "output directory (created if missing)"},
@@ -84,6 +84,8 @@ static const cli_opt k_opts[P_NOPTS] = {
     {.name = "--diffuse-views", .metavar = "TxP", .kind = CLI_OPT_STRING, .def = "2x4",
      .help = "the diffuse table's views with --base both (--views sets the specular table's)"},
     {.name = "--quiet", .kind = CLI_OPT_FLAG, .help = "no progress on stderr (shown only on a terminal anyway)"},
+    {.name = "--seed", .metavar = "S", .kind = CLI_OPT_U64, .def = "1",
+     .help = "scramble of the fits' direction sets (both tables; recorded in the manifest and checkpoint)"},
 };
 static const cli_command k_prefilter_cmd = {
     .name = "prefilter",
@@ -1254,6 +1256,8 @@ static int pf_main(int argc, char **argv, const pf_mpi *mpi)
             o[t].threads = (int)v[P_THREADS].i;
         if (v[P_SAMPLES].set)
             o[t].samples = (int)v[P_SAMPLES].i;
+        if (v[P_SEED].set)
+            o[t].seed = v[P_SEED].u;
         int rc = 0;
         if (base == 2 && lambert && v[P_DIFFUSE_VIEWS].set)
             rc = pf_views("--diffuse-views", v[P_DIFFUSE_VIEWS].s, &o[t]);
