@@ -340,6 +340,25 @@ int mf_prefilter_gate_stream_next(const mf_prefilter_gate_stream *s, int *level_
     return 0;
 }
 
+/* The error e = lobe shading - reference of light k at the two texel neighbours of (r, col) along
+ * axis ax (0: x, 1: y; periodic: normal maps tile), view (a, b): e0 before, e1 after, and (if a1)
+ * the albedo of the one after.  0 when the axis has fewer than 2 texels. */
+static int gs_texel_neighbour_errors(const gs_level *L, int r, int col, int ax, int a, int b, int k, int nt, int np,
+                                     double *e0, double *e1, double *a1)
+{
+    if ((ax ? L->h : L->w) < 2)
+        return 0;
+    int r1 = (r + (ax == 1)) % L->h, c1 = (col + (ax == 0)) % L->w;
+    int r0 = (r - (ax == 1) + L->h) % L->h, c0 = (col - (ax == 0) + L->w) % L->w;
+    size_t i1 = ((size_t)c1 * nt + a) * np + b, i0 = ((size_t)c0 * nt + a) * np + b;
+    int s1 = gs_slot(r1), s0 = gs_slot(r0);
+    *e1 = L->S[s1][GATE_NLIGHTS * i1 + k] - L->R[s1][GATE_NLIGHTS * i1 + k];
+    *e0 = L->S[s0][GATE_NLIGHTS * i0 + k] - L->R[s0][GATE_NLIGHTS * i0 + k];
+    if (a1)
+        *a1 = L->A[s1][i1];
+    return 1;
+}
+
 /* The texel checks of row r of level index li (its rows r - 1 and r + 1, periodic for the
  * reference's, held). */
 static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r)
@@ -378,15 +397,9 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r)
             {
                 double lt = INFINITY, lv = INFINITY;
                 for (int ax = 0; ax < 2; ++ax) {
-                    int n_ax = ax ? L->h : L->w;
-                    if (n_ax < 2)
-                        continue;
-                    int r1 = (r + (ax == 1)) % L->h, c1 = (col + (ax == 0)) % L->w;
-                    int r0 = (r - (ax == 1) + L->h) % L->h, c0 = (col - (ax == 0) + L->w) % L->w;
-                    size_t i1 = ((size_t)c1 * nt + a) * np + b, i0 = ((size_t)c0 * nt + a) * np + b;
-                    int s1 = gs_slot(r1), s0 = gs_slot(r0);
-                    lt = fmin(lt, gate_lone(ex, L->S[s0][GATE_NLIGHTS * i0 + k] - L->R[s0][GATE_NLIGHTS * i0 + k],
-                                            L->S[s1][GATE_NLIGHTS * i1 + k] - L->R[s1][GATE_NLIGHTS * i1 + k]) / alb);
+                    double e0, e1;
+                    if (gs_texel_neighbour_errors(L, r, col, ax, a, b, k, nt, np, &e0, &e1, NULL))
+                        lt = fmin(lt, gate_lone(ex, e0, e1) / alb);
                 }
                 size_t vq[2][2] = {{i - np, i + np}, {i - b + (b + np - 1) % np, i - b + (b + 1) % np}};
                 for (int ax = 0; ax < 2; ++ax)
@@ -402,16 +415,10 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r)
             }
             /* the error's lone texel (periodic neighbours: normal maps tile) */
             for (int ax = 0; ax < 2; ++ax) {
-                int n_ax = ax ? L->h : L->w;
-                if (n_ax < 2)
+                double e0, e1, a1;
+                if (!gs_texel_neighbour_errors(L, r, col, ax, a, b, k, nt, np, &e0, &e1, &a1))
                     continue;
-                int r1 = (r + (ax == 1)) % L->h, c1 = (col + (ax == 0)) % L->w;
-                int r0 = (r - (ax == 1) + L->h) % L->h, c0 = (col - (ax == 0) + L->w) % L->w;
-                size_t i1 = ((size_t)c1 * nt + a) * np + b, i0 = ((size_t)c0 * nt + a) * np + b;
-                int s1 = gs_slot(r1), s0 = gs_slot(r0);
-                double e1 = L->S[s1][GATE_NLIGHTS * i1 + k] - L->R[s1][GATE_NLIGHTS * i1 + k];
-                double e0 = L->S[s0][GATE_NLIGHTS * i0 + k] - L->R[s0][GATE_NLIGHTS * i0 + k];
-                double ab = fmax(alb, L->A[s1][i1]);
+                double ab = fmax(alb, a1);
                 gs_max(fabs(ex - e1) / ab, &g->worst_jump_texel);
                 gs_worst(gate_lone(ex, e0, e1) / alb, gr ? &g->worst_cont_grazing : &g->worst_cont_texel,
                          gr ? &s->k_cont_grazing : &s->k_cont_texel, gs_key(li, e, k, 2 + ax),
