@@ -1,7 +1,7 @@
 /*
  * mf_walk.h -- true multiple scattering on the Smith microsurface: the random walk of Heitz, Hanika,
  * d'Eon and Dachsbacher 2016 ("Multiple-scattering microfacet BSDFs with the Smith model", ACM TOG
- * 35(4)), for a conductor and a rough dielectric interface, GGX only (isotropic or anisotropic).
+ * 35(4)), for a conductor and a rough dielectric interface, GGX or Beckmann (isotropic or anisotropic).
  *
  * The model (their uncorrelated-height Smith microsurface read as a volume of microflakes):
  *  - a ray at height h in direction w is free up to height h' with probability given by the height
@@ -15,7 +15,9 @@
  *  - at a hit the micro-normal is drawn from the visible normals of -w, D_{-w}(m) proportional to
  *    max(0, -w.m) D(m), also for -w below the horizon (a ray going up that hits the surface sees
  *    back-facing slopes): GGX by the spherical-cap construction [Dupuy and Benyoub 2023, "Sampling
- *    visible GGX normals with spherical caps"], valid for every view direction;
+ *    visible GGX normals with spherical caps"], valid for every view direction; Beckmann by inverting
+ *    the CDF of the slope along the view [Heitz and d'Eon 2014], and for views more than 45 degrees
+ *    below the horizon (in the stretched space) by rejection from a Gamma(2) density (mf_walk.c);
  *  - a conductor reflects and multiplies its weight by F(-w.m); a dielectric reflects with
  *    probability F(-w.m) (exact Fresnel, total internal reflection included) and otherwise refracts
  *    and continues on the other side, where the microsurface is the same one seen upside down
@@ -50,16 +52,21 @@ typedef struct mf_walk_path {
     mf_vec3 w;   /* the exit direction in the view's frame (z up on the view's side) */
 } mf_walk_path;
 
-/* Visible GGX normals of the direction v (any unit v with |v.z| < 1 or v.z = 1; v.z = -1 has no
+/* Visible normals of the direction v (any unit v with |v.z| < 1 or v.z = 1; v.z = -1 has no
  * visible normal): m with density max(0, v.m) D(m) / A(v), A(v) = integral max(0, v.m) D(m) dm
- * (= v.z (1 + Lambda(v)) for v.z > 0, -v.z Lambda(-v) for v.z < 0) [Dupuy and Benyoub 2023: in the
- * space stretched to alpha = 1, m = normalize(v + c) with c uniform on the spherical cap
- * c.z >= -v.z].  u in [0, 1)^2.  NaNs for invalid arguments. */
+ * (= v.z (1 + Lambda(v)) for v.z > 0, -v.z Lambda(-v) for v.z < 0).  GGX [Dupuy and Benyoub 2023: in
+ * the space stretched to alpha = 1, m = normalize(v + c) with c uniform on the spherical cap
+ * c.z >= -v.z]; Beckmann [Heitz and d'Eon 2014: the slope along the view by inverting its CDF, the
+ * other Gaussian], only where the stretched view is at most 45 degrees below the horizon (NaNs
+ * beyond: use mf_walk_sample_vndf_rng).  u in [0, 1)^2.  NaNs for invalid arguments. */
 mf_vec3 mf_walk_sample_vndf(mf_ndf ndf, mf_vec3 v, const double u[2]);
+/* The same for every v, drawing from rng: two numbers, then (Beckmann, views beyond 45 degrees below)
+ * three per rejection trial.  GGX: the same normal as mf_walk_sample_vndf with the two numbers. */
+mf_vec3 mf_walk_sample_vndf_rng(mf_ndf ndf, mf_vec3 v, mf_pcg32 *rng);
 
 /* One walk on a conductor: ray -wo (wo.z > 0, unit) from above the surface; weight[c] receives the
  * product over the bounces of mf_fresnel_eval(f[c], -w.m), c < nf (nf <= MF_WALK_MAX_CHANNELS;
- * F = 1 for MF_FRESNEL_NONE).  The path does not depend on f.  GGX only (MF_ERR_DOMAIN otherwise);
+ * F = 1 for MF_FRESNEL_NONE).  The path does not depend on f.  GGX or Beckmann (MF_ERR_DOMAIN otherwise);
  * max_bounces >= 1. */
 mf_status mf_walk_conductor(mf_ndf ndf, mf_vec3 wo, const mf_fresnel *f, int nf, int max_bounces, mf_pcg32 *rng,
                             mf_walk_path *out, double *weight) MF_WARN_UNUSED;
@@ -75,8 +82,8 @@ mf_status mf_walk_dielectric(mf_ndf ndf, double eta, mf_vec3 wo, int max_bounces
  * err = |Q(n) - Q(n / 2)|, n even >= 2):
  *   r1 = integral D_wo(m) F(wo.m) (1 + Lambda_o) / (1 + Lambda_o + Lambda_i) dm   (wi reflected, up)
  *   t1 = integral D_wo(m) (1 - F) (1 + Lambda_o) B(1 + Lambda_o, 1 + Lambda(-wt)) dm  (wt refracted, down)
- * eta as in mf_walk_dielectric; eta = 0 means a conductor with F = 1 (t1 = 0).  GGX, isotropic or not
- * (wo in the x-z plane). */
+ * eta as in mf_walk_dielectric; eta = 0 means a conductor with F = 1 (t1 = 0).  GGX or Beckmann,
+ * isotropic or not (wo in the x-z plane). */
 mf_status mf_walk_single(mf_ndf ndf, double mu, double eta, int n, mf_result *r1, mf_result *t1) MF_WARN_UNUSED;
 
 #ifdef __cplusplus
