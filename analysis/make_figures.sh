@@ -84,7 +84,7 @@ fi
 echo "== study_sh_irradiance"
 "$bin/study_sh_irradiance" --thetas 30 --phis 60 --out "$data/sh_irradiance.csv"
 # study_random_walk: mfkit's energy compensation against the random walk on the Smith microsurface
-# (about 45 s of CPU at the default 200000 walks per cell; docs/math.md)
+# (about 2 min of CPU at the default 100000 walks per cell, GGX and Beckmann; docs/math.md)
 [ -x "$bin/study_random_walk" ] ||
     { echo "make_figures.sh: $bin/study_random_walk not built (cmake --build $build)" >&2; exit 1; }
 echo "== study_random_walk"

@@ -13,7 +13,7 @@ still plot; unknown CSV files are listed and skipped.  Known data (docs/figures.
   study_sh_irradiance  sh_irradiance_error.*, sh_irradiance_curves.*
   study_half         half_shading_error.* (LTC tables), half_rounding_error.*
   study_ltc_texels   ltc_texel_errors.*, and ltc_texel_pair.* with a SECOND_TABLE
-  study_random_walk  random_walk.*
+  study_random_walk  random_walk.* (GGX), random_walk_beckmann.*
 
 Each figure carries a caption line naming its data file and the file's provenance header
 (command, mfkit version, seed, date); paths in it are shown relative to the source tree, and files
@@ -956,8 +956,18 @@ KINDS = ((("light_half_side", "scene", "distance", "mean_lod", "method", "mse", 
 
 
 def plot_random_walk(d, out_dir, made):
-    """analysis/study_random_walk: mfkit's energy compensation against the random walk on the Smith
-    microsurface (GGX).  Top: the dielectric compensation's transmitted fraction t (mf_energy_dielectric_ms_split;
+    """analysis/study_random_walk: one figure per NDF in the file (random_walk for GGX, random_walk_beckmann)."""
+    if "ndf" not in d.cols:
+        _plot_random_walk_one(d, out_dir, made, "random_walk", "GGX")
+        return
+    for ndf, name in (("ggx", "random_walk"), ("beckmann", "random_walk_beckmann")):
+        sel = d["ndf"] == ndf
+        if np.any(sel):
+            _plot_random_walk_one(d.where(sel), out_dir, made, name, "GGX" if ndf == "ggx" else "Beckmann")
+
+
+def _plot_random_walk_one(d, out_dir, made, name, ndf_label):
+    """mfkit's energy compensation against the random walk on the Smith microsurface, one NDF.  Top: the dielectric compensation's transmitted fraction t (mf_energy_dielectric_ms_split;
     lines) against the fraction of the walk's own multiple scattering that is transmitted (markers, +-2 s.e.),
     cosine averages over the view, outside (eta > 1) and inside (eta < 1); bottom left: the compensated
     transmitted albedo against the walk's, T_kc - T_walk (cosine averages); bottom middle: its single-scattering
@@ -1040,7 +1050,7 @@ def plot_random_walk(d, out_dir, made):
     ax.set_title("conductor: Kulla-Conty with F_avg against the walk", fontsize=9)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=6)
-    finish(fig, d, out_dir, "random_walk", made, note="GGX, random walk of Heitz et al. 2016; error bars 2 s.e.")
+    finish(fig, d, out_dir, name, made, note="%s, random walk of Heitz et al. 2016; error bars 2 s.e." % ndf_label)
 
 
 KINDS = KINDS + ((("case", "channel", "alpha", "eta", "mu", "avg", "R_walk", "T_walk", "t_split", "t_walk"),

@@ -1,9 +1,13 @@
 /*
  * study_random_walk.c -- mfkit's energy compensation against true multiple scattering: the random walk
- * on the Smith microsurface (mf_walk.h) [Heitz, Hanika, d'Eon and Dachsbacher 2016], GGX (issue 14).
+ * on the Smith microsurface (mf_walk.h) [Heitz, Hanika, d'Eon and Dachsbacher 2016], GGX and Beckmann
+ * (issue 14).
  *
- *   build-dir/analysis/study_random_walk [--walks N] [--seed S] [--alphas LIST] [--mus LIST]
- *                                        [--etas LIST] [--out FILE]
+ *   build-dir/analysis/study_random_walk [--walks N] [--seed S] [--ndf ggx|beckmann|ggx,beckmann]
+ *                                        [--alphas LIST] [--mus LIST] [--etas LIST] [--out FILE]
+ *
+ * Every row starts with its NDF (ndf: ggx or beckmann; default both, GGX first, so GGX's numbers do not
+ * depend on whether Beckmann follows).
  *
  * Dielectric (rows case=dielectric), for every alpha, eta of --etas and 1/eta, and view mu of --mus
  * plus the cosine average (avg = 1, mu = nan: views drawn with density 2 mu):
@@ -179,17 +183,19 @@ static int conductor_avg_ef(mf_ndf ndf, mf_fresnel f, int ng, double *ef)
 
 static void usage(FILE *f)
 {
-    fprintf(f, "usage: study_random_walk [--walks N] [--seed S] [--alphas LIST] [--mus LIST] [--etas LIST] "
-               "[--out FILE]\n"
+    fprintf(f, "usage: study_random_walk [--walks N] [--seed S] [--ndf ggx|beckmann|ggx,beckmann] [--alphas LIST]\n"
+               "                         [--mus LIST] [--etas LIST] [--out FILE]\n"
                "  mfkit's dielectric and conductor energy compensation against the random walk on the Smith\n"
-               "  microsurface (GGX); LIST is comma-separated: alphas in [0.01, 1], mus in (0, 1], etas in\n"
-               "  (1, 3] (each with its inverse).  Defaults: --walks 200000 --seed 1 --alphas 0.1,0.2,0.3,0.5,0.7,1\n"
+               "  microsurface (default both NDFs); LIST is comma-separated: alphas in [0.01, 1], mus in (0, 1], etas in\n"
+               "  (1, 3] (each with its inverse).  Defaults: --walks 100000 --seed 1 --alphas 0.1,0.2,0.3,0.5,0.7,1\n"
                "  --mus 0.1,0.3,0.5,0.7,0.9 --etas 1.1,1.33,1.5,2 --out notebooks_data/random_walk.csv\n");
 }
 
 int main(int argc, char **argv)
 {
-    long walks = 200000;
+    long walks = 100000;
+    mf_ndf_type ndf_types[2] = {MF_NDF_GGX, MF_NDF_BECKMANN};
+    int n_ndf = 2;
     unsigned long long seed = 1;
     double alphas[MAXLIST] = {0.1, 0.2, 0.3, 0.5, 0.7, 1.0}, mus[MAXLIST] = {0.1, 0.3, 0.5, 0.7, 0.9},
            etas_in[MAXLIST] = {1.1, 1.33, 1.5, 2.0};
@@ -234,6 +240,16 @@ int main(int argc, char **argv)
                 fprintf(stderr, "study_random_walk: --etas %s: expected a comma-separated list in [1.001, 3]\n", v);
                 return 2;
             }
+        } else if (!strcmp(a, "--ndf")) {
+            if (!strcmp(v, "ggx") || !strcmp(v, "beckmann")) {
+                n_ndf = 1;
+                ndf_types[0] = !strcmp(v, "ggx") ? MF_NDF_GGX : MF_NDF_BECKMANN;
+            } else if (!strcmp(v, "ggx,beckmann")) {
+                n_ndf = 2;
+            } else {
+                fprintf(stderr, "study_random_walk: --ndf %s: expected ggx, beckmann or ggx,beckmann\n", v);
+                return 2;
+            }
         } else if (!strcmp(a, "--out")) {
             out_path = v;
         } else {
@@ -252,7 +268,7 @@ int main(int argc, char **argv)
     char seed_s[32];
     snprintf(seed_s, sizeof seed_s, "%llu", seed);
     study_write_header(f, "study_random_walk", argc, argv, seed_s);
-    fprintf(f, "case,channel,alpha,eta,mu,avg,walks,R_walk,R_walk_se,T_walk,T_walk_se,R1_walk,T1_walk,T1_beta,"
+    fprintf(f, "ndf,case,channel,alpha,eta,mu,avg,walks,R_walk,R_walk_se,T_walk,T_walk_se,R1_walk,T1_walk,T1_beta,"
                "T1_beta_err,E_r,E_t,E_avg,E_avg_inv,F_avg,F_avg_inv,t_split,R_kc,T_kc,err_R,err_T,err_T_z,dT_single,"
                "dT_ms,t_walk,t_walk_se,dt,dt_z\n");
 
@@ -267,19 +283,24 @@ int main(int argc, char **argv)
     static double sum_t[MAXLIST][MAXLIST], sum_tw[MAXLIST][MAXLIST], sum_tw_se[MAXLIST][MAXLIST],
         sum_ew[MAXLIST][MAXLIST], sum_favg[MAXLIST][MAXLIST];
 
+    for (int nd = 0; nd < n_ndf && !status; ++nd) {
+    const mf_ndf_type type = ndf_types[nd];
+    const char *ndf_name = mf_ndf_type_name(type);
+    worst_z = worst_dt = worst_err = 0.0;
+    worst_z_at[0] = worst_dt_at[0] = worst_err_at[0] = '\0';
     /* ---- dielectric ---- */
-    printf("dielectric (GGX): T_kc - T_walk and t - t_walk (z = in walk standard errors)\n");
+    printf("== %s\ndielectric: T_kc - T_walk and t - t_walk (z = in walk standard errors)\n", ndf_name);
     printf("%6s %7s %6s %9s %9s %7s %9s %9s %9s %7s\n", "alpha", "eta", "mu", "T_walk", "err_T", "z", "dT_single",
            "t", "t_walk", "dt_z");
     for (int a = 0; a < na && !status; ++a)
         for (int e = 0; e < 2 * ne && !status; ++e) {
             double eta = e < ne ? etas_in[e] : 1.0 / etas_in[e - ne];
-            mf_ndf ndf = mf_ndf_make(MF_NDF_GGX, alphas[a], alphas[a]);
+            mf_ndf ndf = mf_ndf_make(type, alphas[a], alphas[a]);
             double c0 = cpu_now();
             mf_result eavg, eavg_inv, favg, favg_inv;
             double t = NAN;
-            if (mf_energy_dielectric_eavg(MF_NDF_GGX, MF_G2_JOINT, alphas[a], eta, &eavg) != MF_OK
-                || mf_energy_dielectric_eavg(MF_NDF_GGX, MF_G2_JOINT, alphas[a], 1.0 / eta, &eavg_inv) != MF_OK
+            if (mf_energy_dielectric_eavg(type, MF_G2_JOINT, alphas[a], eta, &eavg) != MF_OK
+                || mf_energy_dielectric_eavg(type, MF_G2_JOINT, alphas[a], 1.0 / eta, &eavg_inv) != MF_OK
                 || mf_energy_favg_dielectric(eta, &favg) != MF_OK || mf_energy_favg_dielectric(1.0 / eta, &favg_inv) != MF_OK
                 || mf_energy_dielectric_ms_split(eta, eavg.val, eavg_inv.val, favg.val, favg_inv.val, &t) != MF_OK) {
                 fprintf(stderr, "study_random_walk: mfkit's energy terms failed at alpha %g, eta %g\n", alphas[a], eta);
@@ -337,9 +358,9 @@ int main(int argc, char **argv)
                 double dT_single = avg ? NAN : et - t1b;
                 double dT_ms = t * (1.0 - E) - (s.down - s.down1) / n;
                 fprintf(f,
-                        "dielectric,none,%.17g,%.17g,%.17g,%d,%ld,%.10g,%.4g,%.10g,%.4g,%.10g,%.10g,%.10g,%.4g,%.12g,%.12g,"
+                        "%s,dielectric,none,%.17g,%.17g,%.17g,%d,%ld,%.10g,%.4g,%.10g,%.4g,%.10g,%.10g,%.10g,%.4g,%.12g,%.12g,"
                         "%.12g,%.12g,%.12g,%.12g,%.12g,%.10g,%.10g,%.6g,%.6g,%.4g,%.6g,%.6g,%.10g,%.4g,%.6g,%.4g\n",
-                        alphas[a], eta, avg ? NAN : mu, avg, s.n, R_w, se, T_w, se, s.up1 / n, s.down1 / n, t1b, t1b_err,
+                        ndf_name, alphas[a], eta, avg ? NAN : mu, avg, s.n, R_w, se, T_w, se, s.up1 / n, s.down1 / n, t1b, t1b_err,
                         er, et, eavg.val, eavg_inv.val, favg.val, favg_inv.val, t, R_kc, T_kc, R_kc - R_w, err_T, z,
                         dT_single, dT_ms, tw, tw_se, dt, dtz);
                 if (avg || m == 0 || m == nm - 1)
@@ -395,12 +416,12 @@ int main(int argc, char **argv)
                         {MF_FRESNEL_CONDUCTOR, 0.0, 1.442, 1.603}};
     double worst_cz = 0.0;
     char worst_cz_at[128] = "";
-    printf("conductor (GGX): R_kc - R_walk per channel (F = 1 and gold-like)\n");
+    printf("conductor: R_kc - R_walk per channel (F = 1 and gold-like)\n");
     for (int a = 0; a < na && !status; ++a) {
-        mf_ndf ndf = mf_ndf_make(MF_NDF_GGX, alphas[a], alphas[a]);
+        mf_ndf ndf = mf_ndf_make(type, alphas[a], alphas[a]);
         double c0 = cpu_now();
         mf_result eavg, favg[4];
-        if (mf_energy_eavg(MF_NDF_GGX, MF_G2_JOINT, alphas[a], &eavg) != MF_OK)
+        if (mf_energy_eavg(type, MF_G2_JOINT, alphas[a], &eavg) != MF_OK)
             status = 1;
         favg[0].val = 1.0;
         for (int c = 1; c < 4 && !status; ++c)
@@ -468,9 +489,9 @@ int main(int argc, char **argv)
                 /* F = 1: the walk's albedo is exactly 1 (se 0); z is left nan there */
                 double z = se > 0.0 ? err / se : NAN;
                 fprintf(f,
-                        "conductor,%s,%.17g,nan,%.17g,%d,%ld,%.10g,%.4g,0,0,%.10g,0,nan,nan,%.12g,0,%.12g,nan,%.12g,nan,nan,"
+                        "%s,conductor,%s,%.17g,nan,%.17g,%d,%ld,%.10g,%.4g,0,0,%.10g,0,nan,nan,%.12g,0,%.12g,nan,%.12g,nan,nan,"
                         "%.10g,0,%.6g,nan,%.4g,nan,nan,nan,nan,nan,nan\n",
-                        chan[c], alphas[a], avg ? NAN : mu, avg, walks, mean, se, s1[c] / n, ef[c], eavg.val, fa, r_kc,
+                        ndf_name, chan[c], alphas[a], avg ? NAN : mu, avg, walks, mean, se, s1[c] / n, ef[c], eavg.val, fa, r_kc,
                         err, z);
                 if (isfinite(z) && fabs(z) > fabs(worst_cz)) {
                     worst_cz = z;
@@ -483,6 +504,15 @@ int main(int argc, char **argv)
             }
         }
     }
+    if (!status)
+        printf("dielectric: largest |err_T| %.5f at %s\n", worst_err, worst_err_at);
+    if (!status)
+        printf("dielectric: largest |z| %.1f at %s\n", worst_z, worst_z_at);
+    if (!status)
+        printf("dielectric: largest |t - t_walk| (cosine averages) %.4f at %s\n", worst_dt, worst_dt_at);
+    if (!status)
+        printf("conductor: largest |z| %.1f at %s\n", worst_cz, worst_cz_at);
+    }
     if (status) {
         mf_io_atomic_abort(&out);
         return 1;
@@ -492,10 +522,6 @@ int main(int argc, char **argv)
         return 3;
     }
     printf("walks stopped at %d bounces: %ld\n", MAX_BOUNCES, total_stopped);
-    printf("dielectric: largest |err_T| %.5f at %s\n", worst_err, worst_err_at);
-    printf("dielectric: largest |z| %.1f at %s\n", worst_z, worst_z_at);
-    printf("dielectric: largest |t - t_walk| (cosine averages) %.4f at %s\n", worst_dt, worst_dt_at);
-    printf("conductor: largest |z| %.1f at %s\n", worst_cz, worst_cz_at);
     printf("CPU: walks %.1f s, mfkit's energy terms %.1f s, single-scattering quadrature %.1f s; total %.1f s "
            "(wall %.0f s)\n",
            t_walk, t_mfkit, t_single, cpu_now() - cpu0, (double)time(NULL) - wall0);

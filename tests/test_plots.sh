@@ -131,8 +131,9 @@ rwc=$tmp/data/random_walk.csv
     fail "study_random_walk: $(tail -n 3 "$tmp/rw.txt")"
 head -n 1 "$rwc" | grep -Eq '^# command=study_random_walk .*, mfkit=[0-9.]+, seed=1, date=[0-9]{4}-[0-9]{2}-[0-9]{2}T' ||
     fail "random_walk.csv: bad provenance header: $(head -n 1 "$rwc")"
-# 2 alphas x 2 etas x (1 view + the average) dielectric rows, 2 alphas x 2 x 4 channels conductor rows
-[ "$(tail -n +3 "$rwc" | wc -l)" -eq 24 ] || fail "random_walk.csv: expected 24 rows, got $(tail -n +3 "$rwc" | wc -l)"
+# per NDF (GGX and Beckmann): 2 alphas x 2 etas x (1 view + the average) dielectric rows, 2 alphas x 2 x 4
+# channels conductor rows
+[ "$(tail -n +3 "$rwc" | wc -l)" -eq 48 ] || fail "random_walk.csv: expected 48 rows, got $(tail -n +3 "$rwc" | wc -l)"
 awk -F, 'NR == 2 { for (i = 1; i <= NF; ++i) col[$i] = i }
          NR > 2 && $col["case"] == "conductor" && $col["channel"] == "none" && $col["R_walk"] + 0 != 1 { print "F = 1 albedo " $col["R_walk"]; bad = 1 }
          NR > 2 && $col["case"] == "dielectric" && ($col["R_walk"] + $col["T_walk"] < 1 - 1e-9 || $col["R_walk"] + $col["T_walk"] > 1 + 1e-9) { print "R + T at row " NR; bad = 1 }
@@ -151,7 +152,7 @@ gzip -dc "$lights_csv" >"$tmp/data/prefilter_scenes_lights.csv" || fail "$lights
 MFKIT_FIGURE_GATES=$tmp/gates.tsv "$py" "$src/analysis/plot.py" "$tmp/data" "$tmp/fig" || fail "plot.py exited with $?"
 [ ! -e "$tmp/fig/prefilter_scenes.png" ] || fail "prefilter_scenes_lights.csv was drawn as prefilter_scenes"
 for name in prefilter_scenes_lights smith_walter_g1 smith_gaussian_lambda furnace_microfacet furnace_curves furnace_models \
-    proxy_alpha_error proxy_alpha_curves ggx_rect_error leadr_grid_convergence $ltc_figs $sh_figs $half_figs random_walk; do
+    proxy_alpha_error proxy_alpha_curves ggx_rect_error leadr_grid_convergence $ltc_figs $sh_figs $half_figs random_walk random_walk_beckmann; do
     for ext in png pdf; do
         [ -s "$tmp/fig/$name.$ext" ] || fail "missing or empty $name.$ext"
     done
