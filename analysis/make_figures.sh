@@ -83,6 +83,12 @@ fi
     { echo "make_figures.sh: $bin/study_sh_irradiance not built (cmake --build $build)" >&2; exit 1; }
 echo "== study_sh_irradiance"
 "$bin/study_sh_irradiance" --thetas 30 --phis 60 --out "$data/sh_irradiance.csv"
+# study_random_walk: mfkit's energy compensation against the random walk on the Smith microsurface
+# (about 2 min of CPU at the default 100000 walks per cell, GGX and Beckmann; docs/math.md)
+[ -x "$bin/study_random_walk" ] ||
+    { echo "make_figures.sh: $bin/study_random_walk not built (cmake --build $build)" >&2; exit 1; }
+echo "== study_random_walk"
+"$bin/study_random_walk" --out "$data/random_walk.csv" | tail -n 6
 half_tables=("$ref")
 [ -n "${MFKIT_LTC_TABLE:-}" ] && half_tables+=("$MFKIT_LTC_TABLE")
 if [ -x "$bin/study_half" ]; then

@@ -13,6 +13,7 @@ still plot; unknown CSV files are listed and skipped.  Known data (docs/figures.
   study_sh_irradiance  sh_irradiance_error.*, sh_irradiance_curves.*
   study_half         half_shading_error.* (LTC tables), half_rounding_error.*
   study_ltc_texels   ltc_texel_errors.*, and ltc_texel_pair.* with a SECOND_TABLE
+  study_random_walk  random_walk.* (GGX), random_walk_beckmann.*
 
 Each figure carries a caption line naming its data file and the file's provenance header
 (command, mfkit version, seed, date); paths in it are shown relative to the source tree, and files
@@ -952,6 +953,108 @@ def plot_prefilter_scenes_lights(d, out_dir, made):
 # before prefilter_scenes' entry: this file has its columns too (and light_half_side)
 KINDS = ((("light_half_side", "scene", "distance", "mean_lod", "method", "mse", "rel_rms"),
           plot_prefilter_scenes_lights),) + KINDS
+
+
+def plot_random_walk(d, out_dir, made):
+    """analysis/study_random_walk: one figure per NDF in the file (random_walk for GGX, random_walk_beckmann)."""
+    if "ndf" not in d.cols:
+        _plot_random_walk_one(d, out_dir, made, "random_walk", "GGX")
+        return
+    for ndf, name in (("ggx", "random_walk"), ("beckmann", "random_walk_beckmann")):
+        sel = d["ndf"] == ndf
+        if np.any(sel):
+            _plot_random_walk_one(d.where(sel), out_dir, made, name, "GGX" if ndf == "ggx" else "Beckmann")
+
+
+def _plot_random_walk_one(d, out_dir, made, name, ndf_label):
+    """mfkit's energy compensation against the random walk on the Smith microsurface, one NDF.  Top: the dielectric compensation's transmitted fraction t (mf_energy_dielectric_ms_split;
+    lines) against the fraction of the walk's own multiple scattering that is transmitted (markers, +-2 s.e.),
+    cosine averages over the view, outside (eta > 1) and inside (eta < 1); bottom left: the compensated
+    transmitted albedo against the walk's, T_kc - T_walk (cosine averages); bottom middle: its single-scattering
+    part E_t - T1_beta (mfkit's transmission G2 against the walk's Beta-function G2) per view; bottom right:
+    the conductor's Kulla-Conty albedo with Fresnel against the walk's (gold-like channels)."""
+    diel = d["case"] == "dielectric"
+    cond = d["case"] == "conductor"
+    avg = d["avg"] == 1
+    etas = np.unique(d["eta"][diel])
+    outside = sorted(e for e in etas if e > 1)
+    fig, axes = new_figure(3, 2, width=4.6, height=3.8)
+    for j, (side, title) in enumerate(((lambda e: e, "outside (eta = n_other / n_view > 1)"),
+                                       (lambda e: 1.0 / e, "inside (eta < 1)"))):
+        ax = axes[0][j]
+        for k, e0 in enumerate(outside):
+            e = side(e0)
+            sel = diel & avg & np.isclose(d["eta"], e)
+            order = np.argsort(d["alpha"][sel])
+            al = d["alpha"][sel][order]
+            colour = "C%d" % k
+            ax.plot(al, d["t_split"][sel][order], "-", color=colour, label="mfkit t, eta %.3g" % e)
+            ax.errorbar(al, d["t_walk"][sel][order], yerr=2 * d["t_walk_se"][sel][order], fmt="o", ms=3,
+                        color=colour, label="walk, eta %.3g" % e)
+        ax.set_xlabel("alpha")
+        ax.set_ylabel("transmitted fraction of the multiple scattering")
+        ax.set_title("split, " + title, fontsize=9)
+        ax.set_ylim(0, 1.02)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=6, ncol=2)
+    ax = axes[0][2]
+    for k, e0 in enumerate(outside):
+        for e, style in ((e0, "o-"), (1.0 / e0, "s--")):
+            sel = diel & avg & np.isclose(d["eta"], e)
+            order = np.argsort(d["alpha"][sel])
+            ax.errorbar(d["alpha"][sel][order], d["err_T"][sel][order], yerr=2 * d["T_walk_se"][sel][order],
+                        fmt=style, ms=3, color="C%d" % k, label="eta %.3g" % e)
+    ax.axhline(0, color="0.5", lw=0.8)
+    ax.set_xlabel("alpha")
+    ax.set_ylabel("T_kc - T_walk (cosine average)")
+    ax.set_title("compensated transmission against the walk", fontsize=9)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=6, ncol=2)
+    ax = axes[1][0]
+    alphas = np.unique(d["alpha"][diel])
+    for k, a in enumerate(alphas):
+        for e, style in ((outside[len(outside) // 2], "o-"), (1.0 / outside[len(outside) // 2], "s--")):
+            sel = diel & ~avg & np.isclose(d["eta"], e) & np.isclose(d["alpha"], a)
+            order = np.argsort(d["mu"][sel])
+            ax.plot(d["mu"][sel][order], d["dT_single"][sel][order], style, ms=3, color="C%d" % k,
+                    label="alpha %.2g, eta %.3g" % (a, e))
+    ax.axhline(0, color="0.5", lw=0.8)
+    ax.set_xlabel("mu = cos theta_o")
+    ax.set_ylabel("E_t (mfkit, joint G2) - T1 (walk, Beta G2)")
+    ax.set_title("single-scattering transmission", fontsize=9)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=5, ncol=2)
+    ax = axes[1][1]
+    for k, e0 in enumerate(outside):
+        for e, style in ((e0, "o-"), (1.0 / e0, "s--")):
+            sel = diel & avg & np.isclose(d["eta"], e)
+            order = np.argsort(d["alpha"][sel])
+            ax.plot(d["alpha"][sel][order], d["dT_ms"][sel][order], style, ms=3, color="C%d" % k, label="eta %.3g" % e)
+    ax.axhline(0, color="0.5", lw=0.8)
+    ax.set_xlabel("alpha")
+    ax.set_ylabel("t (1 - E) - T_ms,walk (cosine average)")
+    ax.set_title("compensation's transmitted energy against the walk's", fontsize=9)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=6, ncol=2)
+    ax = axes[1][2]
+    for k, ch in enumerate(("gold_r", "gold_g", "gold_b", "none")):
+        sel = cond & avg & (d["channel"] == ch)
+        if not np.any(sel):
+            continue
+        order = np.argsort(d["alpha"][sel])
+        ax.errorbar(d["alpha"][sel][order], d["err_R"][sel][order], yerr=2 * d["R_walk_se"][sel][order], fmt="o-",
+                    ms=3, color=("C3", "C2", "C0", "0.3")[k], label="F = 1" if ch == "none" else ch)
+    ax.axhline(0, color="0.5", lw=0.8)
+    ax.set_xlabel("alpha")
+    ax.set_ylabel("R_kc - R_walk (cosine average)")
+    ax.set_title("conductor: Kulla-Conty with F_avg against the walk", fontsize=9)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=6)
+    finish(fig, d, out_dir, name, made, note="%s, random walk of Heitz et al. 2016; error bars 2 s.e." % ndf_label)
+
+
+KINDS = KINDS + ((("case", "channel", "alpha", "eta", "mu", "avg", "R_walk", "T_walk", "t_split", "t_walk"),
+                  plot_random_walk),)
 
 
 if __name__ == "__main__":

@@ -120,6 +120,30 @@ d = plot.Data.__new__(plot.Data)
 d.path, d.header = "/x/ltc_texels_ggx.csv", ["command=study_ltc_texels --stride 4 --out /x/ltc_texels.csv /r/a.csv /t/b.exr, mfkit=0.1.0"]
 assert plot._texel_tables(d) == ["/r/a.csv", "/t/b.exr"], plot._texel_tables(d)
 EOF
+# study_random_walk (always built; MFKIT_STUDY_RANDOM_WALK is set by tests/CMakeLists.txt, else it is
+# looked up beside study_smith) on one alpha, one view and one eta pair: provenance header, row count,
+# the walk's exact invariants in the file (F = 1: albedo exactly 1; R + T = 1), the error paths.
+rw_study=${MFKIT_STUDY_RANDOM_WALK:-$(dirname "$smith")/study_random_walk}
+[ -x "$rw_study" ] || fail "study_random_walk not found at $rw_study"
+rwc=$tmp/data/random_walk.csv
+"$rw_study" --help | grep -q '^usage: study_random_walk' || fail "study_random_walk --help"
+"$rw_study" --walks 2000 --alphas 0.5,1 --mus 0.5 --etas 1.5 --out "$rwc" >"$tmp/rw.txt" ||
+    fail "study_random_walk: $(tail -n 3 "$tmp/rw.txt")"
+head -n 1 "$rwc" | grep -Eq '^# command=study_random_walk .*, mfkit=[0-9.]+, seed=1, date=[0-9]{4}-[0-9]{2}-[0-9]{2}T' ||
+    fail "random_walk.csv: bad provenance header: $(head -n 1 "$rwc")"
+# per NDF (GGX and Beckmann): 2 alphas x 2 etas x (1 view + the average) dielectric rows, 2 alphas x 2 x 4
+# channels conductor rows
+[ "$(tail -n +3 "$rwc" | wc -l)" -eq 48 ] || fail "random_walk.csv: expected 48 rows, got $(tail -n +3 "$rwc" | wc -l)"
+awk -F, 'NR == 2 { for (i = 1; i <= NF; ++i) col[$i] = i }
+         NR > 2 && $col["case"] == "conductor" && $col["channel"] == "none" && $col["R_walk"] + 0 != 1 { print "F = 1 albedo " $col["R_walk"]; bad = 1 }
+         NR > 2 && $col["case"] == "dielectric" && ($col["R_walk"] + $col["T_walk"] < 1 - 1e-9 || $col["R_walk"] + $col["T_walk"] > 1 + 1e-9) { print "R + T at row " NR; bad = 1 }
+         NR > 2 && $col["case"] == "dielectric" && !($col["t_split"] >= 0 && $col["t_split"] <= 1) { print "t at row " NR; bad = 1 }
+         END { exit bad }' "$rwc" || fail "random_walk.csv: an invariant of the walk does not hold"
+"$rw_study" --walks 5 --out "$tmp/bad.csv" 2>"$tmp/err.txt"; rc=$?
+[ $rc -eq 2 ] && grep -q -- '--walks' "$tmp/err.txt" || fail "study_random_walk --walks 5: exit $rc, $(cat "$tmp/err.txt")"
+"$rw_study" --walks 100 --alphas 0.5 --mus 0.5 --etas 1.5 --out "$tmp/no_such_dir/x.csv" >/dev/null 2>"$tmp/err.txt"; rc=$?
+[ $rc -eq 3 ] && grep -q 'no_such_dir' "$tmp/err.txt" || fail "study_random_walk, unwritable --out: exit $rc"
+! ls "$tmp"/bad.csv* >/dev/null 2>&1 || fail "study_random_walk left output behind after an error"
 # the committed light-size sweep (analysis/prefilter_scenes_lights.sh): its own figure, not prefilter_scenes'
 # (the file has that figure's columns too)
 lights_csv=$src/notebooks_data/prefilter_scenes_lights.csv.gz
@@ -128,7 +152,7 @@ gzip -dc "$lights_csv" >"$tmp/data/prefilter_scenes_lights.csv" || fail "$lights
 MFKIT_FIGURE_GATES=$tmp/gates.tsv "$py" "$src/analysis/plot.py" "$tmp/data" "$tmp/fig" || fail "plot.py exited with $?"
 [ ! -e "$tmp/fig/prefilter_scenes.png" ] || fail "prefilter_scenes_lights.csv was drawn as prefilter_scenes"
 for name in prefilter_scenes_lights smith_walter_g1 smith_gaussian_lambda furnace_microfacet furnace_curves furnace_models \
-    proxy_alpha_error proxy_alpha_curves ggx_rect_error leadr_grid_convergence $ltc_figs $sh_figs $half_figs; do
+    proxy_alpha_error proxy_alpha_curves ggx_rect_error leadr_grid_convergence $ltc_figs $sh_figs $half_figs random_walk random_walk_beckmann; do
     for ext in png pdf; do
         [ -s "$tmp/fig/$name.$ext" ] || fail "missing or empty $name.$ext"
     done

@@ -29,5 +29,6 @@
 #include "mfkit/mf_model.h"
 #include "mfkit/mf_ltc_gate.h"
 #include "mfkit/mf_table_kind.h"
+#include "mfkit/mf_walk.h"
 
 #endif /* MFKIT_H */
