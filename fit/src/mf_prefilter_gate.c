@@ -12,6 +12,7 @@
 #include "mfkit/mf_polygon.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -186,6 +187,7 @@ static double gate_lone(double x, double y0, double y1)
  * check) of its place, ties going to the smaller key: the order of a whole-level pass, so the
  * result (values and places) does not depend on the streaming order. */
 #define GS_SLOTS 5
+#define GS_MAX_THREADS 256
 
 typedef struct {
     int level, w, h, fed;
@@ -205,7 +207,11 @@ struct mf_prefilter_gate_stream {
     mf_polygon *lights;
     gate_iso *iso;
     uint64_t k_energy, k_level, k_view, k_texel, k_cont_texel, k_cont_view, k_cont_grazing, k_cont_cross;
+    int threads;           /* o->threads (1 without o), at most GS_MAX_THREADS */
+    struct gs_part *parts; /* threads of them, reused for every row */
 };
+
+static size_t gs_part_size(void);
 
 static int gs_slot(int r) { return r < 2 ? r : 2 + r % 3; }
 
@@ -238,7 +244,7 @@ void mf_prefilter_gate_stream_free(mf_prefilter_gate_stream *s)
     for (int l = 0; s->L && l < s->nl; ++l)
         for (int i = 0; i < GS_SLOTS; ++i)
             free(s->L[l].S[i]), free(s->L[l].R[i]), free(s->L[l].A[i]);
-    free(s->L), free(s->lights), free(s->iso), free(s);
+    free(s->L), free(s->lights), free(s->iso), free(s->parts), free(s);
 }
 
 mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int nlevels, const double *normals,
@@ -283,9 +289,11 @@ mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int n
         g->worst_cont_cross = g->worst_cont_cross_texel = 0.0;
         g->where_cont_cross[0] = '\0';
     }
+    s->threads = o && o->threads > 1 ? (o->threads < GS_MAX_THREADS ? o->threads : GS_MAX_THREADS) : 1;
     s->L = calloc((size_t)nlevels, sizeof *s->L);
     s->lights = malloc(sizeof *s->lights * GATE_NLIGHTS * (size_t)nt);
-    mf_status st = s->L && s->lights ? MF_OK : MF_ERR_ALLOC;
+    s->parts = malloc(gs_part_size() * (size_t)s->threads);
+    mf_status st = s->L && s->lights && s->parts ? MF_OK : MF_ERR_ALLOC;
     for (int a = 0; st == MF_OK && a < nt; ++a)
         gate_lights(a / (double)(nt - 1) * MF_PREFILTER_THETA_MAX, s->lights + GATE_NLIGHTS * a);
     for (int l = 0; st == MF_OK && l < nlevels; ++l) {
@@ -360,15 +368,15 @@ static int gs_texel_neighbour_errors(const gs_level *L, int r, int col, int ax, 
 }
 
 /* The texel checks of row r of level index li (its rows r - 1 and r + 1, periodic for the
- * reference's, held). */
-static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r)
+ * reference's, held), over the row's entries [i0, i1). */
+static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i0, size_t i1)
 {
     mf_prefilter_gate *g = s->g;
     const gs_level *L = &s->L[li];
     const int nt = s->nt, np = s->np, nv = s->nv;
     const double *S = L->S[gs_slot(r)], *R = L->R[gs_slot(r)];
     const float *A = L->A[gs_slot(r)];
-    for (size_t i = 0; i < L->rowlen; ++i) {
+    for (size_t i = i0; i < i1; ++i) {
         int col = (int)(i / nv), a = (int)(i / np % nt), b = (int)(i % np);
         size_t e = (size_t)r * L->rowlen + i;
         double alb = fmax(A[i], 1e-6);
@@ -429,20 +437,19 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r)
     }
 }
 
-mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_index, int row, const float *m,
-                                       const float *magnitude, const float *albedo)
+/* The checks of row `row` of level index level_index that need no other row of its level, over its
+ * columns [c0, c1): m, magnitude, albedo are the whole row's arrays. */
+static void gs_row_cols(mf_prefilter_gate_stream *s, int level_index, int row, const float *m, const float *magnitude,
+                        const float *albedo, int c0, int c1)
 {
-    int want_l, want_r;
-    if (!s || !m || !magnitude || !mf_prefilter_gate_stream_next(s, &want_l, &want_r) || level_index != want_l ||
-        row != want_r)
-        return MF_ERR_DOMAIN;
     mf_prefilter_gate *g = s->g;
-    gs_level *L = &s->L[level_index];
+    const gs_level *L = &s->L[level_index];
     const int nt = s->nt, np = s->np, nv = s->nv, sl = gs_slot(row);
     double *S = L->S[sl], *R = L->R[sl];
     float *A = L->A[sl];
+    const size_t i0 = (size_t)c0 * nv, i1 = (size_t)c1 * nv;
     /* energy, nan, the lobes' shading */
-    for (size_t i = 0; i < L->rowlen; ++i) {
+    for (size_t i = i0; i < i1; ++i) {
         int col = (int)(i / nv), a = (int)(i / np % nt), b = (int)(i % np);
         size_t e = (size_t)row * L->rowlen + i;
         const float *mi = m + 9 * i;
@@ -468,9 +475,9 @@ mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_in
     }
     /* the reference: level 1 from its texels, each level above as the mean of its children */
     if (s->ref) {
-        memset(R, 0, sizeof(double) * GATE_NLIGHTS * L->rowlen);
+        memset(R + GATE_NLIGHTS * i0, 0, sizeof(double) * GATE_NLIGHTS * (i1 - i0));
         int cw = level_index ? s->L[level_index - 1].w : s->W, ch = level_index ? s->L[level_index - 1].h : s->H;
-        for (int col = 0; col < L->w; ++col) {
+        for (int col = c0; col < c1; ++col) {
             int nc = 0;
             for (int dy = 0; dy < 2; ++dy)
                 for (int dx = 0; dx < 2; ++dx)
@@ -499,7 +506,7 @@ mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_in
     }
     /* the checks within the row: views, levels; against the reference: the error, its jumps and
      * spikes along the views */
-    for (size_t i = 0; i < L->rowlen; ++i) {
+    for (size_t i = i0; i < i1; ++i) {
         int col = (int)(i / nv), a = (int)(i / np % nt), b = (int)(i % np);
         size_t e = (size_t)row * L->rowlen + i;
         double alb = fmax(A[i], 1e-6);
@@ -559,15 +566,136 @@ mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_in
                          sizeof g->where_cont_view, "phi error spike", L->level, row, col, a, b);
         }
     }
+}
+
+/* ---- the streamed gate on threads ---------------------------------------------------------------
+ * A row's entries are split into column ranges, one per thread: first the checks within the row
+ * (gs_row_cols: a column's views read only that column), then, once the whole row is held, the
+ * texel checks of the rows it completes (gs_texel_checks).  Each part runs on a copy of the stream
+ * whose gate results start cleared (worst 0, keys UINT64_MAX) and are merged into the stream's
+ * afterwards with gs_worst's own rule (the larger value; on a tie, the smaller key) and max and sum
+ * for the rest: that rule is a total order on the candidates, so the result, places included, does
+ * not depend on the number of threads or on the split.  Every value is computed by the same code
+ * from the same operands as on one thread. */
+typedef struct gs_part {
+    mf_prefilter_gate_stream loc; /* the stream, with loc.g = &res and its own keys */
+    mf_prefilter_gate res;
+    int task; /* 0: gs_row_cols; 1: gs_texel_checks of rows[0 .. nrows) */
+    int li, row, nrows, rows[3], c0, c1;
+    const float *m, *magnitude, *albedo;
+} gs_part;
+
+static size_t gs_part_size(void) { return sizeof(gs_part); }
+
+static void gs_part_init(gs_part *p, const mf_prefilter_gate_stream *s)
+{
+    memset(&p->res, 0, sizeof p->res); /* worsts 0, places "", nan_entries 0 */
+    p->loc = *s;
+    p->loc.g = &p->res;
+    p->loc.k_energy = p->loc.k_level = p->loc.k_view = p->loc.k_texel = UINT64_MAX;
+    p->loc.k_cont_texel = p->loc.k_cont_view = p->loc.k_cont_grazing = p->loc.k_cont_cross = UINT64_MAX;
+}
+
+static void *gs_part_run(void *arg)
+{
+    gs_part *p = arg;
+    const size_t nv = (size_t)p->loc.nv;
+    if (p->task == 0)
+        gs_row_cols(&p->loc, p->li, p->row, p->m, p->magnitude, p->albedo, p->c0, p->c1);
+    else
+        for (int q = 0; q < p->nrows; ++q)
+            gs_texel_checks(&p->loc, p->li, p->rows[q], (size_t)p->c0 * nv, (size_t)p->c1 * nv);
+    return NULL;
+}
+
+static void gs_merge_worst(double v, uint64_t key, const char *where, double *worst, uint64_t *wkey, char *gwhere,
+                           size_t n)
+{
+    if (v > *worst || (v == *worst && *worst > 0.0 && key < *wkey)) {
+        *worst = v, *wkey = key;
+        memset(gwhere, 0, n); /* the bytes after the string too, whatever the split */
+        snprintf(gwhere, n, "%s", where);
+    }
+}
+
+static void gs_merge(mf_prefilter_gate_stream *s, const gs_part *p)
+{
+    mf_prefilter_gate *g = s->g;
+    const mf_prefilter_gate *r = &p->res;
+    const mf_prefilter_gate_stream *l = &p->loc;
+#define GS_MERGE(field, key, where) gs_merge_worst(r->field, l->key, r->where, &g->field, &s->key, g->where, sizeof g->where)
+    GS_MERGE(worst_energy, k_energy, where_energy);
+    GS_MERGE(worst_level, k_level, where_level);
+    GS_MERGE(worst_view_spike, k_view, where_view);
+    GS_MERGE(worst_texel_spike, k_texel, where_texel);
+    GS_MERGE(worst_cont_texel, k_cont_texel, where_cont_texel);
+    GS_MERGE(worst_cont_view, k_cont_view, where_cont_view);
+    GS_MERGE(worst_cont_grazing, k_cont_grazing, where_cont_grazing);
+    GS_MERGE(worst_cont_cross, k_cont_cross, where_cont_cross);
+#undef GS_MERGE
+    gs_max(r->worst_jump_texel, &g->worst_jump_texel);
+    gs_max(r->worst_jump_view, &g->worst_jump_view);
+    gs_max(r->worst_ref_error, &g->worst_ref_error);
+    gs_max(r->worst_cont_cross_texel, &g->worst_cont_cross_texel);
+    g->nan_entries += r->nan_entries;
+}
+
+/* Runs parts[0 .. n) (parts 1.. on their own threads, part 0 here; a part whose thread cannot start
+ * runs here too), then merges them in order. */
+static void gs_parts_run(mf_prefilter_gate_stream *s, gs_part *parts, int n)
+{
+    pthread_t tid[GS_MAX_THREADS];
+    int started[GS_MAX_THREADS] = {0};
+    for (int t = 1; t < n; ++t)
+        started[t] = pthread_create(&tid[t], NULL, gs_part_run, &parts[t]) == 0;
+    gs_part_run(&parts[0]);
+    for (int t = 1; t < n; ++t) {
+        if (started[t])
+            pthread_join(tid[t], NULL);
+        else
+            gs_part_run(&parts[t]);
+    }
+    for (int t = 0; t < n; ++t)
+        gs_merge(s, &parts[t]);
+}
+
+mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_index, int row, const float *m,
+                                       const float *magnitude, const float *albedo)
+{
+    int want_l, want_r;
+    if (!s || !m || !magnitude || !mf_prefilter_gate_stream_next(s, &want_l, &want_r) || level_index != want_l ||
+        row != want_r)
+        return MF_ERR_DOMAIN;
+    gs_level *L = &s->L[level_index];
+    /* one part per thread, at least one column each */
+    int n = s->threads < L->w ? s->threads : L->w;
+    gs_part *parts = s->parts;
+    for (int t = 0; t < n; ++t) {
+        gs_part_init(&parts[t], s);
+        parts[t].task = 0, parts[t].li = level_index, parts[t].row = row;
+        parts[t].m = m, parts[t].magnitude = magnitude, parts[t].albedo = albedo;
+        parts[t].c0 = (int)((long)L->w * t / n), parts[t].c1 = (int)((long)L->w * (t + 1) / n);
+    }
+    gs_parts_run(s, parts, n);
     L->fed++;
     /* the texel checks of the row above (its neighbours now held); at the level's end, the last row
      * and row 0 (periodic neighbours) */
+    int rows[3], nrows = 0;
     if (row >= 2)
-        gs_texel_checks(s, level_index, row - 1);
+        rows[nrows++] = row - 1;
     if (row == L->h - 1) {
         if (row >= 1)
-            gs_texel_checks(s, level_index, row);
-        gs_texel_checks(s, level_index, 0);
+            rows[nrows++] = row;
+        rows[nrows++] = 0;
+    }
+    if (nrows) {
+        for (int t = 0; t < n; ++t) {
+            gs_part_init(&parts[t], s);
+            parts[t].task = 1, parts[t].li = level_index, parts[t].nrows = nrows;
+            memcpy(parts[t].rows, rows, sizeof rows);
+            parts[t].c0 = (int)((long)L->w * t / n), parts[t].c1 = (int)((long)L->w * (t + 1) / n);
+        }
+        gs_parts_run(s, parts, n);
     }
     return MF_OK;
 }
