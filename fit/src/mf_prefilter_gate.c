@@ -123,12 +123,12 @@ static mf_status gate_iso_fit(const mf_prefilter_options *o, gate_iso *t)
     return MF_OK;
 }
 
-/* The shading of the (already horizon-clipped, texel-frame, view-azimuth-0) polygon by the base
- * lobe at the texel-frame view cosine c. */
-static double gate_iso_shade(const gate_iso *t, double c, const mf_polygon *p)
+/* The base lobe's LTC at the texel-frame view cosine c, and its magnitude: 1, or 0 when the matrix is
+ * not invertible (the shading is then NaN).  Lambert has none (1). */
+static int gate_iso_ltc(const gate_iso *t, double c, mf_ltc *ltc, double *mag)
 {
     if (t->lambert)
-        return mf_polygon_integrate_cosine(p, MF_POLYGON_ONE_SIDED);
+        return 1;
     double u = sqrt(fmax(0.0, 1.0 - c)) * (MF_PREFILTER_GATE_REF_N - 1);
     int i = (int)u;
     if (i > MF_PREFILTER_GATE_REF_N - 2)
@@ -137,15 +137,30 @@ static double gate_iso_shade(const gate_iso *t, double c, const mf_polygon *p)
     for (int k = 0; k < 5; ++k)
         q[k] = (1.0 - f) * t->v[i][k] + f * t->v[i + 1][k];
     mf_mat3 m = {{{q[0], 0.0, q[1]}, {0.0, 1.0, 0.0}, {q[2], 0.0, q[3]}}};
-    mf_ltc ltc;
-    if (mf_ltc_init(&ltc, m) != MF_OK)
-        return NAN;
-    return q[4] * mf_ltc_integrate_polygon(&ltc, p, MF_POLYGON_ONE_SIDED);
+    *mag = q[4];
+    return mf_ltc_init(ltc, m) == MF_OK;
 }
 
+/* The shading of the (already horizon-clipped, texel-frame, view-azimuth-0) polygon by the base
+ * lobe (gate_iso_ltc's ok, ltc, mag at the texel-frame view cosine). */
+static double gate_iso_shade(const gate_iso *t, int ok, const mf_ltc *ltc, double mag, const mf_polygon *p)
+{
+    if (t->lambert)
+        return mf_polygon_integrate_cosine(p, MF_POLYGON_ONE_SIDED);
+    if (!ok)
+        return NAN;
+    return mag * mf_ltc_integrate_polygon(ltc, p, MF_POLYGON_ONE_SIDED);
+}
+
+/* A gate light clipped to the aligned frame's upper half-space (clip_upper), once per view theta. */
+typedef struct {
+    int n;
+    mf_vec3 v[MF_POLYGON_MAX_VERTICES];
+} gate_clipped;
+
 /* Adds w times the reference shading of level-0 texel normal n (tangent frame) at view (theta,
- * phi) of the GATE_NLIGHTS lights (aligned frame) to acc. */
-static void gate_ref_texel(const gate_iso *t, const double *n, double theta, double phi, const mf_polygon *lights,
+ * phi) of the GATE_NLIGHTS lights (aligned frame; clipped: the same clipped to z >= 0) to acc. */
+static void gate_ref_texel(const gate_iso *t, const double *n, double theta, double phi, const gate_clipped *clipped,
                            double w, double *acc)
 {
     double cp = cos(phi), sp = sin(phi);
@@ -155,17 +170,22 @@ static void gate_ref_texel(const gate_iso *t, const double *n, double theta, dou
     mf_vec3 wo = mf_vec3_make(sin(theta), 0.0, cos(theta));
     mf_vec3 vq = mf_prefilter_texel_view(r, wo);
     double h = sqrt(vq.x * vq.x + vq.y * vq.y), ca = h > 0.0 ? vq.x / h : 1.0, sa = h > 0.0 ? vq.y / h : 0.0;
+    mf_ltc ltc; /* the base lobe at this texel's view, shared by the lights */
+    double mag = 0.0;
+    int ok = -1;
     for (int k = 0; k < GATE_NLIGHTS; ++k) {
-        mf_vec3 v[MF_POLYGON_MAX_VERTICES];
-        int nv = clip_upper(&lights[k], v);
+        int nv = clipped[k].n;
         if (nv < 3)
             continue;
+        mf_vec3 v[MF_POLYGON_MAX_VERTICES];
         for (int i = 0; i < nv; ++i) {
-            mf_vec3 x = mf_prefilter_rot_t(r, v[i]); /* texel frame, then its view azimuth turned to 0 */
+            mf_vec3 x = mf_prefilter_rot_t(r, clipped[k].v[i]); /* texel frame, then its view azimuth turned to 0 */
             v[i] = mf_vec3_make(ca * x.x + sa * x.y, -sa * x.x + ca * x.y, x.z);
         }
         mf_polygon p = mf_polygon_make(nv, v);
-        acc[k] += w * gate_iso_shade(t, vq.z, &p);
+        if (ok < 0)
+            ok = gate_iso_ltc(t, vq.z, &ltc, &mag);
+        acc[k] += w * gate_iso_shade(t, ok, &ltc, mag, &p);
     }
 }
 
@@ -205,6 +225,7 @@ struct mf_prefilter_gate_stream {
     int W, H;
     gs_level *L;
     mf_polygon *lights;
+    gate_clipped *clipped; /* the lights clipped to z >= 0, per view theta (GATE_NLIGHTS each) */
     gate_iso *iso;
     uint64_t k_energy, k_level, k_view, k_texel, k_cont_texel, k_cont_view, k_cont_grazing, k_cont_cross;
     int threads;           /* o->threads (1 without o), at most GS_MAX_THREADS */
@@ -244,7 +265,7 @@ void mf_prefilter_gate_stream_free(mf_prefilter_gate_stream *s)
     for (int l = 0; s->L && l < s->nl; ++l)
         for (int i = 0; i < GS_SLOTS; ++i)
             free(s->L[l].S[i]), free(s->L[l].R[i]), free(s->L[l].A[i]);
-    free(s->L), free(s->lights), free(s->iso), free(s->parts), free(s);
+    free(s->L), free(s->lights), free(s->clipped), free(s->iso), free(s->parts), free(s);
 }
 
 mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int nlevels, const double *normals,
@@ -293,9 +314,12 @@ mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int n
     s->L = calloc((size_t)nlevels, sizeof *s->L);
     s->lights = malloc(sizeof *s->lights * GATE_NLIGHTS * (size_t)nt);
     s->parts = malloc(gs_part_size() * (size_t)s->threads);
-    mf_status st = s->L && s->lights && s->parts ? MF_OK : MF_ERR_ALLOC;
+    s->clipped = malloc(sizeof *s->clipped * GATE_NLIGHTS * (size_t)nt);
+    mf_status st = s->L && s->lights && s->parts && s->clipped ? MF_OK : MF_ERR_ALLOC;
     for (int a = 0; st == MF_OK && a < nt; ++a)
         gate_lights(a / (double)(nt - 1) * MF_PREFILTER_THETA_MAX, s->lights + GATE_NLIGHTS * a);
+    for (int q = 0; st == MF_OK && q < GATE_NLIGHTS * nt; ++q)
+        s->clipped[q].n = clip_upper(&s->lights[q], s->clipped[q].v);
     for (int l = 0; st == MF_OK && l < nlevels; ++l) {
         gs_level *L = &s->L[l];
         const mf_prefilter_level *lv = &shapes[l];
@@ -493,7 +517,7 @@ static void gs_row_cols(mf_prefilter_gate_stream *s, int level_index, int row, c
                             double *acc = R + GATE_NLIGHTS * i;
                             if (level_index == 0) {
                                 gate_ref_texel(s->iso, s->normals + 3 * ((size_t)cr * s->W + cc), mf_prefilter_theta(&s->o, a),
-                                               mf_prefilter_phi(&s->o, b), s->lights + GATE_NLIGHTS * a, 1.0 / nc, acc);
+                                               mf_prefilter_phi(&s->o, b), s->clipped + GATE_NLIGHTS * a, 1.0 / nc, acc);
                             } else {
                                 const gs_level *C = &s->L[level_index - 1];
                                 const double *c = C->R[gs_slot(cr)] + GATE_NLIGHTS * (((size_t)cc * nt + a) * np + b);
