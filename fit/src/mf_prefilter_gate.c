@@ -248,6 +248,7 @@ static void gs_worst(double v, double *worst, uint64_t *wkey, uint64_t key, char
 {
     if (v > *worst || (v == *worst && *worst > 0.0 && key < *wkey)) {
         *worst = v, *wkey = key;
+        memset(where, 0, n); /* the bytes after the string too: the same result bytes on any thread count */
         snprintf(where, n, "%s at level %d, texel (%d, %d), view (%d, %d)", what, level, col, row, a, b);
     }
 }
@@ -595,7 +596,8 @@ static void gs_row_cols(mf_prefilter_gate_stream *s, int level_index, int row, c
 /* ---- the streamed gate on threads ---------------------------------------------------------------
  * A row's entries are split into column ranges, one per thread: first the checks within the row
  * (gs_row_cols: a column's views read only that column), then, once the whole row is held, the
- * texel checks of the rows it completes (gs_texel_checks).  Each part runs on a copy of the stream
+ * texel checks of the rows it completes (gs_texel_checks).  On one thread they run on the stream
+ * itself, over the whole row.  On more, each part runs on a copy of the stream
  * whose gate results start cleared (worst 0, keys UINT64_MAX) and are merged into the stream's
  * afterwards with gs_worst's own rule (the larger value; on a tie, the smaller key) and max and sum
  * for the rest: that rule is a total order on the candidates, so the result, places included, does
@@ -637,11 +639,15 @@ static void gs_merge_worst(double v, uint64_t key, const char *where, double *wo
 {
     if (v > *worst || (v == *worst && *worst > 0.0 && key < *wkey)) {
         *worst = v, *wkey = key;
-        memset(gwhere, 0, n); /* the bytes after the string too, whatever the split */
+        memset(gwhere, 0, n); /* as gs_worst */
         snprintf(gwhere, n, "%s", where);
     }
 }
 
+/* Merges a part's results into the stream's: every worst with its key and place, every gs_max
+ * figure and the NaN count (a measure added to the gate must be added here too; one thread runs on
+ * the stream itself, so test_prefilter_gate_threads sees a measure missing here as a difference
+ * between 1 and 2 threads). */
 static void gs_merge(mf_prefilter_gate_stream *s, const gs_part *p)
 {
     mf_prefilter_gate *g = s->g;
@@ -683,6 +689,24 @@ static void gs_parts_run(mf_prefilter_gate_stream *s, gs_part *parts, int n)
         gs_merge(s, &parts[t]);
 }
 
+/* Splits task (0: gs_row_cols of row; 1: gs_texel_checks of rows[0 .. nrows)) of level index li into
+ * n column ranges and runs them (gs_parts_run). */
+static void gs_split(mf_prefilter_gate_stream *s, int n, int task, int li, int row, const float *m,
+                     const float *magnitude, const float *albedo, const int *rows, int nrows)
+{
+    const int w = s->L[li].w;
+    for (int t = 0; t < n; ++t) {
+        gs_part *p = &s->parts[t];
+        gs_part_init(p, s);
+        p->task = task, p->li = li, p->row = row, p->nrows = nrows;
+        p->m = m, p->magnitude = magnitude, p->albedo = albedo;
+        for (int q = 0; q < nrows; ++q)
+            p->rows[q] = rows[q];
+        p->c0 = (int)((long)w * t / n), p->c1 = (int)((long)w * (t + 1) / n);
+    }
+    gs_parts_run(s, s->parts, n);
+}
+
 mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_index, int row, const float *m,
                                        const float *magnitude, const float *albedo)
 {
@@ -691,16 +715,12 @@ mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_in
         row != want_r)
         return MF_ERR_DOMAIN;
     gs_level *L = &s->L[level_index];
-    /* one part per thread, at least one column each */
-    int n = s->threads < L->w ? s->threads : L->w;
-    gs_part *parts = s->parts;
-    for (int t = 0; t < n; ++t) {
-        gs_part_init(&parts[t], s);
-        parts[t].task = 0, parts[t].li = level_index, parts[t].row = row;
-        parts[t].m = m, parts[t].magnitude = magnitude, parts[t].albedo = albedo;
-        parts[t].c0 = (int)((long)L->w * t / n), parts[t].c1 = (int)((long)L->w * (t + 1) / n);
-    }
-    gs_parts_run(s, parts, n);
+    /* one part per thread, at least one column each; one thread works on the stream itself */
+    const int n = s->threads < L->w ? s->threads : L->w;
+    if (n == 1)
+        gs_row_cols(s, level_index, row, m, magnitude, albedo, 0, L->w);
+    else
+        gs_split(s, n, 0, level_index, row, m, magnitude, albedo, NULL, 0);
     L->fed++;
     /* the texel checks of the row above (its neighbours now held); at the level's end, the last row
      * and row 0 (periodic neighbours) */
@@ -712,15 +732,11 @@ mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_in
             rows[nrows++] = row;
         rows[nrows++] = 0;
     }
-    if (nrows) {
-        for (int t = 0; t < n; ++t) {
-            gs_part_init(&parts[t], s);
-            parts[t].task = 1, parts[t].li = level_index, parts[t].nrows = nrows;
-            memcpy(parts[t].rows, rows, sizeof rows);
-            parts[t].c0 = (int)((long)L->w * t / n), parts[t].c1 = (int)((long)L->w * (t + 1) / n);
-        }
-        gs_parts_run(s, parts, n);
-    }
+    if (n == 1)
+        for (int q = 0; q < nrows; ++q)
+            gs_texel_checks(s, level_index, rows[q], 0, L->rowlen);
+    else if (nrows)
+        gs_split(s, n, 1, level_index, row, NULL, NULL, NULL, rows, nrows);
     return MF_OK;
 }
 
