@@ -29,8 +29,9 @@
  * sub-map and one fit, whose clustering holds 80 bytes per footprint texel for a moment), the
  * albedo blocks (16 bytes per block and view) and a few rows of each level.
  * Gate: rank 0 streams the levels row by row from the tiles into the output files and the gate
- * (mf_prefilter_gate_stream_*: mf_prefilter_gate_run_ref's result, holding a few rows per level)
- * before committing; its result goes into prefilter.json.
+ * (mf_prefilter_gate_stream_*: mf_prefilter_gate_run_ref's result, holding a few rows per level,
+ * each row's columns split over --threads, the same result on any count) before committing; its
+ * result goes into prefilter.json.
  * Tables: --base both (the default) runs the pipeline twice, the specular GGX table into DIR, then the
  * diffuse Lambert table into DIR/diffuse; the specular checkpoint is kept until the diffuse table is
  * written, so a rerun after a stop in either table resumes it.
