@@ -9,6 +9,8 @@
 #   - with MPIEXEC (an MFKIT_WITH_MPI build; only the MPI checks then, test_prefilter_mpi): `MPIEXEC -n 2 mfkit prefilter`, through the front end
 #     bin/mfkit, writes the same bits as one process, and one process resumes a 2-rank run stopped
 #     by --max-tiles;
+#   - threads: on the shipped 16 x 16 bump map with 3 x 4 views (128 samples, about 2 s of CPU a run), --threads 1, 2 and 3 write the same
+#     bits, the manifest (the gate's figures and places) included;
 #   - --base both (the default: specular table in DIR, diffuse in DIR/diffuse): stopped by --max-tiles
 #     in either table and rerun, it writes the same bits as an uninterrupted run, and the specular
 #     checkpoint stays until the diffuse table is written.
@@ -72,6 +74,20 @@ ok '[ $rc1 -eq 75 ] && [ $rc2 -eq 75 ] && [ -s "$tmp/br/prefilter.json" ] && [ -
 "$mfkit" "${both[@]}" --out "$tmp/br" 2>"$tmp/br3.log"; rc=$?
 ok '[ $rc -eq 0 ] && same "$tmp/b" "$tmp/br" manifest && same "$tmp/b/diffuse" "$tmp/br/diffuse" manifest && [ ! -e "$tmp/br/.prefilter-work" ]' \
    "both, resumed: the same bits in both tables, manifests included (rc=$rc): $(tail -2 "$tmp/br3.log")"
+
+# threads: the fits and the gate (each row's columns split over the threads, the worsts merged with
+# the gate's tie rule) write the same bits, the manifest's gate figures and places included, on 1, 2
+# and 3 threads (the shipped bump map: several normals per footprint, nonzero spikes and cross)
+bump=(prefilter "$src/tests/data/normalmaps/bump_16.png" --base ggx --views 3x4 --samples 128 --tile 16)
+for n in 1 2 3; do
+  "$mfkit" "${bump[@]}" --threads $n --out "$tmp/th$n" 2>"$tmp/th$n.log"; rc=$?
+  ok '[ $rc -eq 0 ]' "bump map on $n threads exits 0 (rc=$rc): $(tail -2 "$tmp/th$n.log")"
+done
+nw=$(grep -o '"where": "[a-z ]* at level [0-9]*, texel ([0-9]*, [0-9]*)' "$tmp/th1/prefilter.json" | wc -l)
+ok '[ $nw -eq 8 ]' "the manifest holds the gate's 8 places (compared with the rest): $nw"
+ok 'same "$tmp/th1" "$tmp/th2" manifest && same "$tmp/th1" "$tmp/th3" manifest' "--threads 1, 2, 3: the same bits, manifest included"
+ok 'diff <(grep "^mfkit prefilter: \(gate\|reported\)" "$tmp/th1.log") <(grep "^mfkit prefilter: \(gate\|reported\)" "$tmp/th3.log")' \
+   "--threads 1 and 3 print the same gate figures"
 
 else
   mpi=("$mpiexec" -n 2); [ "$(id -u)" -eq 0 ] && mpi+=(--allow-run-as-root)

@@ -29,8 +29,9 @@
  * sub-map and one fit, whose clustering holds 80 bytes per footprint texel for a moment), the
  * albedo blocks (16 bytes per block and view) and a few rows of each level.
  * Gate: rank 0 streams the levels row by row from the tiles into the output files and the gate
- * (mf_prefilter_gate_stream_*: mf_prefilter_gate_run_ref's result, holding a few rows per level)
- * before committing; its result goes into prefilter.json.
+ * (mf_prefilter_gate_stream_*: mf_prefilter_gate_run_ref's result, holding a few rows per level,
+ * each row's columns split over --threads, the same result on any count) before committing; its
+ * result goes into prefilter.json.
  * Tables: --base both (the default) runs the pipeline twice, the specular GGX table into DIR, then the
  * diffuse Lambert table into DIR/diffuse; the specular checkpoint is kept until the diffuse table is
  * written, so a rerun after a stop in either table resumes it.
@@ -740,6 +741,9 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
     const mf_prefilter_options *o = A->o;
     const char *dir = A->dir;
     const int nv = o->n_theta * o->n_phi, nl = A->nl;
+    struct timespec w0, c0; /* the assembly's and gate's wall and process CPU, for the summary */
+    clock_gettime(CLOCK_MONOTONIC, &w0);
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
     char msg[1024] = "";
     int nfiles_max = 6 * nl + 3, nf = 0, ok = 1;
     mf_io_atomic *files = calloc((size_t)nfiles_max, sizeof *files);
@@ -1076,11 +1080,16 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
     } else if (mf_io_atomic_commit_all(files, (size_t)nf, msg, sizeof msg) != MF_OK) {
         rc = cli_error(k_cmd, "%s", msg) * 0 + CLI_EXIT_IO;
     } else {
+        struct timespec w1, c1;
+        clock_gettime(CLOCK_MONOTONIC, &w1);
+        clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c1);
+        double aw = (double)(w1.tv_sec - w0.tv_sec) + 1e-9 * (double)(w1.tv_nsec - w0.tv_nsec);
+        double ac = (double)(c1.tv_sec - c0.tv_sec) + 1e-9 * (double)(c1.tv_nsec - c0.tv_nsec);
         fprintf(stderr,
                 "mfkit prefilter: %ld lobes in %ld tiles (%ld resumed) on %d rank%s x %d thread%s, %.3f s fitting wall "
-                "(%.3f ms per lobe)\n",
+                "(%.3f ms per lobe); assembly and gate %.3f s wall, %.3f s CPU (%.2f us per lobe)\n",
                 lobes, A->ntiles, resumed, A->ranks, A->ranks > 1 ? "s" : "", o->threads, o->threads > 1 ? "s" : "", secs,
-                lobes ? 1e3 * secs / lobes : 0.0);
+                lobes ? 1e3 * secs / lobes : 0.0, aw, ac, lobes ? 1e6 * ac / lobes : 0.0);
     }
     mf_buf_free(&b);
     free(gl); /* shapes only: no arrays */

@@ -12,6 +12,7 @@
 #include "mfkit/mf_polygon.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -122,12 +123,12 @@ static mf_status gate_iso_fit(const mf_prefilter_options *o, gate_iso *t)
     return MF_OK;
 }
 
-/* The shading of the (already horizon-clipped, texel-frame, view-azimuth-0) polygon by the base
- * lobe at the texel-frame view cosine c. */
-static double gate_iso_shade(const gate_iso *t, double c, const mf_polygon *p)
+/* The base lobe's LTC at the texel-frame view cosine c, and its magnitude: 1, or 0 when the matrix is
+ * not invertible (the shading is then NaN).  Lambert has none (1). */
+static int gate_iso_ltc(const gate_iso *t, double c, mf_ltc *ltc, double *mag)
 {
     if (t->lambert)
-        return mf_polygon_integrate_cosine(p, MF_POLYGON_ONE_SIDED);
+        return 1;
     double u = sqrt(fmax(0.0, 1.0 - c)) * (MF_PREFILTER_GATE_REF_N - 1);
     int i = (int)u;
     if (i > MF_PREFILTER_GATE_REF_N - 2)
@@ -136,15 +137,30 @@ static double gate_iso_shade(const gate_iso *t, double c, const mf_polygon *p)
     for (int k = 0; k < 5; ++k)
         q[k] = (1.0 - f) * t->v[i][k] + f * t->v[i + 1][k];
     mf_mat3 m = {{{q[0], 0.0, q[1]}, {0.0, 1.0, 0.0}, {q[2], 0.0, q[3]}}};
-    mf_ltc ltc;
-    if (mf_ltc_init(&ltc, m) != MF_OK)
-        return NAN;
-    return q[4] * mf_ltc_integrate_polygon(&ltc, p, MF_POLYGON_ONE_SIDED);
+    *mag = q[4];
+    return mf_ltc_init(ltc, m) == MF_OK;
 }
 
+/* The shading of the (already horizon-clipped, texel-frame, view-azimuth-0) polygon by the base
+ * lobe (gate_iso_ltc's ok, ltc, mag at the texel-frame view cosine). */
+static double gate_iso_shade(const gate_iso *t, int ok, const mf_ltc *ltc, double mag, const mf_polygon *p)
+{
+    if (t->lambert)
+        return mf_polygon_integrate_cosine(p, MF_POLYGON_ONE_SIDED);
+    if (!ok)
+        return NAN;
+    return mag * mf_ltc_integrate_polygon(ltc, p, MF_POLYGON_ONE_SIDED);
+}
+
+/* A gate light clipped to the aligned frame's upper half-space (clip_upper), once per view theta. */
+typedef struct {
+    int n;
+    mf_vec3 v[MF_POLYGON_MAX_VERTICES];
+} gate_clipped;
+
 /* Adds w times the reference shading of level-0 texel normal n (tangent frame) at view (theta,
- * phi) of the GATE_NLIGHTS lights (aligned frame) to acc. */
-static void gate_ref_texel(const gate_iso *t, const double *n, double theta, double phi, const mf_polygon *lights,
+ * phi) of the GATE_NLIGHTS lights (aligned frame; clipped: the same clipped to z >= 0) to acc. */
+static void gate_ref_texel(const gate_iso *t, const double *n, double theta, double phi, const gate_clipped *clipped,
                            double w, double *acc)
 {
     double cp = cos(phi), sp = sin(phi);
@@ -154,17 +170,22 @@ static void gate_ref_texel(const gate_iso *t, const double *n, double theta, dou
     mf_vec3 wo = mf_vec3_make(sin(theta), 0.0, cos(theta));
     mf_vec3 vq = mf_prefilter_texel_view(r, wo);
     double h = sqrt(vq.x * vq.x + vq.y * vq.y), ca = h > 0.0 ? vq.x / h : 1.0, sa = h > 0.0 ? vq.y / h : 0.0;
+    mf_ltc ltc; /* the base lobe at this texel's view, shared by the lights */
+    double mag = 0.0;
+    int ok = -1;
     for (int k = 0; k < GATE_NLIGHTS; ++k) {
-        mf_vec3 v[MF_POLYGON_MAX_VERTICES];
-        int nv = clip_upper(&lights[k], v);
+        int nv = clipped[k].n;
         if (nv < 3)
             continue;
+        mf_vec3 v[MF_POLYGON_MAX_VERTICES];
         for (int i = 0; i < nv; ++i) {
-            mf_vec3 x = mf_prefilter_rot_t(r, v[i]); /* texel frame, then its view azimuth turned to 0 */
+            mf_vec3 x = mf_prefilter_rot_t(r, clipped[k].v[i]); /* texel frame, then its view azimuth turned to 0 */
             v[i] = mf_vec3_make(ca * x.x + sa * x.y, -sa * x.x + ca * x.y, x.z);
         }
         mf_polygon p = mf_polygon_make(nv, v);
-        acc[k] += w * gate_iso_shade(t, vq.z, &p);
+        if (ok < 0)
+            ok = gate_iso_ltc(t, vq.z, &ltc, &mag);
+        acc[k] += w * gate_iso_shade(t, ok, &ltc, mag, &p);
     }
 }
 
@@ -186,6 +207,7 @@ static double gate_lone(double x, double y0, double y1)
  * check) of its place, ties going to the smaller key: the order of a whole-level pass, so the
  * result (values and places) does not depend on the streaming order. */
 #define GS_SLOTS 5
+#define GS_MAX_THREADS 256
 
 typedef struct {
     int level, w, h, fed;
@@ -203,9 +225,14 @@ struct mf_prefilter_gate_stream {
     int W, H;
     gs_level *L;
     mf_polygon *lights;
+    gate_clipped *clipped; /* the lights clipped to z >= 0, per view theta (GATE_NLIGHTS each) */
     gate_iso *iso;
     uint64_t k_energy, k_level, k_view, k_texel, k_cont_texel, k_cont_view, k_cont_grazing, k_cont_cross;
+    int threads;           /* o->threads (1 without o), at most GS_MAX_THREADS */
+    struct gs_part *parts; /* threads of them, reused for every row */
 };
+
+static size_t gs_part_size(void);
 
 static int gs_slot(int r) { return r < 2 ? r : 2 + r % 3; }
 
@@ -221,6 +248,7 @@ static void gs_worst(double v, double *worst, uint64_t *wkey, uint64_t key, char
 {
     if (v > *worst || (v == *worst && *worst > 0.0 && key < *wkey)) {
         *worst = v, *wkey = key;
+        memset(where, 0, n); /* the bytes after the string too: the same result bytes on any thread count */
         snprintf(where, n, "%s at level %d, texel (%d, %d), view (%d, %d)", what, level, col, row, a, b);
     }
 }
@@ -238,7 +266,7 @@ void mf_prefilter_gate_stream_free(mf_prefilter_gate_stream *s)
     for (int l = 0; s->L && l < s->nl; ++l)
         for (int i = 0; i < GS_SLOTS; ++i)
             free(s->L[l].S[i]), free(s->L[l].R[i]), free(s->L[l].A[i]);
-    free(s->L), free(s->lights), free(s->iso), free(s);
+    free(s->L), free(s->lights), free(s->clipped), free(s->iso), free(s->parts), free(s);
 }
 
 mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int nlevels, const double *normals,
@@ -283,11 +311,16 @@ mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int n
         g->worst_cont_cross = g->worst_cont_cross_texel = 0.0;
         g->where_cont_cross[0] = '\0';
     }
+    s->threads = o && o->threads > 1 ? (o->threads < GS_MAX_THREADS ? o->threads : GS_MAX_THREADS) : 1;
     s->L = calloc((size_t)nlevels, sizeof *s->L);
     s->lights = malloc(sizeof *s->lights * GATE_NLIGHTS * (size_t)nt);
-    mf_status st = s->L && s->lights ? MF_OK : MF_ERR_ALLOC;
+    s->parts = malloc(gs_part_size() * (size_t)s->threads);
+    s->clipped = malloc(sizeof *s->clipped * GATE_NLIGHTS * (size_t)nt);
+    mf_status st = s->L && s->lights && s->parts && s->clipped ? MF_OK : MF_ERR_ALLOC;
     for (int a = 0; st == MF_OK && a < nt; ++a)
         gate_lights(a / (double)(nt - 1) * MF_PREFILTER_THETA_MAX, s->lights + GATE_NLIGHTS * a);
+    for (int q = 0; st == MF_OK && q < GATE_NLIGHTS * nt; ++q)
+        s->clipped[q].n = clip_upper(&s->lights[q], s->clipped[q].v);
     for (int l = 0; st == MF_OK && l < nlevels; ++l) {
         gs_level *L = &s->L[l];
         const mf_prefilter_level *lv = &shapes[l];
@@ -360,15 +393,15 @@ static int gs_texel_neighbour_errors(const gs_level *L, int r, int col, int ax, 
 }
 
 /* The texel checks of row r of level index li (its rows r - 1 and r + 1, periodic for the
- * reference's, held). */
-static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r)
+ * reference's, held), over the row's entries [i0, i1). */
+static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i0, size_t i1)
 {
     mf_prefilter_gate *g = s->g;
     const gs_level *L = &s->L[li];
     const int nt = s->nt, np = s->np, nv = s->nv;
     const double *S = L->S[gs_slot(r)], *R = L->R[gs_slot(r)];
     const float *A = L->A[gs_slot(r)];
-    for (size_t i = 0; i < L->rowlen; ++i) {
+    for (size_t i = i0; i < i1; ++i) {
         int col = (int)(i / nv), a = (int)(i / np % nt), b = (int)(i % np);
         size_t e = (size_t)r * L->rowlen + i;
         double alb = fmax(A[i], 1e-6);
@@ -429,20 +462,19 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r)
     }
 }
 
-mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_index, int row, const float *m,
-                                       const float *magnitude, const float *albedo)
+/* The checks of row `row` of level index level_index that need no other row of its level, over its
+ * columns [c0, c1): m, magnitude, albedo are the whole row's arrays. */
+static void gs_row_cols(mf_prefilter_gate_stream *s, int level_index, int row, const float *m, const float *magnitude,
+                        const float *albedo, int c0, int c1)
 {
-    int want_l, want_r;
-    if (!s || !m || !magnitude || !mf_prefilter_gate_stream_next(s, &want_l, &want_r) || level_index != want_l ||
-        row != want_r)
-        return MF_ERR_DOMAIN;
     mf_prefilter_gate *g = s->g;
-    gs_level *L = &s->L[level_index];
+    const gs_level *L = &s->L[level_index];
     const int nt = s->nt, np = s->np, nv = s->nv, sl = gs_slot(row);
     double *S = L->S[sl], *R = L->R[sl];
     float *A = L->A[sl];
+    const size_t i0 = (size_t)c0 * nv, i1 = (size_t)c1 * nv;
     /* energy, nan, the lobes' shading */
-    for (size_t i = 0; i < L->rowlen; ++i) {
+    for (size_t i = i0; i < i1; ++i) {
         int col = (int)(i / nv), a = (int)(i / np % nt), b = (int)(i % np);
         size_t e = (size_t)row * L->rowlen + i;
         const float *mi = m + 9 * i;
@@ -468,9 +500,9 @@ mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_in
     }
     /* the reference: level 1 from its texels, each level above as the mean of its children */
     if (s->ref) {
-        memset(R, 0, sizeof(double) * GATE_NLIGHTS * L->rowlen);
+        memset(R + GATE_NLIGHTS * i0, 0, sizeof(double) * GATE_NLIGHTS * (i1 - i0));
         int cw = level_index ? s->L[level_index - 1].w : s->W, ch = level_index ? s->L[level_index - 1].h : s->H;
-        for (int col = 0; col < L->w; ++col) {
+        for (int col = c0; col < c1; ++col) {
             int nc = 0;
             for (int dy = 0; dy < 2; ++dy)
                 for (int dx = 0; dx < 2; ++dx)
@@ -486,7 +518,7 @@ mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_in
                             double *acc = R + GATE_NLIGHTS * i;
                             if (level_index == 0) {
                                 gate_ref_texel(s->iso, s->normals + 3 * ((size_t)cr * s->W + cc), mf_prefilter_theta(&s->o, a),
-                                               mf_prefilter_phi(&s->o, b), s->lights + GATE_NLIGHTS * a, 1.0 / nc, acc);
+                                               mf_prefilter_phi(&s->o, b), s->clipped + GATE_NLIGHTS * a, 1.0 / nc, acc);
                             } else {
                                 const gs_level *C = &s->L[level_index - 1];
                                 const double *c = C->R[gs_slot(cr)] + GATE_NLIGHTS * (((size_t)cc * nt + a) * np + b);
@@ -499,7 +531,7 @@ mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_in
     }
     /* the checks within the row: views, levels; against the reference: the error, its jumps and
      * spikes along the views */
-    for (size_t i = 0; i < L->rowlen; ++i) {
+    for (size_t i = i0; i < i1; ++i) {
         int col = (int)(i / nv), a = (int)(i / np % nt), b = (int)(i % np);
         size_t e = (size_t)row * L->rowlen + i;
         double alb = fmax(A[i], 1e-6);
@@ -559,16 +591,152 @@ mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_in
                          sizeof g->where_cont_view, "phi error spike", L->level, row, col, a, b);
         }
     }
+}
+
+/* ---- the streamed gate on threads ---------------------------------------------------------------
+ * A row's entries are split into column ranges, one per thread: first the checks within the row
+ * (gs_row_cols: a column's views read only that column), then, once the whole row is held, the
+ * texel checks of the rows it completes (gs_texel_checks).  On one thread they run on the stream
+ * itself, over the whole row.  On more, each part runs on a copy of the stream
+ * whose gate results start cleared (worst 0, keys UINT64_MAX) and are merged into the stream's
+ * afterwards with gs_worst's own rule (the larger value; on a tie, the smaller key) and max and sum
+ * for the rest: that rule is a total order on the candidates, so the result, places included, does
+ * not depend on the number of threads or on the split.  Every value is computed by the same code
+ * from the same operands as on one thread. */
+typedef struct gs_part {
+    mf_prefilter_gate_stream loc; /* the stream, with loc.g = &res and its own keys */
+    mf_prefilter_gate res;
+    int task; /* 0: gs_row_cols; 1: gs_texel_checks of rows[0 .. nrows) */
+    int li, row, nrows, rows[3], c0, c1;
+    const float *m, *magnitude, *albedo;
+} gs_part;
+
+static size_t gs_part_size(void) { return sizeof(gs_part); }
+
+static void gs_part_init(gs_part *p, const mf_prefilter_gate_stream *s)
+{
+    memset(&p->res, 0, sizeof p->res); /* worsts 0, places "", nan_entries 0 */
+    p->loc = *s;
+    p->loc.g = &p->res;
+    p->loc.k_energy = p->loc.k_level = p->loc.k_view = p->loc.k_texel = UINT64_MAX;
+    p->loc.k_cont_texel = p->loc.k_cont_view = p->loc.k_cont_grazing = p->loc.k_cont_cross = UINT64_MAX;
+}
+
+static void *gs_part_run(void *arg)
+{
+    gs_part *p = arg;
+    const size_t nv = (size_t)p->loc.nv;
+    if (p->task == 0)
+        gs_row_cols(&p->loc, p->li, p->row, p->m, p->magnitude, p->albedo, p->c0, p->c1);
+    else
+        for (int q = 0; q < p->nrows; ++q)
+            gs_texel_checks(&p->loc, p->li, p->rows[q], (size_t)p->c0 * nv, (size_t)p->c1 * nv);
+    return NULL;
+}
+
+static void gs_merge_worst(double v, uint64_t key, const char *where, double *worst, uint64_t *wkey, char *gwhere,
+                           size_t n)
+{
+    if (v > *worst || (v == *worst && *worst > 0.0 && key < *wkey)) {
+        *worst = v, *wkey = key;
+        memset(gwhere, 0, n); /* as gs_worst */
+        snprintf(gwhere, n, "%s", where);
+    }
+}
+
+/* Merges a part's results into the stream's: every worst with its key and place, every gs_max
+ * figure and the NaN count (a measure added to the gate must be added here too; one thread runs on
+ * the stream itself, so test_prefilter_gate_threads sees a measure missing here as a difference
+ * between 1 and 2 threads). */
+static void gs_merge(mf_prefilter_gate_stream *s, const gs_part *p)
+{
+    mf_prefilter_gate *g = s->g;
+    const mf_prefilter_gate *r = &p->res;
+    const mf_prefilter_gate_stream *l = &p->loc;
+#define GS_MERGE(field, key, where) gs_merge_worst(r->field, l->key, r->where, &g->field, &s->key, g->where, sizeof g->where)
+    GS_MERGE(worst_energy, k_energy, where_energy);
+    GS_MERGE(worst_level, k_level, where_level);
+    GS_MERGE(worst_view_spike, k_view, where_view);
+    GS_MERGE(worst_texel_spike, k_texel, where_texel);
+    GS_MERGE(worst_cont_texel, k_cont_texel, where_cont_texel);
+    GS_MERGE(worst_cont_view, k_cont_view, where_cont_view);
+    GS_MERGE(worst_cont_grazing, k_cont_grazing, where_cont_grazing);
+    GS_MERGE(worst_cont_cross, k_cont_cross, where_cont_cross);
+#undef GS_MERGE
+    gs_max(r->worst_jump_texel, &g->worst_jump_texel);
+    gs_max(r->worst_jump_view, &g->worst_jump_view);
+    gs_max(r->worst_ref_error, &g->worst_ref_error);
+    gs_max(r->worst_cont_cross_texel, &g->worst_cont_cross_texel);
+    g->nan_entries += r->nan_entries;
+}
+
+/* Runs parts[0 .. n) (parts 1.. on their own threads, part 0 here; a part whose thread cannot start
+ * runs here too), then merges them in order. */
+static void gs_parts_run(mf_prefilter_gate_stream *s, gs_part *parts, int n)
+{
+    pthread_t tid[GS_MAX_THREADS];
+    int started[GS_MAX_THREADS] = {0};
+    for (int t = 1; t < n; ++t)
+        started[t] = pthread_create(&tid[t], NULL, gs_part_run, &parts[t]) == 0;
+    gs_part_run(&parts[0]);
+    for (int t = 1; t < n; ++t) {
+        if (started[t])
+            pthread_join(tid[t], NULL);
+        else
+            gs_part_run(&parts[t]);
+    }
+    for (int t = 0; t < n; ++t)
+        gs_merge(s, &parts[t]);
+}
+
+/* Splits task (0: gs_row_cols of row; 1: gs_texel_checks of rows[0 .. nrows)) of level index li into
+ * n column ranges and runs them (gs_parts_run). */
+static void gs_split(mf_prefilter_gate_stream *s, int n, int task, int li, int row, const float *m,
+                     const float *magnitude, const float *albedo, const int *rows, int nrows)
+{
+    const int w = s->L[li].w;
+    for (int t = 0; t < n; ++t) {
+        gs_part *p = &s->parts[t];
+        gs_part_init(p, s);
+        p->task = task, p->li = li, p->row = row, p->nrows = nrows;
+        p->m = m, p->magnitude = magnitude, p->albedo = albedo;
+        for (int q = 0; q < nrows; ++q)
+            p->rows[q] = rows[q];
+        p->c0 = (int)((long)w * t / n), p->c1 = (int)((long)w * (t + 1) / n);
+    }
+    gs_parts_run(s, s->parts, n);
+}
+
+mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_index, int row, const float *m,
+                                       const float *magnitude, const float *albedo)
+{
+    int want_l, want_r;
+    if (!s || !m || !magnitude || !mf_prefilter_gate_stream_next(s, &want_l, &want_r) || level_index != want_l ||
+        row != want_r)
+        return MF_ERR_DOMAIN;
+    gs_level *L = &s->L[level_index];
+    /* one part per thread, at least one column each; one thread works on the stream itself */
+    const int n = s->threads < L->w ? s->threads : L->w;
+    if (n == 1)
+        gs_row_cols(s, level_index, row, m, magnitude, albedo, 0, L->w);
+    else
+        gs_split(s, n, 0, level_index, row, m, magnitude, albedo, NULL, 0);
     L->fed++;
     /* the texel checks of the row above (its neighbours now held); at the level's end, the last row
      * and row 0 (periodic neighbours) */
+    int rows[3], nrows = 0;
     if (row >= 2)
-        gs_texel_checks(s, level_index, row - 1);
+        rows[nrows++] = row - 1;
     if (row == L->h - 1) {
         if (row >= 1)
-            gs_texel_checks(s, level_index, row);
-        gs_texel_checks(s, level_index, 0);
+            rows[nrows++] = row;
+        rows[nrows++] = 0;
     }
+    if (n == 1)
+        for (int q = 0; q < nrows; ++q)
+            gs_texel_checks(s, level_index, rows[q], 0, L->rowlen);
+    else if (nrows)
+        gs_split(s, n, 1, level_index, row, NULL, NULL, NULL, rows, nrows);
     return MF_OK;
 }
 

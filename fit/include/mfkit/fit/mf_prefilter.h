@@ -392,6 +392,8 @@ mf_status mf_prefilter_gate_run_ref(const mf_prefilter_level *levels, int nlevel
  * level l's row r right after rows 2r and 2r + 1 of level l - 1); the stream holds five rows of
  * each level (S and R: 2 x GATE_NLIGHTS doubles per lobe, plus a float), so its memory is
  * about 5 x 100 bytes x the lobes of one row of each level, independent of the map's height.
+ * Threads: o->threads (1 without o) split each row's columns; the result, places included, is the
+ * same bytes for any count (the threads' worsts are merged with the ties rule above).
  *   begin: checks the shapes (as the entry points do), clears g's results, fits the reference's
  *     base lobes (GGX: MF_PREFILTER_GATE_REF_N small fits); MF_ERR_DOMAIN, MF_ERR_ALLOC;
  *   next: 1 and the level index (0 for level 1) and row wanted next, 0 when all were fed;

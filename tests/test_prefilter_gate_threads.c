@@ -1,0 +1,180 @@
+/* test_prefilter_gate_threads.c -- the prefilter gate (mf_prefilter_gate_run_ref and the streamed
+ * mf_prefilter_gate_stream_*) gives the same result, byte for byte, places included, for any
+ * options.threads: the rows' entries are split into column ranges, one per thread, and the threads'
+ * worsts merged with the gate's own rule (the larger value; on a tie the smaller key, i.e. the first
+ * place of a whole-level pass).
+ *
+ * The lobes are synthetic (no fit: only the gate is under test): forward matrices, magnitudes and
+ * albedos from a hash of (level-1 column mod 4, view), the same on every row, over a map whose
+ * normals repeat every 8 columns and every 2 rows.  So every worst of level 1 is tied between
+ * columns c and c + 4 and between all rows (the non-periodic texel spike skips column 0, so its
+ * first place is in columns 1-4), and a split into 2 or 3 column ranges puts tied
+ * candidates on different threads: a merge that let a later thread win a tie (or that depended on
+ * the merge order) moves the places, which the byte comparison sees, and the explicit check that
+ * level-1 places lie in columns 0-3 and row 0 sees too.  Higher levels get lobes from a second hash
+ * (the level check and their own spikes).  One run carries NaN lobes (the NaN count is a sum over
+ * the threads). */
+#include "mf_test.h"
+
+#define CHECKF(cond, ...)                                                                                       \
+    do {                                                                                                        \
+        ++mf_test_checks;                                                                                       \
+        if (!(cond))                                                                                            \
+            MF_FAIL_AT(__VA_ARGS__);                                                                            \
+    } while (0)
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "mfkit/fit/mf_prefilter.h"
+
+static double hash01(uint64_t x) /* a fixed hash of x to [0, 1) (splitmix64's finaliser) */
+{
+    x += 0x9e3779b97f4a7c15ull;
+    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+    x ^= x >> 31;
+    return (double)(x >> 11) / 9007199254740992.0;
+}
+
+/* W x H map of unit normals repeating every 8 columns and every 2 rows */
+static void make_map(int W, int H, double *n)
+{
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            double sx = 0.5 * sin(2.0 * MF_PI * (x % 8) / 8.0), sy = 0.3 * ((y % 2) ? 1.0 : -1.0) + 0.1 * (x % 4 == 0);
+            double l = sqrt(sx * sx + sy * sy + 1.0);
+            double *p = n + 3 * ((size_t)y * W + x);
+            p[0] = -sx / l, p[1] = -sy / l, p[2] = 1.0 / l;
+        }
+}
+
+/* the levels' synthetic lobes: level 1 from (column mod 4, view), higher levels from (level, texel, view) */
+static mf_prefilter_level *make_levels(int W, int H, int nt, int np, int nan_lobes, int *nl_out)
+{
+    int nl = 0;
+    while ((1 << nl) < (W > H ? W : H)) /* log2(max(W, H)) levels, as mf_prefilter_run */
+        ++nl;
+    mf_prefilter_level *lv = calloc((size_t)nl, sizeof *lv);
+    for (int l = 0; l < nl; ++l) {
+        int w = W >> (l + 1), h = H >> (l + 1);
+        w = w > 0 ? w : 1, h = h > 0 ? h : 1;
+        size_t n = (size_t)w * h * nt * np;
+        lv[l] = (mf_prefilter_level){.level = l + 1, .width = w, .height = h, .n_theta = nt, .n_phi = np};
+        lv[l].m = malloc(sizeof(float) * 9 * n);
+        lv[l].magnitude = malloc(sizeof(float) * n);
+        lv[l].albedo = malloc(sizeof(float) * n);
+        for (size_t i = 0; i < n; ++i) {
+            size_t col = i / ((size_t)nt * np) % (size_t)w, view = i % ((size_t)nt * np), row = i / ((size_t)w * nt * np);
+            uint64_t key = l == 0 ? (col % 4) * 1000 + view : ((uint64_t)(l + 1) << 40) + (row * w + col) * 1000 + view;
+            double u[6];
+            for (int q = 0; q < 6; ++q)
+                u[q] = hash01(key * 8 + (uint64_t)q);
+            float *m = lv[l].m + 9 * i;
+            double sc = l == 0 ? 1.0 : 0.2; /* higher levels vary less: level 1 holds most worsts (and the ties) */
+            double a = 0.55 + sc * 0.9 * (u[0] - 0.5), b = 0.55 + sc * 0.9 * (u[1] - 0.5), c = sc * (0.6 * u[2] - 0.3),
+                   d = sc * (0.2 * u[3] - 0.1);
+            float mm[9] = {(float)a, 0.0f, (float)c, 0.0f, (float)b, 0.0f, (float)d, 0.0f, 1.0f};
+            memcpy(m, mm, sizeof mm);
+            double n2 = (double)m[6] * m[6] + (double)m[7] * m[7] + (double)m[8] * m[8];
+            double frac = 0.5 * (1.0 + m[8] / sqrt(n2));
+            lv[l].magnitude[i] = (float)(0.7 + sc * 0.6 * (u[4] - 0.5));
+            lv[l].albedo[i] = (float)(lv[l].magnitude[i] * frac * (1.0 + 0.004 * (u[5] - 0.5)));
+        }
+        if (nan_lobes && l == 0) { /* two NaN lobes in different column ranges, one non-finite magnitude */
+            lv[0].m[9 * ((size_t)0 * nt * np + 3)] = NAN;
+            lv[0].m[9 * (((size_t)1 * w + w - 1) * nt * np + 1) + 4] = NAN;
+            lv[0].magnitude[((size_t)h - 1) * w * nt * np + 5] = INFINITY;
+        }
+    }
+    *nl_out = nl;
+    return lv;
+}
+
+/* "... texel (c, r) ..." of a place: c and r */
+static int place(const char *where, int *c, int *r)
+{
+    const char *p = strstr(where, "texel (");
+    return p && sscanf(p, "texel (%d, %d)", c, r) == 2;
+}
+
+static void check_run(int W, int H, int nt, int np, int nan_lobes, int lambert)
+{
+    double *n = malloc(sizeof(double) * 3 * (size_t)W * H);
+    make_map(W, H, n);
+    int nl;
+    mf_prefilter_level *lv = make_levels(W, H, nt, np, nan_lobes, &nl);
+    mf_prefilter_options o;
+    if (lambert)
+        mf_prefilter_options_default_diffuse(&o);
+    else
+        mf_prefilter_options_default(&o);
+    o.n_theta = nt, o.n_phi = np, o.keep_albedo = 1;
+    static const int threads[] = {1, 2, 3, 4, 7};
+    mf_prefilter_gate g1;
+    for (int t = 0; t < (int)(sizeof threads / sizeof *threads); ++t) {
+        o.threads = threads[t];
+        mf_prefilter_gate g;
+        mf_prefilter_gate_bounds_default(&g);
+        CHECK(mf_prefilter_gate_run_ref(lv, nl, n, W, H, &o, &g) == MF_OK);
+        if (t == 0) {
+            g1 = g;
+            /* the tied level-1 worsts sit at their first place: columns 0-3 (of 0-7), row 0 */
+            const char *where[] = {g.where_view, g.where_texel, g.where_cont_view, g.where_cont_texel,
+                                   g.where_cont_grazing, g.where_cont_cross};
+            int seen = 0;
+            for (int q = 0; q < 6 && !nan_lobes; ++q) { /* (NaN lobes break some ties) */
+                int c, r;
+                if (strstr(where[q], "level 1,") && place(where[q], &c, &r)) {
+                    ++seen;
+                    /* the texel spike (not periodic) skips column 0: its first place is in 1-4 */
+                    int first = q == 1 ? c >= 1 && c <= 4 : c < 4;
+                    CHECKF(first && r == 0, "%s %dx%d %dx%d: a tied level-1 worst not at its first place: %s",
+                           lambert ? "lambert" : "ggx", W, H, nt, np, where[q]);
+                }
+            }
+            CHECKF(nan_lobes || seen >= 2, "%s %dx%d: only %d level-1 places (the tie test needs some)", lambert ? "lambert" : "ggx",
+                   W, H, seen);
+            CHECKF(nan_lobes ? g.nan_entries == 3 : g.nan_entries == 0, "nan entries %ld (%d NaN lobes)", g.nan_entries,
+                   nan_lobes ? 3 : 0);
+            CHECKF(g.worst_energy > 0.0 && g.worst_level > 0.0 && g.worst_cont_cross > 0.0,
+                   "the synthetic run has no worsts to compare (energy %g, level %g, cross %g)", g.worst_energy,
+                   g.worst_level, g.worst_cont_cross);
+            continue;
+        }
+        CHECKF(memcmp(&g, &g1, sizeof g) == 0,
+               "%s %dx%d %dx%d views, %d threads against 1: the gate differs (energy %.17g / %.17g at %s / %s; "
+               "view %s / %s; cont texel %.17g / %.17g at %s / %s; cross %.17g / %.17g at %s / %s; nan %ld / %ld)",
+               lambert ? "lambert" : "ggx", W, H, nt, np, threads[t], g.worst_energy, g1.worst_energy, g.where_energy,
+               g1.where_energy, g.where_view, g1.where_view, g.worst_cont_texel, g1.worst_cont_texel,
+               g.where_cont_texel, g1.where_cont_texel, g.worst_cont_cross, g1.worst_cont_cross, g.where_cont_cross,
+               g1.where_cont_cross, g.nan_entries, g1.nan_entries);
+        /* the stream, rows fed by hand, on the same threads */
+        mf_prefilter_gate gs;
+        mf_prefilter_gate_bounds_default(&gs);
+        mf_prefilter_gate_stream *s;
+        CHECK(mf_prefilter_gate_stream_begin(lv, nl, n, W, H, &o, &gs, &s) == MF_OK);
+        int li, r;
+        while (mf_prefilter_gate_stream_next(s, &li, &r)) {
+            size_t off = (size_t)r * lv[li].width * nt * np;
+            CHECK(mf_prefilter_gate_stream_row(s, li, r, lv[li].m + 9 * off, lv[li].magnitude + off,
+                                               lv[li].albedo + off) == MF_OK);
+        }
+        CHECK(mf_prefilter_gate_stream_end(s) == MF_OK);
+        CHECKF(memcmp(&gs, &g1, sizeof gs) == 0, "%s %dx%d: streamed on %d threads differs from run_ref on 1",
+               lambert ? "lambert" : "ggx", W, H, threads[t]);
+    }
+    mf_prefilter_levels_free(lv, nl);
+    free(n);
+}
+
+int main(void)
+{
+    check_run(16, 8, 4, 4, 0, 0);  /* GGX: levels 8x4, 4x2, 2x1, 1x1 */
+    check_run(16, 16, 3, 5, 1, 0); /* GGX with NaN lobes; an odd phi count */
+    check_run(32, 4, 2, 4, 0, 1);  /* Lambert: a wide map, levels down to 16x2 ... 1x1 */
+    MF_TEST_MAIN_END();
+}
