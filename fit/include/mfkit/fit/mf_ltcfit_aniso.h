@@ -140,7 +140,17 @@ typedef struct mf_ltcfit_aniso_options {
     int objective;              /* MF_LTCFIT_ANISO_OBJECTIVE_DEFAULT (0): residual weights 1 / (I_k + 1 albedo),
                                  * close to absolute errors; MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE (opt-in):
                                  * 1 / (I_k + 0.01 albedo), close to relative errors (docs/validation.md) */
+    double ladder_alpha;        /* 0 (default): the entry point's own light family only.  > 0: the structured
+                                 * family (mf_ltcfit_aniso_entry_fit_general, _mirrored, _mirrored_two,
+                                 * _mirrored_multi: the prefilter's fits) gets MF_LTCFIT_ANISO_LADDER more
+                                 * lights, squares centred on the lobe's mean direction at distance 1 whose half
+                                 * sides run geometrically from ladder_alpha / 4 to 10 ladder_alpha (a base
+                                 * lobe's roughness: the lights resolve the base lobes of a mixture whose own
+                                 * spread sizes every other light; mf_ltcfit_aniso.c, "The ladder").  The
+                                 * random family of the table and of mf_ltcfit_aniso_entry_fit never reads it */
 } mf_ltcfit_aniso_options;
+
+#define MF_LTCFIT_ANISO_LADDER 8
 
 #define MF_LTCFIT_ANISO_OBJECTIVE_DEFAULT 0
 #define MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE 1
