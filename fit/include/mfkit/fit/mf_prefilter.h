@@ -35,6 +35,12 @@
  * applies M^-1), divided by the norm of its last column (mf_ltcfit_aniso.h).
  *
  * Fits (mf_prefilter_run).  Levels coarse to fine; per footprint:
+ *   - the light family: the anisotropic fitter's structured family (mf_ltcfit_aniso_entry_fit_general),
+ *     and for GGX since revision 6 its ladder of 8 squares centred on the view's mirror direction,
+ *     half sides alpha / 4 .. 10 alpha (mf_ltcfit_aniso_options.ladder_alpha = alpha; options.fit_lights):
+ *     the structured family sizes its lights by the footprint lobe's own spread, so a mixture of
+ *     base lobes far apart (a groove seen along the groove) had no light that resolves the gap
+ *     where the single lobe puts its peak (docs/prefilter.md, "The fit's light family").
  *   - its normals, clustered when it has >= MF_PREFILTER_CLUSTER_MIN texels: cells of side
  *     cluster_cell * alpha in slope space, each cell one component (the normalised sum of its
  *     normals, weight count / N).  Measured (tests/test_prefilter.c, test_clusters, 8 x 8 map of
