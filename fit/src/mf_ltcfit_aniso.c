@@ -106,6 +106,7 @@ typedef struct {
     double wfloor;   /* the residual weight's floor in albedos (AWEIGHT_FLOOR, or RELATIVE_FLOOR) */
     int mixed;       /* the weights of the table's default objective (light_weight) */
     int family;      /* FAMILY_* of the lights */
+    double ladder;   /* the options' ladder_alpha (FAMILY_SHAPED; set before atexel_prepare) */
     uint64_t *mask;  /* NULL, or per live direction the lights (bit k) it is inside (inside_masks) */
     int mask_ok;     /* mask holds this preparation's sets */
 } atexel;
@@ -240,6 +241,72 @@ static light make_light_shaped(mf_vec3 m, mf_vec3 t1, mf_vec3 t2, const double l
     return l;
 }
 
+/* The ladder (mf_ltcfit_aniso_options.ladder_alpha = a > 0): MF_LTCFIT_ANISO_LADDER squares of half
+ * side h_k = (a / 4) 40^(k / (LADDER - 1)) (a / 4 to 10 a, geometric) at distance 1, facing the shading
+ * point, centred on the mirror direction of the view about the geometric normal (ladder_centre).
+ * Why: every other light of the structured family is centred on the lobe's mean m and sized by the
+ * lobe's own spread L (lobe_shape).  For a mixture of base lobes far apart (a V-groove's two facets
+ * seen along the groove) L is about the clamp 1.2, so the smallest light is a cap of about 0.3 rad,
+ * and between the facet lobes, where one LTC puts its peak, the mixture has a gap that no light
+ * resolves: the fit cannot see what the peak costs a light smaller than the gap.  The mirror direction
+ * of the macro-surface is where a flat surface of the footprint's mean normal has its highlight, so
+ * where a viewer sees the lights that matter most for a distant, filtered surface (the issue's
+ * evaluation and the thesis' scenes light it there), and it lies in that gap.  A renderer's lights go
+ * down to the base lobe's own scale and below (a small lamp seen in a highlight), so the ladder spans
+ * a / 4 (a quarter of a GGX lobe's reflected half width 2 a) to 10 a (the mixture's scale, about 1
+ * rad at a = 0.1), with the family's weights (1 / (I + A)): it adds the absolute error of such lights.
+ * Centring the ladder on m instead was measured and rejected (docs/prefilter.md, "The fit's light
+ * family"): m lies in the gap too, but the fit then pushes the peak from m towards the mirror
+ * direction. */
+/* The ladder's centre: the view's mirror direction about z in the frame of the view in the xz plane,
+ * its elevation clamped to 75 deg so that the largest squares stay mostly above the horizon at
+ * grazing views (prefilter-eval clamps its lights the same way). */
+static mf_vec3 ladder_centre(double theta)
+{
+    double tl = fmin(theta, 75.0 * MF_PI / 180.0);
+    return mf_vec3_make(-sin(tl), 0.0, cos(tl));
+}
+
+static int make_lights_ladder(mf_vec3 m, mf_vec3 t1, mf_vec3 t2, double a, light *out)
+{
+    for (int k = 0; k < MF_LTCFIT_ANISO_LADDER; ++k) {
+        double h = 0.25 * a * pow(40.0, (double)k / (MF_LTCFIT_ANISO_LADDER - 1));
+        mf_vec3 v[4];
+        for (int i = 0; i < 4; ++i) {
+            double x = (i == 0 || i == 3) ? -h : h, y = i < 2 ? -h : h; /* counter-clockwise about m */
+            v[i] = mf_vec3_add(m, mf_vec3_add(mf_vec3_scale(t1, x), mf_vec3_scale(t2, y)));
+        }
+        light *l = &out[k];
+        l->poly = mf_polygon_make(4, v);
+        double cr = 1.0;
+        for (int i = 0; i < 4; ++i) {
+            l->edge_n[i] = mf_vec3_cross(v[i], v[(i + 1) % 4]);
+            cr = fmin(cr, mf_vec3_dot(m, mf_vec3_normalize(v[i])));
+        }
+        /* the cap about the centre through the vertices holds the square (see make_light_shaped) */
+        l->centre = m;
+        l->cos_radius = cr > 1e-6 ? cr - 1e-9 : -2.0;
+        l->factor = 1.0;
+    }
+    return MF_LTCFIT_ANISO_LADDER;
+}
+
+int mf_ltcfit_aniso_ladder_lights(double theta, double alpha, double *v)
+{
+    if (!v || !(alpha > 0.0 && alpha < INFINITY) || !(theta >= 0.0 && theta < 0.5 * MF_PI))
+        return -1;
+    mf_vec3 c = ladder_centre(theta), u1 = mf_vec3_make(c.z, 0.0, -c.x), u2 = mf_vec3_make(0.0, 1.0, 0.0);
+    light l[MF_LTCFIT_ANISO_LADDER];
+    int n = make_lights_ladder(c, u1, u2, alpha, l);
+    for (int k = 0; k < n; ++k)
+        for (int i = 0; i < 4; ++i) {
+            v[12 * k + 3 * i] = l[k].poly.v[i].x;
+            v[12 * k + 3 * i + 1] = l[k].poly.v[i].y;
+            v[12 * k + 3 * i + 2] = l[k].poly.v[i].z;
+        }
+    return n;
+}
+
 /* The anisotropic light family (the isotropic fitter's make_lights_basis with every lobe-sized
  * light shaped by L): centre n-gons, n-gons offset along +-t1, +-t2 (in units of L) and along the
  * four diagonals, then the lobe-independent lights (horizon, low, large caps) of the isotropic
@@ -353,6 +420,10 @@ static mf_status atexel_prepare(const mf_brdf_model *m, mf_brdf_params prm, doub
     lobe_shape(ws, sum, cp, sp, t1, t2, sym, lw);
     if (family == FAMILY_SHAPED) {
         t->k = make_lights_shaped(mv, t1, t2, lw, t->lights);
+        if (t->ladder > 0.0) {
+            mf_vec3 c = ladder_centre(theta), u1 = mf_vec3_make(c.z, 0.0, -c.x), u2 = mf_vec3_make(0.0, 1.0, 0.0);
+            t->k += make_lights_ladder(c, u1, u2, t->ladder, t->lights + t->k);
+        }
         for (int k = 0; k < t->k; ++k)
             rotate_light(&t->lights[k], cp, sp);
     } else {
@@ -1101,6 +1172,7 @@ static mf_status fit_entry_starts(const mf_brdf_model *model, mf_brdf_params prm
     if (!t)
         return MF_ERR_ALLOC;
     memset(out, 0, sizeof *out);
+    t->ladder = o->ladder_alpha;
     mf_status st = atexel_prepare(model, prm, theta, phi, sym, family, given_mag, scr, ws, t);
     t->mask = mask;
     t->mask_ok = 0;
@@ -1133,7 +1205,8 @@ static int check_options(const mf_ltcfit_aniso_options *o)
     if (!o || o->threads < 1 || o->threads > 256 || o->samples < 64 || o->samples > (1 << 20) ||
         (o->samples & (o->samples - 1)) || o->max_iterations < 1 ||
         (o->param != MF_LTC_ANISO_PARAM_ALPHA_XY && o->param != MF_LTC_ANISO_PARAM_ALPHA_LAMBDA) ||
-        (o->objective != MF_LTCFIT_ANISO_OBJECTIVE_DEFAULT && o->objective != MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE))
+        (o->objective != MF_LTCFIT_ANISO_OBJECTIVE_DEFAULT && o->objective != MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE) ||
+        !(o->ladder_alpha >= 0.0 && o->ladder_alpha < INFINITY))
         return 0;
     for (int k = 0; k < 4; ++k)
         if (o->n[k] < 2 || o->n[k] > 256)
@@ -1306,6 +1379,8 @@ mf_status mf_ltcfit_aniso_entry_fit_mirrored_multi(const mf_brdf_model *model, m
     uint32_t scr[2];
     sobol_scramble(o->seed, scr);
     atexel *t = malloc(sizeof *t);
+    if (t)
+        t->ladder = o->ladder_alpha;
     mf_status st = t ? atexel_prepare(model, prm, theta, 0.0, mirrors, FAMILY_SHAPED, mag, scr, &w->ws, t) : MF_ERR_ALLOC;
     if (t) {
         t->mask = w->mask;

@@ -1049,6 +1049,8 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
     fo.samples = o->samples;
     fo.max_iterations = o->max_iterations;
     fo.seed = o->seed;
+    /* the ladder of base-lobe-sized lights (revision 6; mf_ltcfit_aniso_options.ladder_alpha) */
+    fo.ladder_alpha = o->fit_lights == MF_PREFILTER_LIGHTS_LADDER && o->base == MF_PREFILTER_BASE_GGX ? o->alpha : 0.0;
     mf_brdf_params p = base_params(o);
     /* the per-component arrays (rn .. key) are sized by the component count nc, known after the
      * clustering: bounded for the largest footprints (one per occupied slope cell) */
@@ -1378,6 +1380,8 @@ static mf_status check_run(const double *normals, int width, int height, const m
         return FAIL("views %d x %d: need 2..256 elevations x 1..256 azimuths", o->n_theta, o->n_phi);
     if (o->threads < 1 || o->threads > 256)
         return FAIL("threads %d not in 1..256", o->threads);
+    if (o->fit_lights != MF_PREFILTER_LIGHTS_LADDER && o->fit_lights != MF_PREFILTER_LIGHTS_LOBE)
+        return FAIL("fit_lights %d is neither MF_PREFILTER_LIGHTS_LADDER nor MF_PREFILTER_LIGHTS_LOBE", o->fit_lights);
     if (!(o->cluster_cell >= 0.0 && o->cluster_cell <= 4.0))
         return FAIL("cluster cell %g not in [0, 4]", o->cluster_cell);
     if (!is_pow2(width) || !is_pow2(height) || (width == 1 && height == 1) || width > 4096 || height > 4096)

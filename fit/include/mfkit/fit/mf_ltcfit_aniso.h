@@ -140,7 +140,18 @@ typedef struct mf_ltcfit_aniso_options {
     int objective;              /* MF_LTCFIT_ANISO_OBJECTIVE_DEFAULT (0): residual weights 1 / (I_k + 1 albedo),
                                  * close to absolute errors; MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE (opt-in):
                                  * 1 / (I_k + 0.01 albedo), close to relative errors (docs/validation.md) */
+    double ladder_alpha;        /* 0 (default): the entry point's own light family only.  > 0: the structured
+                                 * family (mf_ltcfit_aniso_entry_fit_general, _mirrored, _mirrored_two,
+                                 * _mirrored_multi: the prefilter's fits) gets MF_LTCFIT_ANISO_LADDER more
+                                 * lights, squares at distance 1 centred on the view's mirror direction about
+                                 * the normal (elevation clamped to 75 deg) whose half sides run geometrically
+                                 * from ladder_alpha / 4 to 10 ladder_alpha (a base lobe's roughness: lights
+                                 * that resolve a mixture of base lobes whose own spread sizes every other
+                                 * light; mf_ltcfit_aniso.c, "The ladder").  The
+                                 * random family of the table and of mf_ltcfit_aniso_entry_fit never reads it */
 } mf_ltcfit_aniso_options;
+
+#define MF_LTCFIT_ANISO_LADDER 8
 
 #define MF_LTCFIT_ANISO_OBJECTIVE_DEFAULT 0
 #define MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE 1
@@ -252,6 +263,13 @@ mf_status mf_ltcfit_aniso_entry_fit_mirrored_multi(const mf_brdf_model *model, m
                                                    const double *const *starts, int nstarts, double accept,
                                                    const mf_ltcfit_aniso_options *o, mf_ltcfit_aniso_entry *out,
                                                    int *nsolved) MF_WARN_UNUSED;
+
+/* For tests: the ladder's squares (mf_ltcfit_aniso_options.ladder_alpha = alpha > 0) for the view at
+ * elevation theta in the xz plane (azimuth 0): v gets MF_LTCFIT_ANISO_LADDER x 4 vertices (xyz, square
+ * after square), in the plane at distance 1 of the centre c = (-sin t, 0, cos t), t = min(theta, 75 deg),
+ * counter-clockwise about c.  Returns MF_LTCFIT_ANISO_LADDER, or -1 (alpha not > 0 and finite, theta not
+ * in [0, pi/2), v NULL). */
+int mf_ltcfit_aniso_ladder_lights(double theta, double alpha, double *v);
 
 /* Writes the published layout: a little-endian float32 .npy of shape (n0, n1, n2, n3, 3, 3),
  * C order (the LAST table axis fastest, unlike mf_table's storage), the forward M of each entry

@@ -35,6 +35,12 @@
  * applies M^-1), divided by the norm of its last column (mf_ltcfit_aniso.h).
  *
  * Fits (mf_prefilter_run).  Levels coarse to fine; per footprint:
+ *   - the light family: the anisotropic fitter's structured family (mf_ltcfit_aniso_entry_fit_general),
+ *     and for GGX since revision 6 its ladder of 8 squares centred on the view's mirror direction,
+ *     half sides alpha / 4 .. 10 alpha (mf_ltcfit_aniso_options.ladder_alpha = alpha; options.fit_lights):
+ *     the structured family sizes its lights by the footprint lobe's own spread, so a mixture of
+ *     base lobes far apart (a groove seen along the groove) had no light that resolves the gap
+ *     where the single lobe puts its peak (docs/prefilter.md, "The fit's light family").
  *   - its normals, clustered when it has >= MF_PREFILTER_CLUSTER_MIN texels: cells of side
  *     cluster_cell * alpha in slope space, each cell one component (the normalised sum of its
  *     normals, weight count / N).  Measured (tests/test_prefilter.c, test_clusters, 8 x 8 map of
@@ -110,7 +116,7 @@ extern "C" {
 #define MF_PREFILTER_COS_MIN 0.001
 /* Names the fitted values: bump it whenever they change (objective, starts, constants), so that a
  * resumed `mfkit prefilter` refuses tiles of another revision. */
-#define MF_PREFILTER_REVISION 5
+#define MF_PREFILTER_REVISION 6
 #define MF_PREFILTER_ALBEDO_N 64
 #define MF_PREFILTER_THETA_MAX (0.999 * 0.5 * MF_PI)
 /* Footprints of at least MF_PREFILTER_CLUSTER_MIN texels are fitted to a clustered mixture: cells
@@ -214,7 +220,16 @@ typedef struct mf_prefilter_options {
      * result. */
     void (*progress)(void *user, long lobes);
     void *progress_user;
+    int fit_lights;      /* the fits' light family: MF_PREFILTER_LIGHTS_LADDER (0, the default since revision 6):
+                            the structured family plus, for GGX, a ladder of squares sized by the base
+                            lobe (mf_ltcfit_aniso_options.ladder_alpha = alpha; Lambert: no ladder, the
+                            same lobes as MF_PREFILTER_LIGHTS_LOBE); MF_PREFILTER_LIGHTS_LOBE (1): the
+                            structured family alone, every light sized by the footprint lobe's own spread
+                            (revision 5; for comparisons).  docs/prefilter.md, "The fit's light family" */
 } mf_prefilter_options;
+
+#define MF_PREFILTER_LIGHTS_LADDER 0
+#define MF_PREFILTER_LIGHTS_LOBE 1
 
 void mf_prefilter_options_default(mf_prefilter_options *o);
 /* The diffuse table's defaults: Lambert, 2 x 4 views, the rest as mf_prefilter_options_default. */
