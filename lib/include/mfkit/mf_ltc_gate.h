@@ -228,6 +228,15 @@ mf_status mf_ltc_gate_neighbour_scores_box(const mf_table *t, const mf_brdf_mode
  * (c then failed). */
 mf_status mf_ltc_gate_neighbour_check(const mf_table *t, const mf_brdf_model *model, uint64_t seed, mf_check *c);
 
+/* What `mfkit validate TABLE` runs on an LTC table (and the Python module's validate(), so both
+ * give the same report): mf_ltc_gate_run, then with a model the neighbour check
+ * (mf_ltc_gate_neighbour_check with o's seed) as the last check.  cap >= MF_LTC_VALIDATE_MAX_CHECKS.
+ * Returns as mf_ltc_gate_run (MF_ERR_CHECK_FAILED when any check, the neighbour check included,
+ * failed). */
+#define MF_LTC_VALIDATE_MAX_CHECKS (MF_LTC_GATE_MAX_CHECKS + 1)
+mf_status mf_ltc_gate_validate(const mf_table *t, const mf_brdf_model *model, const mf_ltc_gate_options *o,
+                               mf_check *checks, int cap, int *count) MF_WARN_UNUSED;
+
 #ifdef __cplusplus
 }
 #endif
