@@ -183,6 +183,47 @@ static void magnitude_sweep(const char *title, const mf_table *t, const mf_brdf_
            title, ncases, cpu_seconds() - c0, above_f, above, below_f, below);
 }
 
+static int fit_model(const mf_brdf_model *model, int n, int samples, mf_table *t)
+{
+    mf_ltcfit_options fo;
+    mf_ltcfit_options_default(&fo);
+    fo.n_r = fo.n_u = n;
+    fo.threads = 2;
+    if (samples > 0)
+        fo.samples = samples;
+    mf_ltcfit_result fr;
+    char msg[512] = "";
+    mf_status st = mf_ltcfit_table(model, &fo, t, &fr, msg, sizeof msg);
+    CHECK(st == MF_OK);
+    if (st != MF_OK) {
+        fprintf(stderr, "fit %s %d x %d: %s\n", model->name, n, n, msg);
+        return 0;
+    }
+    mf_ltcfit_result_free(&fr);
+    return 1;
+}
+
+/* Every registered model's table fitted at n x n (samples directions per texel, 0: the default)
+ * passes the neighbour check (`mfkit validate` on a table mfkit itself ships must not fail). */
+static void models_pass(int n, int samples)
+{
+    for (int i = 0; mf_brdf_models[i]; ++i) {
+        const mf_brdf_model *m = mf_brdf_models[i];
+        double c0 = cpu_seconds();
+        mf_table t;
+        if (!fit_model(m, n, samples, &t))
+            continue;
+        double c1 = cpu_seconds(), w;
+        char at[256];
+        int f = check_fails(&t, m, &w, at, sizeof at);
+        printf("neighbours: %-14s %d x %d (%d samples): %s, worst %.4g at %s (fit %.2f s, check %.2f s CPU)\n",
+               m->name, n, n, samples, f ? "FAILS" : "passes", w, at, c1 - c0, cpu_seconds() - c1);
+        if (f)
+            MF_FAIL_AT("false alarm: %s fitted at %d x %d fails ltc_texel_neighbours (%.4g at %s)", m->name, n, n, w, at);
+        mf_table_free(&t);
+    }
+}
+
 static int fit_ggx(int n, mf_table *t)
 {
     const mf_brdf_model *ggx = mf_brdf_model_find("ggx");
@@ -218,6 +259,11 @@ static double expect_pass(const char *title, const mf_table *t, const mf_brdf_mo
 int main(int argc, char **argv)
 {
     setvbuf(stdout, NULL, _IOLBF, 0); /* progress lines as they come, also into a file */
+    if (argc > 1 && !strcmp(argv[1], "models")) {
+        /* models [N [SAMPLES]]: every registered model fitted at N x N (default 16) passes */
+        models_pass(argc > 2 ? atoi(argv[2]) : 16, argc > 3 ? atoi(argv[3]) : 0);
+        MF_TEST_MAIN_END();
+    }
     int full16 = argc > 1 && !strcmp(argv[1], "full16"); /* the full study at 16 x 16 only */
     int full64 = argc > 1 && !strcmp(argv[1], "full64"); /* ... at 64 x 64 only */
     int fullref = argc > 1 && !strcmp(argv[1], "fullref"); /* the reference table's sweep only */
