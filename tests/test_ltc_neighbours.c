@@ -24,7 +24,10 @@
  * usage: test_ltc_neighbours [full | full16 | full64 | fullref] [REFERENCE_DIR]   (full: the study
  * at 16, 32, 64, the reference table and the magnitude, label slow; full16, full64: the study at
  * that size only; fullref: the reference table's sweep only; environment MF_TEST_VERBOSE=1: one
- * line per corruption; MF_TEST_SKIP_MAGNITUDE=1: no magnitude sweep)
+ * line per corruption; MF_TEST_SKIP_MAGNITUDE=1: no magnitude sweep; MF_TEST_GATE_MISSES=1: each
+ * corruption with D >= 0.11 the check misses also runs through mf_ltc_gate_run, full mode, to
+ * measure what `mfkit validate` as a whole catches; models [N [SAMPLES]]: every registered model
+ * fitted at N x N passes the check)
  */
 #include "mf_test.h"
 
@@ -71,6 +74,7 @@ static int check_fails(const mf_table *t, const mf_brdf_model *m, double *worst,
 typedef struct {
     int n[6], f[6];   /* by D bin */
     int fn[4], ff[4]; /* D > 0.11 by field */
+    int gate_n, gate_f; /* (MF_TEST_GATE_MISSES) misses with D >= 0.11 run through mf_ltc_gate_run: failed */
 } sweep_stats;
 static const double k_edges[7] = {0.0, 0.05, 0.09, 0.11, 0.2, 0.5, INFINITY};
 
@@ -109,6 +113,22 @@ static void matrix_sweep(const char *title, const mf_table *t, const mf_brdf_mod
         if (getenv("MF_TEST_VERBOSE"))
             printf("  %s case %3d texel (%2d, %2d) %-8s %+5.2f: D %-9.4g %s (worst %.3g)\n", title, k, ir, iu,
                    mf_ltc_table_fields[fi], delta, D, fl ? "flagged" : "passes", worst);
+        if (!fl && D >= 0.11 && getenv("MF_TEST_GATE_MISSES")) {
+            /* the rest of `mfkit validate` (mf_ltc_gate_run, full mode, seed 1) on a miss */
+            mf_ltc_gate_options o;
+            mf_ltc_gate_options_default(&o);
+            mf_check c[MF_LTC_GATE_MAX_CHECKS];
+            int nc = 0;
+            mf_status gs = mf_ltc_gate_run(&bad, m, &o, c, MF_LTC_GATE_MAX_CHECKS, &nc);
+            CHECK(gs == MF_OK || gs == MF_ERR_CHECK_FAILED);
+            ++st->gate_n;
+            st->gate_f += gs != MF_OK;
+            printf("  %s case %3d missed (D %.3g): the rest of the gate %s", title, k, D, gs == MF_OK ? "passes" : "fails");
+            for (int i = 0; i < nc; ++i)
+                if (!c[i].passed)
+                    printf(", %s %.3g", c[i].name, c[i].worst);
+            printf("\n");
+        }
         for (int q = 0; q < 6; ++q)
             if (D >= k_edges[q] && D < k_edges[q + 1]) {
                 ++st->n[q];
@@ -131,6 +151,10 @@ static void matrix_sweep(const char *title, const mf_table *t, const mf_brdf_mod
            "minv_22 %d/%d; flagged with D < 0.05: %d/%d\n",
            title, af, an, an ? (double)af / an : NAN, st->ff[0], st->fn[0], st->ff[1], st->fn[1], st->ff[2], st->fn[2],
            st->ff[3], st->fn[3], st->f[0], st->n[0]);
+    if (st->gate_n)
+        printf("neighbours: %s: of the %d misses with D >= 0.11, %d fail the rest of the gate (full mode): `mfkit "
+               "validate` catches %d/%d\n",
+               title, st->gate_n, st->gate_f, af + st->gate_f, an);
 }
 
 /* Magnitude corruptions through the gate (ltc_albedo_quad at every texel, full mode). */

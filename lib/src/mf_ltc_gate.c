@@ -1130,7 +1130,8 @@ double mf_ltc_gate_texel_difference(const mf_ltc *ltc, double magnitude, const m
  * log S), and the stored texel is compared with each prediction by the texel check's d on its 24 gate
  * polygons, magnitudes set to 1 (the magnitude is the albedo checks' business).  s = the second
  * smallest d over the predictions; e = the largest, over the texel's (up to 4) axis neighbours, of
- * the neighbour's smallest d over its predictions whose stencils do not use this texel.  The
+ * the neighbour's smallest d over its predictions whose stencils do not use this texel, and over its
+ * (up to 4) diagonal neighbours, of the neighbour's smallest d.  The
  * check's value is s / (NB_TAU + NB_C e). */
 #define NB_TAU MF_LTC_GATE_NEIGHBOUR_TAU
 #define NB_C MF_LTC_GATE_NEIGHBOUR_C

@@ -187,13 +187,16 @@ double mf_ltc_gate_texel_difference(const mf_ltc *ltc, double magnitude, const m
  * along u), each in two spaces of the matrix block
  * [[minv_00, minv_02], [minv_20, minv_22]]: the stored fields, and log-polar (B = R(psi) S, S
  * symmetric positive definite: psi and log S), which follows the narrow lobes of low roughness
- * whose fields change by orders of magnitude between texels.  With d the texel check's difference
+ * whose fields change by orders of magnitude between texels (a prediction whose block has
+ * determinant <= 0, a lobe peaking at or below the horizon, is dropped).  With d the texel check's difference
  * (mf_ltc_gate_texel_difference, magnitudes 1: the albedo checks cover the magnitude) on the texel's
  * gate polygons (mf_ltc_gate_texel_polygons):
  *   s = the second smallest, over the 12 predictions, of d(stored, prediction) (each the smaller
  *       of its two spaces; one prediction alone can lie near a corrupted texel where the stencils
  *       scatter),
- *   e = max over the texel's axis neighbours j of s_j without the stencils that use this texel,
+ *   e = max over the texel's 4 axis neighbours j of their smallest d without the stencils that use
+ *       this texel, and over its 4 diagonal neighbours of their smallest d (no stencil of theirs
+ *       uses the texel),
  *   value = s / (MF_LTC_GATE_NEIGHBOUR_TAU + MF_LTC_GATE_NEIGHBOUR_C e), bound 1.
  * A smooth region (e small) allows a texel 0.06 of shading difference from its neighbours'
  * prediction, a little over half the issue's 10 % (so that a corruption of 0.1 still reads above
