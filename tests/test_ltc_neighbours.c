@@ -19,8 +19,11 @@
  *
  * Asserted (fast, CI): the good 16 x 16 table and the reference table pass; the issue's own example
  * (texel (5, 9) of the 16 x 16 table, minv_00 x 1.3) fails; of 150 corruptions of the 16 x 16
- * table none with D < 0.05 is flagged, and at least 80 % of those with D > 0.11 are (measured:
- * 86 %; a regression guard, not a claim of power 1: docs/validation.md, "The neighbour check").
+ * table none with D < 0.05 is flagged, and at least 85 % of those with D > 0.11 are (measured:
+ * 88 %, 86 % before predictions of determinant <= 0 were dropped; a regression guard, not a claim
+ * of power 1: docs/validation.md, "The neighbour check"); a point lobe at alpha 1e-4 flipped below
+ * the horizon (texel (0, 11), minv_22 - 0.001: D = 1) fails (it passed, every value <= 0.74, while such
+ * predictions counted).
  * usage: test_ltc_neighbours [full | full16 | full64 | fullref] [REFERENCE_DIR]   (full: the study
  * at 16, 32, 64, the reference table and the magnitude, label slow; full16, full64: the study at
  * that size only; fullref: the reference table's sweep only; environment MF_TEST_VERBOSE=1: one
@@ -336,6 +339,16 @@ int main(int argc, char **argv)
             if (!f)
                 MF_FAIL_AT("the issue's example (texel (5, 9) minv_00 x 1.3) passes ltc_texel_neighbours (%.4g)", w);
             mf_table_free(&bad);
+            /* a point lobe flipped below the horizon: minv_22 (about 2.5e-5 at alpha 1e-4) - 0.001 */
+            CHECK(mf_table_copy(&bad, &good) == MF_OK);
+            int idx2[2] = {0, 11};
+            mf_table_record(&bad, idx2)[mf_table_field(&bad, "minv_22")] -= 1e-3;
+            f = check_fails(&bad, ggx, &w, at, sizeof at);
+            printf("neighbours: texel (0, 11) minv_22 - 0.001 (a flipped point lobe): %s (%.4g at %s)\n",
+                   f ? "fails" : "passes", w, at);
+            if (!f)
+                MF_FAIL_AT("a point lobe flipped below the horizon (texel (0, 11) minv_22 - 0.001) passes (%.4g)", w);
+            mf_table_free(&bad);
         }
         sweep_stats st;
         matrix_sweep(title, &good, ggx, full ? 300 : 150, (uint64_t)n, &st);
@@ -344,8 +357,8 @@ int main(int argc, char **argv)
             CHECK(st.n[0] >= 30 && an >= 40); /* both sides populated by the seed */
             if (st.f[0] != 0)
                 MF_FAIL_AT("%d of %d corruptions with D < 0.05 flagged (measured 0)", st.f[0], st.n[0]);
-            if (!(af >= 0.8 * an))
-                MF_FAIL_AT("power %d of %d on D >= 0.11, below the guard 0.8 (measured 0.86)", af, an);
+            if (!(af >= 0.85 * an))
+                MF_FAIL_AT("power %d of %d on D >= 0.11, below the guard 0.85 (measured 0.88)", af, an);
         }
         if (full && !getenv("MF_TEST_SKIP_MAGNITUDE"))
             magnitude_sweep(title, &good, ggx, 40);
