@@ -234,6 +234,11 @@ static int fit_model(const mf_brdf_model *model, int n, int samples, mf_table *t
  * passes the neighbour check (`mfkit validate` on a table mfkit itself ships must not fail). */
 static void models_pass(int n, int samples)
 {
+    if (samples <= 0) {
+        mf_ltcfit_options fo;
+        mf_ltcfit_options_default(&fo);
+        samples = fo.samples; /* the default, printed */
+    }
     for (int i = 0; mf_brdf_models[i]; ++i) {
         const mf_brdf_model *m = mf_brdf_models[i];
         double c0 = cpu_seconds();
