@@ -19,12 +19,18 @@
  *
  * Asserted (fast, CI): the good 16 x 16 table and the reference table pass; the issue's own example
  * (texel (5, 9) of the 16 x 16 table, minv_00 x 1.3) fails; of 150 corruptions of the 16 x 16
- * table none with D < 0.05 is flagged, and at least 80 % of those with D > 0.11 are (measured:
- * 86 %; a regression guard, not a claim of power 1: docs/validation.md, "The neighbour check").
+ * table none with D < 0.05 is flagged, and at least 85 % of those with D > 0.11 are (measured:
+ * 88 %, 86 % before predictions of determinant <= 0 were dropped; a regression guard, not a claim
+ * of power 1: docs/validation.md, "The neighbour check"); a point lobe at alpha 1e-4 flipped below
+ * the horizon (texel (0, 11), minv_22 - 0.001: D = 1) fails (it passed, every value <= 0.74, while such
+ * predictions counted).
  * usage: test_ltc_neighbours [full | full16 | full64 | fullref] [REFERENCE_DIR]   (full: the study
  * at 16, 32, 64, the reference table and the magnitude, label slow; full16, full64: the study at
  * that size only; fullref: the reference table's sweep only; environment MF_TEST_VERBOSE=1: one
- * line per corruption; MF_TEST_SKIP_MAGNITUDE=1: no magnitude sweep)
+ * line per corruption; MF_TEST_SKIP_MAGNITUDE=1: no magnitude sweep; MF_TEST_GATE_MISSES=1: each
+ * corruption with D >= 0.11 the check misses also runs through mf_ltc_gate_run, full mode, to
+ * measure what `mfkit validate` as a whole catches; models [N [SAMPLES]]: every registered model
+ * fitted at N x N passes the check)
  */
 #include "mf_test.h"
 
@@ -71,6 +77,7 @@ static int check_fails(const mf_table *t, const mf_brdf_model *m, double *worst,
 typedef struct {
     int n[6], f[6];   /* by D bin */
     int fn[4], ff[4]; /* D > 0.11 by field */
+    int gate_n, gate_f; /* (MF_TEST_GATE_MISSES) misses with D >= 0.11 run through mf_ltc_gate_run: failed */
 } sweep_stats;
 static const double k_edges[7] = {0.0, 0.05, 0.09, 0.11, 0.2, 0.5, INFINITY};
 
@@ -109,6 +116,22 @@ static void matrix_sweep(const char *title, const mf_table *t, const mf_brdf_mod
         if (getenv("MF_TEST_VERBOSE"))
             printf("  %s case %3d texel (%2d, %2d) %-8s %+5.2f: D %-9.4g %s (worst %.3g)\n", title, k, ir, iu,
                    mf_ltc_table_fields[fi], delta, D, fl ? "flagged" : "passes", worst);
+        if (!fl && D >= 0.11 && getenv("MF_TEST_GATE_MISSES")) {
+            /* the rest of `mfkit validate` (mf_ltc_gate_run, full mode, seed 1) on a miss */
+            mf_ltc_gate_options o;
+            mf_ltc_gate_options_default(&o);
+            mf_check c[MF_LTC_GATE_MAX_CHECKS];
+            int nc = 0;
+            mf_status gs = mf_ltc_gate_run(&bad, m, &o, c, MF_LTC_GATE_MAX_CHECKS, &nc);
+            CHECK(gs == MF_OK || gs == MF_ERR_CHECK_FAILED);
+            ++st->gate_n;
+            st->gate_f += gs != MF_OK;
+            printf("  %s case %3d missed (D %.3g): the rest of the gate %s", title, k, D, gs == MF_OK ? "passes" : "fails");
+            for (int i = 0; i < nc; ++i)
+                if (!c[i].passed)
+                    printf(", %s %.3g", c[i].name, c[i].worst);
+            printf("\n");
+        }
         for (int q = 0; q < 6; ++q)
             if (D >= k_edges[q] && D < k_edges[q + 1]) {
                 ++st->n[q];
@@ -131,6 +154,10 @@ static void matrix_sweep(const char *title, const mf_table *t, const mf_brdf_mod
            "minv_22 %d/%d; flagged with D < 0.05: %d/%d\n",
            title, af, an, an ? (double)af / an : NAN, st->ff[0], st->fn[0], st->ff[1], st->fn[1], st->ff[2], st->fn[2],
            st->ff[3], st->fn[3], st->f[0], st->n[0]);
+    if (st->gate_n)
+        printf("neighbours: %s: of the %d misses with D >= 0.11, %d fail the rest of the gate (full mode): `mfkit "
+               "validate` catches %d/%d\n",
+               title, st->gate_n, st->gate_f, af + st->gate_f, an);
 }
 
 /* Magnitude corruptions through the gate (ltc_albedo_quad at every texel, full mode). */
@@ -183,6 +210,52 @@ static void magnitude_sweep(const char *title, const mf_table *t, const mf_brdf_
            title, ncases, cpu_seconds() - c0, above_f, above, below_f, below);
 }
 
+static int fit_model(const mf_brdf_model *model, int n, int samples, mf_table *t)
+{
+    mf_ltcfit_options fo;
+    mf_ltcfit_options_default(&fo);
+    fo.n_r = fo.n_u = n;
+    fo.threads = 2;
+    if (samples > 0)
+        fo.samples = samples;
+    mf_ltcfit_result fr;
+    char msg[512] = "";
+    mf_status st = mf_ltcfit_table(model, &fo, t, &fr, msg, sizeof msg);
+    CHECK(st == MF_OK);
+    if (st != MF_OK) {
+        fprintf(stderr, "fit %s %d x %d: %s\n", model->name, n, n, msg);
+        return 0;
+    }
+    mf_ltcfit_result_free(&fr);
+    return 1;
+}
+
+/* Every registered model's table fitted at n x n (samples directions per texel, 0: the default)
+ * passes the neighbour check (`mfkit validate` on a table mfkit itself ships must not fail). */
+static void models_pass(int n, int samples)
+{
+    if (samples <= 0) {
+        mf_ltcfit_options fo;
+        mf_ltcfit_options_default(&fo);
+        samples = fo.samples; /* the default, printed */
+    }
+    for (int i = 0; mf_brdf_models[i]; ++i) {
+        const mf_brdf_model *m = mf_brdf_models[i];
+        double c0 = cpu_seconds();
+        mf_table t;
+        if (!fit_model(m, n, samples, &t))
+            continue;
+        double c1 = cpu_seconds(), w;
+        char at[256];
+        int f = check_fails(&t, m, &w, at, sizeof at);
+        printf("neighbours: %-14s %d x %d (%d samples): %s, worst %.4g at %s (fit %.2f s, check %.2f s CPU)\n",
+               m->name, n, n, samples, f ? "FAILS" : "passes", w, at, c1 - c0, cpu_seconds() - c1);
+        if (f)
+            MF_FAIL_AT("false alarm: %s fitted at %d x %d fails ltc_texel_neighbours (%.4g at %s)", m->name, n, n, w, at);
+        mf_table_free(&t);
+    }
+}
+
 static int fit_ggx(int n, mf_table *t)
 {
     const mf_brdf_model *ggx = mf_brdf_model_find("ggx");
@@ -218,6 +291,11 @@ static double expect_pass(const char *title, const mf_table *t, const mf_brdf_mo
 int main(int argc, char **argv)
 {
     setvbuf(stdout, NULL, _IOLBF, 0); /* progress lines as they come, also into a file */
+    if (argc > 1 && !strcmp(argv[1], "models")) {
+        /* models [N [SAMPLES]]: every registered model fitted at N x N (default 16) passes */
+        models_pass(argc > 2 ? atoi(argv[2]) : 16, argc > 3 ? atoi(argv[3]) : 0);
+        MF_TEST_MAIN_END();
+    }
     int full16 = argc > 1 && !strcmp(argv[1], "full16"); /* the full study at 16 x 16 only */
     int full64 = argc > 1 && !strcmp(argv[1], "full64"); /* ... at 64 x 64 only */
     int fullref = argc > 1 && !strcmp(argv[1], "fullref"); /* the reference table's sweep only */
@@ -266,6 +344,16 @@ int main(int argc, char **argv)
             if (!f)
                 MF_FAIL_AT("the issue's example (texel (5, 9) minv_00 x 1.3) passes ltc_texel_neighbours (%.4g)", w);
             mf_table_free(&bad);
+            /* a point lobe flipped below the horizon: minv_22 (about 2.5e-5 at alpha 1e-4) - 0.001 */
+            CHECK(mf_table_copy(&bad, &good) == MF_OK);
+            int idx2[2] = {0, 11};
+            mf_table_record(&bad, idx2)[mf_table_field(&bad, "minv_22")] -= 1e-3;
+            f = check_fails(&bad, ggx, &w, at, sizeof at);
+            printf("neighbours: texel (0, 11) minv_22 - 0.001 (a flipped point lobe): %s (%.4g at %s)\n",
+                   f ? "fails" : "passes", w, at);
+            if (!f)
+                MF_FAIL_AT("a point lobe flipped below the horizon (texel (0, 11) minv_22 - 0.001) passes (%.4g)", w);
+            mf_table_free(&bad);
         }
         sweep_stats st;
         matrix_sweep(title, &good, ggx, full ? 300 : 150, (uint64_t)n, &st);
@@ -274,8 +362,8 @@ int main(int argc, char **argv)
             CHECK(st.n[0] >= 30 && an >= 40); /* both sides populated by the seed */
             if (st.f[0] != 0)
                 MF_FAIL_AT("%d of %d corruptions with D < 0.05 flagged (measured 0)", st.f[0], st.n[0]);
-            if (!(af >= 0.8 * an))
-                MF_FAIL_AT("power %d of %d on D >= 0.11, below the guard 0.8 (measured 0.86)", af, an);
+            if (!(af >= 0.85 * an))
+                MF_FAIL_AT("power %d of %d on D >= 0.11, below the guard 0.85 (measured 0.88)", af, an);
         }
         if (full && !getenv("MF_TEST_SKIP_MAGNITUDE"))
             magnitude_sweep(title, &good, ggx, 40);

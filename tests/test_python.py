@@ -7,6 +7,7 @@ several functions and options, shapes and broadcasting, errors as exceptions wit
 message, and a table round trip through every readable format.  Exact comparisons throughout:
 both sides run the same C code on the same doubles, so there is no tolerance.
 """
+import json
 import os
 import subprocess
 import sys
@@ -201,6 +202,43 @@ with tempfile.TemporaryDirectory() as tmp:
     check(r.kind == "ltc_isotropic" and len(r.checks) >= 4 and all(isinstance(c.worst, float) for c in r.checks),
           "validate(reference csv, brdf='none'): %s, %d checks" % (r.kind, len(r.checks)))
     expect(mfkit.DomainError, "unknown BRDF 'phong'", mfkit.validate, ref, brdf="phong", progress=False)
+
+    # validate with a model runs what `mfkit validate TABLE` runs, the neighbour check included
+    # (mf_ltc_gate_validate, the same C function): every check's worst, bound, cases and place
+    # must be the CLI's, bit for bit (the CLI prints %.17g, which reads back exactly).  Quick mode:
+    # about 1.5 s of CPU per call on this 64 x 64 table.
+    def cli_validate(path):
+        p = subprocess.run([MFKIT, "validate", path, "--brdf", "ggx", "--quick", "--json", "--quiet"],
+                           capture_output=True, text=True)
+        return p.returncode, json.loads(p.stdout)
+
+    def same_report(r, rc, j, what):
+        names = [c.name for c in r.checks]
+        ok = (names == [c["name"] for c in j["checks"]] and r.passed == j["passed"] and rc == (0 if r.passed else 1)
+              and all(same_bits(c.worst, float(d["worst"])) and same_bits(c.bound, float(d["bound"]))
+                      and c.passed == d["passed"] and c.cases == d["cases"] and c.worst_at == d["worst_at"]
+                      for c, d in zip(r.checks, j["checks"])))
+        check(ok, "%s: the same %d checks as `mfkit validate` (exit %d), bit for bit" % (what, len(names), rc))
+
+    r = mfkit.validate(ref, brdf="ggx", quick=True, progress=False)
+    nb = [c for c in r.checks if c.name == "ltc_texel_neighbours"]
+    check(len(nb) == 1 and nb[0].passed and nb[0].cases == 64 * 64,
+          "validate(reference csv, brdf='ggx') runs ltc_texel_neighbours at every texel and it passes: %r" % nb)
+    rc, j = cli_validate(ref)
+    same_report(r, rc, j, "validate(reference csv, brdf='ggx', quick=True)")
+    # one texel's minv_00 x 1.3 (the issue's corruption): the neighbour check fails there, and the
+    # Python report is the CLI's on the same file
+    t = mfkit.read_table(ref)
+    t.data[40, 30, t.fields.index("minv_00")] *= 1.3
+    bad = os.path.join(tmp, "bad.json")
+    mfkit.write_table(bad, t)
+    r = mfkit.validate(bad, brdf="ggx", quick=True, progress=False)
+    nb = [c for c in r.checks if c.name == "ltc_texel_neighbours"]
+    check(len(nb) == 1 and not nb[0].passed and "(ir 30, iu 40:" in nb[0].worst_at,
+          "validate(one texel minv_00 x 1.3): ltc_texel_neighbours fails at (30, 40): %r %s"
+          % (nb, nb[0].worst_at if nb else ""))
+    rc, j = cli_validate(bad)
+    same_report(r, rc, j, "validate(one texel minv_00 x 1.3)")
 
 if failures:
     print("%d FAILED" % len(failures))

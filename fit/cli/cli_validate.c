@@ -205,25 +205,15 @@ static int validate_table(const char *path, const char *path2, const char *brdf,
     mf_ltc_gate_stats stats;
     memset(&stats, 0, sizeof stats);
     o.stats = &stats;
-    mf_check checks[MF_LTC_GATE_MAX_CHECKS + 1]; /* + the neighbour check */
+    mf_check checks[MF_LTC_VALIDATE_MAX_CHECKS]; /* the gate and the neighbour check */
     int n = 0;
     struct timespec t0;
     clock_gettime(CLOCK_MONOTONIC, &t0);
     if (!quiet && isatty(fileno(stderr)))
         fprintf(stderr, "mfkit validate: running the LTC gate on %s (%s)...\n", path, model ? model->name : "no model");
-    st = mf_ltc_gate_run(&t, model, &o, checks, MF_LTC_GATE_MAX_CHECKS, &n);
-    /* With a model, every texel against its neighbours' predictions (ltc_texel_neighbours: the
-     * fitter-free stand-in for fit ltc's refit check, docs/validation.md "The neighbour check"). */
-    if (model && (st == MF_OK || st == MF_ERR_CHECK_FAILED)) {
-        mf_status ns = mf_ltc_gate_neighbour_check(&t, model, seed, &checks[n]);
-        if (ns == MF_ERR_ALLOC)
-            st = ns;
-        else {
-            if (!checks[n].passed)
-                st = MF_ERR_CHECK_FAILED;
-            ++n;
-        }
-    }
+    /* the gate, then with a model every texel against its neighbours' predictions
+     * (ltc_texel_neighbours; the Python module's validate() runs the same function) */
+    st = mf_ltc_gate_validate(&t, model, &o, checks, MF_LTC_VALIDATE_MAX_CHECKS, &n);
     double secs = elapsed(&t0);
     int n_r = t.axes[0].size, n_u = t.naxes > 1 ? t.axes[1].size : 0;
     mf_table_free(&t);

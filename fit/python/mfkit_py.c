@@ -40,8 +40,8 @@ mf_status mfpy_table_read(const char *path, mf_table *out, mf_table_file_info *i
     return mf_table_read(path, out, info, msg, msg_size);
 }
 
-/* The gate of t's kind (mf_table_kind.h), as `mfkit validate TABLE` runs it: the LTC gate with the
- * model named brdf (NULL: the table's "brdf" metadata; "none": model-free checks), other kinds
+/* The gate of t's kind (mf_table_kind.h), as `mfkit validate TABLE` runs it: the LTC gate and, with
+ * a model, the neighbour check (mf_ltc_gate_validate, the CLI's own call) with the model named brdf (NULL: the table's "brdf" metadata; "none": model-free checks), other kinds
  * their model-free gate with the storage rounding of half_float.  kind_out gets the kind's name.
  * MF_OK (all passed), MF_ERR_CHECK_FAILED (the checks are filled either way), MF_ERR_DOMAIN with
  * msg for an unknown kind or BRDF. */
@@ -77,7 +77,12 @@ mf_status mfpy_validate_table(const mf_table *t, int half_float, const char *brd
     mf_ltc_gate_options_default(&o);
     o.seed = seed;
     o.quick = quick;
-    mf_status st = mf_ltc_gate_run(t, model, &o, checks, cap, count);
+    if (cap < MF_LTC_VALIDATE_MAX_CHECKS) {
+        snprintf(msg, msg_size, "room for %d checks, the LTC gate writes up to %d", cap, MF_LTC_VALIDATE_MAX_CHECKS);
+        return MF_ERR_DOMAIN;
+    }
+    /* the gate and, with a model, the neighbour check: what `mfkit validate TABLE` runs */
+    mf_status st = mf_ltc_gate_validate(t, model, &o, checks, cap, count);
     if (st == MF_ERR_DOMAIN)
         snprintf(msg, msg_size, "not an LTC table layout (two axes r: alpha = r^2 and u: cos = 1 - u^2, fields "
                                 "minv_00, minv_20, minv_02, minv_22, magnitude)");

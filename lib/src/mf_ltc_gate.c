@@ -1130,7 +1130,8 @@ double mf_ltc_gate_texel_difference(const mf_ltc *ltc, double magnitude, const m
  * log S), and the stored texel is compared with each prediction by the texel check's d on its 24 gate
  * polygons, magnitudes set to 1 (the magnitude is the albedo checks' business).  s = the second
  * smallest d over the predictions; e = the largest, over the texel's (up to 4) axis neighbours, of
- * the neighbour's smallest d over its predictions whose stencils do not use this texel.  The
+ * the neighbour's smallest d over its predictions whose stencils do not use this texel, and over its
+ * (up to 4) diagonal neighbours, of the neighbour's smallest d.  The
  * check's value is s / (NB_TAU + NB_C e). */
 #define NB_TAU MF_LTC_GATE_NEIGHBOUR_TAU
 #define NB_C MF_LTC_GATE_NEIGHBOUR_C
@@ -1270,6 +1271,13 @@ static void nb_texel(const mf_table *t, const gate_layout *L, const mf_brdf_mode
                     nb_from_logpolar(x, f);
                 else
                     memcpy(f, x, sizeof f);
+                /* A block of determinant <= 0 is a lobe whose peak M z lies at or below the horizon
+                 * (M z ~ (-minv_02, 0, minv_00) / det): no fitted texel of a reflectance lobe is
+                 * one, and such a prediction shades (almost) nothing, so it "agrees" with a
+                 * corrupted texel that shades nothing too (a point lobe at alpha 1e-4 flipped by
+                 * minv_22 -> minv_22 - 0.001: D = 1, read d = 0).  It is not a prediction. */
+                if (!(f[0] * f[3] - f[2] * f[1] > 0.0))
+                    continue;
                 mf_ltc q;
                 double v = INFINITY;
                 if (sok && mf_ltc_table_unpack(f, &q) == MF_OK)
@@ -1341,7 +1349,7 @@ mf_status mf_ltc_gate_neighbour_scores_box(const mf_table *t, const mf_brdf_mode
     gate_layout L;
     if (!model || !layout_of(t, &L) || r0 < 0 || u0 < 0 || r1 >= L.nr || u1 >= L.nu || r0 > r1 || u0 > u1)
         return MF_ERR_DOMAIN;
-    /* d of every prediction of the box and its axis neighbours (the allowance reads theirs) */
+    /* d of every prediction of the box and the texels around it (the allowance reads theirs) */
     int br0 = r0 > 0 ? r0 - 1 : 0, br1 = r1 + 1 < L.nr ? r1 + 1 : r1;
     int bu0 = u0 > 0 ? u0 - 1 : 0, bu1 = u1 + 1 < L.nu ? u1 + 1 : u1, bnr = br1 - br0 + 1;
     size_t nb_texels = (size_t)bnr * (size_t)(bu1 - bu0 + 1);
@@ -1352,16 +1360,21 @@ mf_status mf_ltc_gate_neighbour_scores_box(const mf_table *t, const mf_brdf_mode
     for (int iu = bu0; iu <= bu1; ++iu)
         for (int ir = br0; ir <= br1; ++ir)
             nb_texel(t, &L, model, seed, ir, iu, NB_D(ir, iu));
-    const int nb[4][2] = {{-1, 0}, {1, 0}, {0, -1}, {0, 1}};
+    /* e: the axis neighbours' smallest d without the stencils that use the texel, and the diagonal
+     * neighbours' smallest d (none of their stencils uses the texel: they lie on other rows and
+     * columns), so a fast change along a line through the texel, which spoils the diagonals'
+     * predictions too, widens the allowance, and a single bad texel, which spoils none of theirs,
+     * does not. */
+    const int nb[8][2] = {{-1, 0}, {1, 0}, {0, -1}, {0, 1}, {-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
     for (int iu = u0; iu <= u1; ++iu)
         for (int ir = r0; ir <= r1; ++ir) {
             size_t k = (size_t)ir + (size_t)L.nr * iu;
             double sk = nb_second(NB_D(ir, iu)), ek = 0.0;
-            for (int q = 0; q < 4; ++q) {
+            for (int q = 0; q < 8; ++q) {
                 int jr = ir + nb[q][0], ju = iu + nb[q][1];
                 if (jr < 0 || ju < 0 || jr >= L.nr || ju >= L.nu)
                     continue;
-                double x = nb_min(NB_D(jr, ju), jr, ju, ir, iu);
+                double x = q < 4 ? nb_min(NB_D(jr, ju), jr, ju, ir, iu) : nb_min(NB_D(jr, ju), jr, ju, -1, -1);
                 if (isfinite(x) && x > ek)
                     ek = x;
             }
@@ -1431,4 +1444,31 @@ mf_status mf_ltc_gate_neighbour_check(const mf_table *t, const mf_brdf_model *mo
     free(s);
     mf_check_finish(c);
     return MF_OK;
+}
+
+mf_status mf_ltc_gate_validate(const mf_table *t, const mf_brdf_model *model, const mf_ltc_gate_options *o,
+                               mf_check *checks, int cap, int *count)
+{
+    if (!checks || !count || cap < MF_LTC_VALIDATE_MAX_CHECKS)
+        return MF_ERR_DOMAIN;
+    mf_ltc_gate_options def;
+    if (!o) {
+        mf_ltc_gate_options_default(&def);
+        o = &def;
+    }
+    mf_status st = mf_ltc_gate_run(t, model, o, checks, cap, count);
+    /* With a model, every texel against its neighbours' predictions (ltc_texel_neighbours: the
+     * fitter-free stand-in for fit ltc's refit check, docs/validation.md "The neighbour check"). */
+    if (model && (st == MF_OK || st == MF_ERR_CHECK_FAILED)) {
+        mf_status ns = mf_ltc_gate_neighbour_check(t, model, o->seed, &checks[*count]);
+        if (ns == MF_ERR_ALLOC)
+            return ns;
+        if (ns == MF_OK) {
+            if (!checks[*count].passed)
+                st = MF_ERR_CHECK_FAILED;
+            ++*count;
+        } else
+            st = ns;
+    }
+    return st;
 }

@@ -666,8 +666,10 @@ def _progress_printer(label):
 def validate(table=None, brdf=None, quick=False, seed=1, progress=True):
     """The checks of ``mfkit validate``: without table the property checks of the core math; with a
     table (a path, or a Table) the gate of its kind (the LTC gate with the BRDF ``brdf``, else the
-    table's "brdf" metadata, "none" for model-free checks only).  Returns a Report; raises on an
-    unreadable file or a table of no known kind.  progress: show progress on stderr."""
+    table's "brdf" metadata, "none" for model-free checks only; with a BRDF also
+    ltc_texel_neighbours, every texel against its neighbours' predictions: the same C function as
+    the command, so the same report).  Returns a Report; raises on an unreadable file or a table
+    of no known kind.  progress: show progress on stderr."""
     if table is None:
         n = _lib.mf_validate_core_count()
         checks = (_Check * n)()

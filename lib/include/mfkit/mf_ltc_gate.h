@@ -187,13 +187,16 @@ double mf_ltc_gate_texel_difference(const mf_ltc *ltc, double magnitude, const m
  * along u), each in two spaces of the matrix block
  * [[minv_00, minv_02], [minv_20, minv_22]]: the stored fields, and log-polar (B = R(psi) S, S
  * symmetric positive definite: psi and log S), which follows the narrow lobes of low roughness
- * whose fields change by orders of magnitude between texels.  With d the texel check's difference
+ * whose fields change by orders of magnitude between texels (a prediction whose block has
+ * determinant <= 0, a lobe peaking at or below the horizon, is dropped).  With d the texel check's difference
  * (mf_ltc_gate_texel_difference, magnitudes 1: the albedo checks cover the magnitude) on the texel's
  * gate polygons (mf_ltc_gate_texel_polygons):
  *   s = the second smallest, over the 12 predictions, of d(stored, prediction) (each the smaller
  *       of its two spaces; one prediction alone can lie near a corrupted texel where the stencils
  *       scatter),
- *   e = max over the texel's axis neighbours j of s_j without the stencils that use this texel,
+ *   e = max over the texel's 4 axis neighbours j of their smallest d without the stencils that use
+ *       this texel, and over its 4 diagonal neighbours of their smallest d (no stencil of theirs
+ *       uses the texel),
  *   value = s / (MF_LTC_GATE_NEIGHBOUR_TAU + MF_LTC_GATE_NEIGHBOUR_C e), bound 1.
  * A smooth region (e small) allows a texel 0.06 of shading difference from its neighbours'
  * prediction, a little over half the issue's 10 % (so that a corruption of 0.1 still reads above
@@ -227,6 +230,15 @@ mf_status mf_ltc_gate_neighbour_scores_box(const mf_table *t, const mf_brdf_mode
  * Returns MF_OK when it ran (c->passed says whether it passed), else as mf_ltc_gate_neighbour_scores
  * (c then failed). */
 mf_status mf_ltc_gate_neighbour_check(const mf_table *t, const mf_brdf_model *model, uint64_t seed, mf_check *c);
+
+/* What `mfkit validate TABLE` runs on an LTC table (and the Python module's validate(), so both
+ * give the same report): mf_ltc_gate_run, then with a model the neighbour check
+ * (mf_ltc_gate_neighbour_check with o's seed) as the last check.  cap >= MF_LTC_VALIDATE_MAX_CHECKS.
+ * Returns as mf_ltc_gate_run (MF_ERR_CHECK_FAILED when any check, the neighbour check included,
+ * failed). */
+#define MF_LTC_VALIDATE_MAX_CHECKS (MF_LTC_GATE_MAX_CHECKS + 1)
+mf_status mf_ltc_gate_validate(const mf_table *t, const mf_brdf_model *model, const mf_ltc_gate_options *o,
+                               mf_check *checks, int cap, int *count) MF_WARN_UNUSED;
 
 #ifdef __cplusplus
 }
