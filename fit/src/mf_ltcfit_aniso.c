@@ -724,11 +724,8 @@ static void targets_raw(atexel *t, workspace *ws)
 static void control_variate(atexel *t, workspace *ws, const double *p0)
 {
     mf_ltc ltc;
-    int ok = valid(p0) && mf_ltc_init(&ltc, view_matrix(t, p0)) == MF_OK;
-    for (int j = 0; ok && j < t->live; ++j) {
-        ws->cw[j] = t->magnitude * mf_ltc_eval(&ltc, ws->dir[j]) / ws->pdf[j];
-        ok = isfinite(ws->cw[j]);
-    }
+    /* cw_j = magnitude D(w_j) / pdf_j (cv_weights: mf_ltc_eval's operations, two at a time) */
+    int ok = valid(p0) && mf_ltc_init(&ltc, view_matrix(t, p0)) == MF_OK && cv_weights(&ltc, t->magnitude, ws, t->live);
     if (!ok) {
         targets_raw(t, ws);
         return;

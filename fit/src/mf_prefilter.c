@@ -233,11 +233,96 @@ static mf_vec3 mix_sample(const mf_brdf_model *m, const mf_brdf_params *p, mf_ve
     return wi;
 }
 
+/* mix_eval_pdf at the cached view (GGX) for cnt directions (components vx, vy, vz) into f, pdf:
+ * ggx_fpdf_cached's operations in its order per direction and component, summed over the
+ * components in their order (the same bits), two directions at a time in 2-wide vectors where the
+ * compiler has them (GCC and Clang vector extensions; nothing is contracted); a lane whose texel
+ * frame direction is below the horizon, or whose density condition fails, takes 0 as the scalar
+ * rule does (its other values are computed and dropped). */
+#if defined(__GNUC__) || defined(__clang__)
+#define MIX_VEC2 1
+typedef double mix_v2d __attribute__((vector_size(16)));
+typedef long long mix_v2l __attribute__((vector_size(16)));
+#endif
+static void mix_eval_pdf_batch(const mf_prefilter_mix *x, double a2, const double *vc, int cnt, const double *vx,
+                               const double *vy, const double *vz, double *f, double *pdf)
+{
+    for (int i = 0; i < cnt; ++i)
+        f[i] = pdf[i] = 0.0;
+    for (int j = 0; j < x->n; ++j) {
+        const double *r = x->rot + 9 * j, *c = vc + VC_N * j, wj = x->w[j];
+        int i = 0;
+#ifdef MIX_VEC2
+        for (; i + 2 <= cnt; i += 2) {
+            mix_v2d ax, ay, az;
+            memcpy(&ax, vx + i, sizeof ax);
+            memcpy(&ay, vy + i, sizeof ay);
+            memcpy(&az, vz + i, sizeof az);
+            const mix_v2d tx = r[0] * ax + r[3] * ay + r[6] * az, ty = r[1] * ax + r[4] * ay + r[7] * az,
+                          tz = r[2] * ax + r[5] * ay + r[8] * az; /* rot_t */
+            const mix_v2d hx = c[0] + tx, hy = c[1] + ty, hz = c[2] + tz;
+            const mix_v2d s2 = hx * hx + hy * hy, z2 = hz * hz;
+            const mix_v2d den = a2 * z2 + s2, l2 = s2 + z2;
+            const mix_v2d dq = c[14] * (l2 * l2) / (den * den);
+            mix_v2d q = tz * tz + a2 * (tx * tx + ty * ty);
+            q = (mix_v2d){sqrt(q[0]), sqrt(q[1])};
+            const mix_v2d fj = 2.0 * dq * tz / (c[15] * tz + q);
+            const mix_v2d pj = dq * c[16];
+            const mix_v2l up = tz > 0.0;
+            const mix_v2l dens = up & (hz > 0.0) & ((c[0] * hx + c[1] * hy + c[2] * hz) > 0.0);
+            const mix_v2d fs = (mix_v2d)(up & (mix_v2l)fj), ps = (mix_v2d)(dens & (mix_v2l)pj); /* or +0 */
+            mix_v2d sf, sp;
+            memcpy(&sf, f + i, sizeof sf);
+            memcpy(&sp, pdf + i, sizeof sp);
+            sf += wj * fs;
+            sp += wj * ps;
+            memcpy(f + i, &sf, sizeof sf);
+            memcpy(pdf + i, &sp, sizeof sp);
+        }
+#endif
+        for (; i < cnt; ++i) {
+            double fj, pj;
+            ggx_fpdf_cached(a2, c, rot_t(r, mf_vec3_make(vx[i], vy[i], vz[i])), &fj, &pj);
+            f[i] += wj * fj;
+            pdf[i] += wj * pj;
+        }
+    }
+}
+
+/* The directions of mix_sample_weights' fused path are evaluated in chunks of this many. */
+#define MIX_CHUNK 64
+
 static void mix_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, int n, const double *u,
                                mf_vec3 *wi, double *pdf, double *w)
 {
     const mf_prefilter_mix *x = mix_of(m);
     const double *vc = x->kind == MF_PREFILTER_BASE_GGX ? view_cache(x, p, wo) : NULL;
+    if (vc && wo.z > 0.0) { /* the cached view: sample a chunk, then evaluate the mixture over it */
+        const double a2 = p->alpha_x * p->alpha_x;
+        for (int i0 = 0; i0 < n; i0 += MIX_CHUNK) {
+            int ix[MIX_CHUNK], cnt = 0, i1 = i0 + MIX_CHUNK < n ? i0 + MIX_CHUNK : n;
+            double vx[MIX_CHUNK], vy[MIX_CHUNK], vz[MIX_CHUNK], f[MIX_CHUNK], pd[MIX_CHUNK];
+            for (int i = i0; i < i1; ++i) {
+                pdf[i] = 0.0;
+                w[i] = 0.0;
+                double bp;
+                wi[i] = mix_sample_texel(x, p, wo, u + 2 * i, &bp, vc);
+                if (bp > 0.0 && wi[i].z > 0.0 && mf_vec3_isfinite(wi[i])) {
+                    ix[cnt] = i;
+                    vx[cnt] = wi[i].x, vy[cnt] = wi[i].y, vz[cnt] = wi[i].z;
+                    ++cnt;
+                }
+            }
+            mix_eval_pdf_batch(x, a2, vc, cnt, vx, vy, vz, f, pd);
+            for (int q = 0; q < cnt; ++q) {
+                int i = ix[q];
+                pdf[i] = pd[q];
+                if (pdf[i] > 0.0)
+                    w[i] = f[q] / pdf[i];
+            }
+        }
+        return;
+    }
     for (int i = 0; i < n; ++i) {
         pdf[i] = 0.0;
         w[i] = 0.0;
@@ -347,6 +432,11 @@ static mf_status mix_set_view(mf_prefilter_mix *m, const mf_brdf_params *p, mf_v
     m->cache_wo[0] = wo.x, m->cache_wo[1] = wo.y, m->cache_wo[2] = wo.z;
     m->cache_a = p->alpha_x;
     return MF_OK;
+}
+
+mf_status mf_prefilter_mix_set_view(mf_prefilter_mix *m, const mf_brdf_params *p, mf_vec3 wo)
+{
+    return mix_set_view(m, p, wo);
 }
 
 void mf_prefilter_mix_free(mf_prefilter_mix *m)
