@@ -326,8 +326,15 @@ static mf_status atexel_prepare(const mf_brdf_model *m, mf_brdf_params prm, doub
         t->magnitude_err = alb.err;
         t->fresnel = fres.val;
     }
-    for (int j = 0; j < ws->n; ++j)
-        mf_sobol2((uint32_t)j, scr[0], scr[1], ws->u + 2 * j);
+    /* the Sobol points: the same prefix for every entry of a scramble, kept in the workspace (the
+     * isotropic fitter's u_n, u_scr; nothing else writes ws->u) */
+    if (ws->u_n < ws->n || ws->u_scr[0] != scr[0] || ws->u_scr[1] != scr[1]) {
+        for (int j = 0; j < ws->n; ++j)
+            mf_sobol2((uint32_t)j, scr[0], scr[1], ws->u + 2 * j);
+        ws->u_n = ws->n;
+        ws->u_scr[0] = scr[0];
+        ws->u_scr[1] = scr[1];
+    }
     mf_model_sample_weights(m, &prm, wo, ws->n, ws->u, ws->dir, ws->pdf, ws->w);
     double sum;
     mf_vec3 mean;
