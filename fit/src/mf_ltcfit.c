@@ -425,6 +425,48 @@ static mf_status texel_prepare(const mf_brdf_model *m, double alpha, double cos_
     return MF_OK;
 }
 
+/* The candidates i < m (components X, Y, Z, indices cand) inside every edge plane of light l
+ * (light_inside's test X ex + Y ey + Z ez > 0 for every edge, without its early exit: the same
+ * answer, the tests have no side effects): their indices into in[], in order; returns their count.
+ * Two candidates at a time in 2-wide vectors where the compiler has them (GCC and Clang vector
+ * extensions): the same IEEE operations in the same order per element (the build contracts
+ * nothing), all edges in registers; the scalar loop is the same test. */
+static int edge_select(const light *l, int m, const double *X, const double *Y, const double *Z, const int *cand,
+                       int *in)
+{
+    const int ne = l->poly.n;
+    int n = 0, i = 0;
+#ifdef LS_VEC2
+    ls_v2d ex[MF_POLYGON_MAX_VERTICES], ey[MF_POLYGON_MAX_VERTICES], ez[MF_POLYGON_MAX_VERTICES];
+    for (int e = 0; e < ne; ++e) {
+        ex[e] = (ls_v2d){l->edge_n[e].x, l->edge_n[e].x};
+        ey[e] = (ls_v2d){l->edge_n[e].y, l->edge_n[e].y};
+        ez[e] = (ls_v2d){l->edge_n[e].z, l->edge_n[e].z};
+    }
+    for (; i + 2 <= m; i += 2) {
+        ls_v2d x, y, z;
+        memcpy(&x, X + i, sizeof x);
+        memcpy(&y, Y + i, sizeof y);
+        memcpy(&z, Z + i, sizeof z);
+        ls_v2l ok = (x * ex[0] + y * ey[0] + z * ez[0]) > 0.0;
+        for (int e = 1; e < ne; ++e)
+            ok &= (x * ex[e] + y * ey[e] + z * ez[e]) > 0.0;
+        in[n] = cand[i];
+        n += ok[0] != 0;
+        in[n] = cand[i + 1];
+        n += ok[1] != 0;
+    }
+#endif
+    for (; i < m; ++i) {
+        int ok = 1;
+        for (int e = 0; e < ne; ++e)
+            ok &= X[i] * l->edge_n[e].x + Y[i] * l->edge_n[e].y + Z[i] * l->edge_n[e].z > 0.0;
+        in[n] = cand[i];
+        n += ok;
+    }
+    return n;
+}
+
 /* The sums over the live directions inside each light k (light_inside's test: the bounding cap,
  * then the edge planes), in index order: out[4 k + 0..3] = sum of w, and with cv also of cw, cw^2
  * and cw w (light_sum, light_sums_cv).  The same sums, bit for bit, with less work: lights whose
