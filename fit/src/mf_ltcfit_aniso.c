@@ -393,8 +393,15 @@ static mf_status atexel_prepare(const mf_brdf_model *m, mf_brdf_params prm, doub
         t->magnitude_err = alb.err;
         t->fresnel = fres.val;
     }
-    for (int j = 0; j < ws->n; ++j)
-        mf_sobol2((uint32_t)j, scr[0], scr[1], ws->u + 2 * j);
+    /* the Sobol points: the same prefix for every entry of a scramble, kept in the workspace (the
+     * isotropic fitter's u_n, u_scr; nothing else writes ws->u) */
+    if (ws->u_n < ws->n || ws->u_scr[0] != scr[0] || ws->u_scr[1] != scr[1]) {
+        for (int j = 0; j < ws->n; ++j)
+            mf_sobol2((uint32_t)j, scr[0], scr[1], ws->u + 2 * j);
+        ws->u_n = ws->n;
+        ws->u_scr[0] = scr[0];
+        ws->u_scr[1] = scr[1];
+    }
     mf_model_sample_weights(m, &prm, wo, ws->n, ws->u, ws->dir, ws->pdf, ws->w);
     double sum;
     mf_vec3 mean;
@@ -795,11 +802,8 @@ static void targets_raw(atexel *t, workspace *ws)
 static void control_variate(atexel *t, workspace *ws, const double *p0)
 {
     mf_ltc ltc;
-    int ok = valid(p0) && mf_ltc_init(&ltc, view_matrix(t, p0)) == MF_OK;
-    for (int j = 0; ok && j < t->live; ++j) {
-        ws->cw[j] = t->magnitude * mf_ltc_eval(&ltc, ws->dir[j]) / ws->pdf[j];
-        ok = isfinite(ws->cw[j]);
-    }
+    /* cw_j = magnitude D(w_j) / pdf_j (cv_weights: mf_ltc_eval's operations, two at a time) */
+    int ok = valid(p0) && mf_ltc_init(&ltc, view_matrix(t, p0)) == MF_OK && cv_weights(&ltc, t->magnitude, ws, t->live);
     if (!ok) {
         targets_raw(t, ws);
         return;

@@ -15,12 +15,14 @@
 #endif
 
 #include "mfkit/mf_core.h"
+#include "mfkit/mf_ltc.h"
 #include "mfkit/mf_polygon.h"
 #include "mfkit/mf_rng.h"
 
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
+#include <string.h>
 
 #define LIGHTS_MAX 48
 
@@ -451,6 +453,62 @@ static inline mf_status ws_weight_sums(workspace *ws, double *sum_out, mf_vec3 *
     *sum_out = sum;
     *mean_out = mean;
     return MF_OK;
+}
+
+/* ---- the control variate's weights, two directions at a time (both fitters; moved here from
+ * mf_ltcfit.c unchanged, so that the anisotropic fitter shares them) -------------------------- */
+
+/* 2-wide vectors where the compiler has them (GCC and Clang vector extensions); cv_weights and the
+ * isotropic fitter's edge_select use them. */
+#if defined(__GNUC__) || defined(__clang__)
+#define LS_VEC2 1
+typedef double ls_v2d __attribute__((vector_size(16)));
+typedef long long ls_v2l __attribute__((vector_size(16)));
+#endif
+
+/* cw_j = magnitude D(w_j) / pdf_j for the live directions: mf_ltc_eval's operations, in its order,
+ * two directions at a time in 2-wide vectors where the compiler has them (the same IEEE operations
+ * per element, nothing contracted); a pair with a direction mf_ltc_eval would reject (not finite,
+ * zero or overflowing length) goes through mf_ltc_eval itself.  1 if every cw_j is finite. */
+static inline int cv_weights(const mf_ltc *ltc, double magnitude, const workspace *ws, int live)
+{
+    int j = 0;
+#ifdef LS_VEC2
+    const mf_mat3 a = ltc->inv;
+    const ls_v2d k = {ltc->abs_det_inv, ltc->abs_det_inv};
+    for (; j + 2 <= live; j += 2) {
+        ls_v2d x, y, z, pdf;
+        memcpy(&x, ws->x + j, sizeof x);
+        memcpy(&y, ws->y + j, sizeof y);
+        memcpy(&z, ws->z + j, sizeof z);
+        memcpy(&pdf, ws->pdf + j, sizeof pdf);
+        ls_v2d len = x * x + y * y + z * z;
+        len = (ls_v2d){sqrt(len[0]), sqrt(len[1])};
+        if (!(isfinite(x[0]) && isfinite(y[0]) && isfinite(z[0]) && isfinite(x[1]) && isfinite(y[1]) && isfinite(z[1]) &&
+              len[0] > 0.0 && len[1] > 0.0 && isfinite(len[0]) && isfinite(len[1]))) {
+            for (int q = j; q < j + 2; ++q)
+                ws->cw[q] = magnitude * mf_ltc_eval(ltc, ws->dir[q]) / ws->pdf[q];
+            continue;
+        }
+        ls_v2d s = 1.0 / len;
+        ls_v2d vx = x * s, vy = y * s, vz = z * s;
+        ls_v2d ux = a.m[0][0] * vx + a.m[0][1] * vy + a.m[0][2] * vz;
+        ls_v2d uy = a.m[1][0] * vx + a.m[1][1] * vy + a.m[1][2] * vz;
+        ls_v2d uz = a.m[2][0] * vx + a.m[2][1] * vy + a.m[2][2] * vz;
+        ls_v2d r = ux * ux + uy * uy + uz * uz;
+        r = (ls_v2d){sqrt(r[0]), sqrt(r[1])};
+        ls_v2d d = (uz / r) * (k / (r * r * r)) * MF_INV_PI;
+        ls_v2d cw = magnitude * d / pdf;
+        ws->cw[j] = uz[0] > 0.0 ? cw[0] : magnitude * 0.0 / ws->pdf[j];
+        ws->cw[j + 1] = uz[1] > 0.0 ? cw[1] : magnitude * 0.0 / ws->pdf[j + 1];
+    }
+#endif
+    for (; j < live; ++j)
+        ws->cw[j] = magnitude * mf_ltc_eval(ltc, ws->dir[j]) / ws->pdf[j];
+    int ok = 1;
+    for (j = 0; j < live; ++j)
+        ok &= isfinite(ws->cw[j]) != 0;
+    return ok;
 }
 
 static inline void sobol_scramble(uint64_t seed, uint32_t scr[2])

@@ -233,11 +233,163 @@ static mf_vec3 mix_sample(const mf_brdf_model *m, const mf_brdf_params *p, mf_ve
     return wi;
 }
 
+/* mix_eval_pdf at the cached view (GGX) for cnt directions (components vx, vy, vz) into f, pdf:
+ * ggx_fpdf_cached's operations in its order per direction and component, summed over the
+ * components in their order (the same bits), two directions at a time in 2-wide vectors where the
+ * compiler has them (GCC and Clang vector extensions; nothing is contracted); a lane whose texel
+ * frame direction is below the horizon, or whose density condition fails, takes 0 as the scalar
+ * rule does (its other values are computed and dropped). */
+#if defined(__GNUC__) || defined(__clang__)
+#define MIX_VEC2 1
+typedef double mix_v2d __attribute__((vector_size(16)));
+typedef long long mix_v2l __attribute__((vector_size(16)));
+#endif
+static void mix_eval_pdf_batch(const mf_prefilter_mix *x, double a2, const double *vc, int cnt, const double *vx,
+                               const double *vy, const double *vz, double *f, double *pdf)
+{
+    for (int i = 0; i < cnt; ++i)
+        f[i] = pdf[i] = 0.0;
+    for (int j = 0; j < x->n; ++j) {
+        const double *r = x->rot + 9 * j, *c = vc + VC_N * j, wj = x->w[j];
+        int i = 0;
+#ifdef MIX_VEC2
+        for (; i + 2 <= cnt; i += 2) {
+            mix_v2d ax, ay, az;
+            memcpy(&ax, vx + i, sizeof ax);
+            memcpy(&ay, vy + i, sizeof ay);
+            memcpy(&az, vz + i, sizeof az);
+            const mix_v2d tx = r[0] * ax + r[3] * ay + r[6] * az, ty = r[1] * ax + r[4] * ay + r[7] * az,
+                          tz = r[2] * ax + r[5] * ay + r[8] * az; /* rot_t */
+            const mix_v2d hx = c[0] + tx, hy = c[1] + ty, hz = c[2] + tz;
+            const mix_v2d s2 = hx * hx + hy * hy, z2 = hz * hz;
+            const mix_v2d den = a2 * z2 + s2, l2 = s2 + z2;
+            const mix_v2d dq = c[14] * (l2 * l2) / (den * den);
+            mix_v2d q = tz * tz + a2 * (tx * tx + ty * ty);
+            q = (mix_v2d){sqrt(q[0]), sqrt(q[1])};
+            const mix_v2d fj = 2.0 * dq * tz / (c[15] * tz + q);
+            const mix_v2d pj = dq * c[16];
+            const mix_v2l up = tz > 0.0;
+            const mix_v2l dens = up & (hz > 0.0) & ((c[0] * hx + c[1] * hy + c[2] * hz) > 0.0);
+            const mix_v2d fs = (mix_v2d)(up & (mix_v2l)fj), ps = (mix_v2d)(dens & (mix_v2l)pj); /* or +0 */
+            mix_v2d sf, sp;
+            memcpy(&sf, f + i, sizeof sf);
+            memcpy(&sp, pdf + i, sizeof sp);
+            sf += wj * fs;
+            sp += wj * ps;
+            memcpy(f + i, &sf, sizeof sf);
+            memcpy(pdf + i, &sp, sizeof sp);
+        }
+#endif
+        for (; i < cnt; ++i) {
+            double fj, pj;
+            ggx_fpdf_cached(a2, c, rot_t(r, mf_vec3_make(vx[i], vy[i], vz[i])), &fj, &pj);
+            f[i] += wj * fj;
+            pdf[i] += wj * pj;
+        }
+    }
+}
+
+/* The directions of mix_sample_weights' fused path are sampled and evaluated in chunks of this
+ * many. */
+#define MIX_CHUNK 64
+
+/* mix_sample_texel at the cached view (GGX) for cnt <= MIX_CHUNK points u: the texel and the
+ * angle's cosine and sine per direction, then ggx_sample_cached's operations (in its order, its
+ * fmax calls kept) two directions at a time, each lane reading its own texel's cache; wi in the
+ * geometric frame, ok[i] its sampler's positive-density test (the same bits: tested by
+ * test_prefilter_mix_fast). */
+#ifdef MIX_VEC2
+static inline mix_v2d mix_sqrt2(mix_v2d a) { return (mix_v2d){sqrt(a[0]), sqrt(a[1])}; }
+static inline mix_v2d mix_fmax02(mix_v2d a) { return (mix_v2d){fmax(0.0, a[0]), fmax(0.0, a[1])}; }
+#endif
+static void mix_sample_chunk(const mf_prefilter_mix *x, double alpha, const double *vc, const double *u, int cnt,
+                             mf_vec3 *wi, int *ok)
+{
+    int lo_[MIX_CHUNK];
+    double v0[MIX_CHUNK], cs[MIX_CHUNK], sn[MIX_CHUNK];
+    for (int i = 0; i < cnt; ++i) { /* mix_sample_texel's texel and rescaled u[0] */
+        const double *ui = u + 2 * i;
+        int lo = 0, hi = x->n - 1;
+        while (lo < hi) {
+            int mid = (lo + hi) / 2;
+            if (ui[0] < x->cdf[mid])
+                hi = mid;
+            else
+                lo = mid + 1;
+        }
+        double c0 = lo > 0 ? x->cdf[lo - 1] : 0.0;
+        double v = (ui[0] - c0) / x->w[lo];
+        v0[i] = fmin(fmax(v, 0.0), nextafter(1.0, 0.0));
+        lo_[i] = lo;
+        double phi = 2.0 * MF_PI * ui[1];
+        cs[i] = cos(phi);
+        sn[i] = sin(phi);
+    }
+    int i = 0;
+#ifdef MIX_VEC2
+    for (; i + 2 <= cnt; i += 2) {
+        const double *ca = vc + VC_N * lo_[i], *cb = vc + VC_N * lo_[i + 1];
+#define MIX_C(q) ((mix_v2d){ca[q], cb[q]})
+        mix_v2d r = mix_sqrt2((mix_v2d){v0[i], v0[i + 1]});
+        mix_v2d p1 = r * (mix_v2d){cs[i], cs[i + 1]}, p2 = r * (mix_v2d){sn[i], sn[i + 1]};
+        mix_v2d s = MIX_C(13);
+        p2 = (1.0 - s) * mix_sqrt2(mix_fmax02(1.0 - p1 * p1)) + s * p2;
+        mix_v2d pz = mix_sqrt2(mix_fmax02(1.0 - p1 * p1 - p2 * p2));
+        mix_v2d nx = MIX_C(7) * p1 + MIX_C(10) * p2 + MIX_C(4) * pz;
+        mix_v2d ny = MIX_C(8) * p1 + MIX_C(11) * p2 + MIX_C(5) * pz;
+        mix_v2d nz = MIX_C(9) * p1 + MIX_C(12) * p2 + MIX_C(6) * pz;
+        mix_v2d mx = alpha * nx, my = alpha * ny, mz = mix_fmax02(nz);
+        mix_v2d inv = 1.0 / mix_sqrt2(mx * mx + my * my + mz * mz);
+        mx = mx * inv, my = my * inv, mz = mz * inv;
+        mix_v2d ox = MIX_C(0), oy = MIX_C(1), oz = MIX_C(2);
+        mix_v2d d = ox * mx + oy * my + oz * mz;
+        mix_v2d k = 2.0 * d;
+        mix_v2d wx = mx * k - ox, wy = my * k - oy, wz = mz * k - oz;
+#undef MIX_C
+        for (int q = 0; q < 2; ++q) {
+            ok[i + q] = wz[q] > 0.0 && d[q] > 0.0 && mz[q] > 0.0;
+            wi[i + q] = rot_apply(x->rot + 9 * lo_[i + q], mf_vec3_make(wx[q], wy[q], wz[q]));
+        }
+    }
+#endif
+    for (; i < cnt; ++i) {
+        double v[2] = {v0[i], u[2 * i + 1]};
+        wi[i] = rot_apply(x->rot + 9 * lo_[i], ggx_sample_cached(alpha, vc + VC_N * lo_[i], v, &ok[i]));
+    }
+}
+
+
 static void mix_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 wo, int n, const double *u,
                                mf_vec3 *wi, double *pdf, double *w)
 {
     const mf_prefilter_mix *x = mix_of(m);
     const double *vc = x->kind == MF_PREFILTER_BASE_GGX ? view_cache(x, p, wo) : NULL;
+    if (vc && wo.z > 0.0) { /* the cached view: sample a chunk, then evaluate the mixture over it */
+        const double a2 = p->alpha_x * p->alpha_x;
+        for (int i0 = 0; i0 < n; i0 += MIX_CHUNK) {
+            int ix[MIX_CHUNK], cnt = 0, i1 = i0 + MIX_CHUNK < n ? i0 + MIX_CHUNK : n;
+            double vx[MIX_CHUNK], vy[MIX_CHUNK], vz[MIX_CHUNK], f[MIX_CHUNK], pd[MIX_CHUNK];
+            int ok[MIX_CHUNK];
+            mix_sample_chunk(x, p->alpha_x, vc, u + 2 * i0, i1 - i0, wi + i0, ok);
+            for (int i = i0; i < i1; ++i) {
+                pdf[i] = 0.0;
+                w[i] = 0.0;
+                if (ok[i - i0] && wi[i].z > 0.0 && mf_vec3_isfinite(wi[i])) {
+                    ix[cnt] = i;
+                    vx[cnt] = wi[i].x, vy[cnt] = wi[i].y, vz[cnt] = wi[i].z;
+                    ++cnt;
+                }
+            }
+            mix_eval_pdf_batch(x, a2, vc, cnt, vx, vy, vz, f, pd);
+            for (int q = 0; q < cnt; ++q) {
+                int i = ix[q];
+                pdf[i] = pd[q];
+                if (pdf[i] > 0.0)
+                    w[i] = f[q] / pdf[i];
+            }
+        }
+        return;
+    }
     for (int i = 0; i < n; ++i) {
         pdf[i] = 0.0;
         w[i] = 0.0;
@@ -347,6 +499,11 @@ static mf_status mix_set_view(mf_prefilter_mix *m, const mf_brdf_params *p, mf_v
     m->cache_wo[0] = wo.x, m->cache_wo[1] = wo.y, m->cache_wo[2] = wo.z;
     m->cache_a = p->alpha_x;
     return MF_OK;
+}
+
+mf_status mf_prefilter_mix_set_view(mf_prefilter_mix *m, const mf_brdf_params *p, mf_vec3 wo)
+{
+    return mix_set_view(m, p, wo);
 }
 
 void mf_prefilter_mix_free(mf_prefilter_mix *m)

@@ -13,4 +13,11 @@ mf_vec3 mf_prefilter_texel_view(const double *r, mf_vec3 wo);
 /* R^T v for the row-major rotation r. */
 mf_vec3 mf_prefilter_rot_t(const double *r, mf_vec3 v);
 
+/* The fits' per-view cache of mixture m (GGX, isotropic alpha): until the next call, eval_cos, pdf,
+ * sample and sample_weights at this wo use the cached texel-frame views (for tests of the fused
+ * paths against the per-direction ones; the fits set it themselves).  MF_ERR_ALLOC. */
+struct mf_prefilter_mix;
+struct mf_brdf_params;
+mf_status mf_prefilter_mix_set_view(struct mf_prefilter_mix *m, const struct mf_brdf_params *p, mf_vec3 wo);
+
 #endif
