@@ -58,7 +58,8 @@
  *     (with the fitter's proximal residuals); rows with cos theta < MF_PREFILTER_MULTISTART_COS
  *     get a second solve from the closed-form start, the lower residual kept.  From the second
  *     azimuth on, every entry also gets a solve from the previous azimuth's lobe at the same
- *     elevation (one preparation, mf_ltcfit_aniso_entry_fit_mirrored_multi), and that one is kept
+ *     elevation and one from the closed-form start (revision 6: on every row; one preparation,
+ *     mf_ltcfit_aniso_entry_fit_mirrored_multi), and the previous azimuth's solve is kept
  *     unless its residual exceeds the best solve's by more than MF_PREFILTER_CONTINUITY_MARGIN:
  *     where a single lobe has several fits of similar cost (the two facets of a groove), the
  *     neighbouring azimuths keep the same one instead of flipping between them (a lobe on one
@@ -110,7 +111,7 @@ extern "C" {
 #define MF_PREFILTER_COS_MIN 0.001
 /* Names the fitted values: bump it whenever they change (objective, starts, constants), so that a
  * resumed `mfkit prefilter` refuses tiles of another revision. */
-#define MF_PREFILTER_REVISION 5
+#define MF_PREFILTER_REVISION 6
 #define MF_PREFILTER_ALBEDO_N 64
 #define MF_PREFILTER_THETA_MAX (0.999 * 0.5 * MF_PI)
 /* Footprints of at least MF_PREFILTER_CLUSTER_MIN texels are fitted to a clustered mixture: cells
