@@ -322,11 +322,12 @@ static void run_map(int kind, int w, int nt, int np, int ncorr, double scale, mf
         qsort(pw->cross, (size_t)m, sizeof(double), dbl_cmp);
         printf("; cross above good: every axis %d, texel axes %d, above bound %d / %d, gated checks or cross above "
                "bound %d; visible %d: gated checks %d, cross above good %d, above bound %d, either %d; cross quantiles "
-               "0, .1, .25, .5:",
+               "0, .1, .25, .5, .75, .9, 1:",
                pw->sep_c, pw->sep_ct, pw->bound_c, pw->total, pw->either, pw->vis, pw->vis_old, pw->vis_c, pw->vis_bound,
                pw->vis_either);
-        for (int q = 0; q < 4 && m > 0; ++q)
-            printf(" %.4f", pw->cross[(int)((q == 0 ? 0 : q == 1 ? 0.1 : q == 2 ? 0.25 : 0.5) * (m - 1))]);
+        static const double qs[7] = {0.0, 0.1, 0.25, 0.5, 0.75, 0.9, 1.0};
+        for (int q = 0; q < 7 && m > 0; ++q)
+            printf(" %.4f", pw->cross[(int)(qs[q] * (m - 1))]);
         printf("\n");
     }
     fflush(stdout);

@@ -64,7 +64,8 @@
  *     (with the fitter's proximal residuals); rows with cos theta < MF_PREFILTER_MULTISTART_COS
  *     get a second solve from the closed-form start, the lower residual kept.  From the second
  *     azimuth on, every entry also gets a solve from the previous azimuth's lobe at the same
- *     elevation (one preparation, mf_ltcfit_aniso_entry_fit_mirrored_multi), and that one is kept
+ *     elevation and one from the closed-form start (revision 6: on every row; one preparation,
+ *     mf_ltcfit_aniso_entry_fit_mirrored_multi), and the previous azimuth's solve is kept
  *     unless its residual exceeds the best solve's by more than MF_PREFILTER_CONTINUITY_MARGIN:
  *     where a single lobe has several fits of similar cost (the two facets of a groove), the
  *     neighbouring azimuths keep the same one instead of flipping between them (a lobe on one
