@@ -41,6 +41,14 @@ static inline uint64_t mf_test_seed(uint64_t dflt)
             MF_FAIL_AT("%s", #cond);                                                                            \
     } while (0)
 
+/* CHECK with a printf-style failure message (the values that failed). */
+#define CHECKF(cond, ...)                                                                                       \
+    do {                                                                                                        \
+        ++mf_test_checks;                                                                                       \
+        if (!(cond))                                                                                            \
+            MF_FAIL_AT(__VA_ARGS__);                                                                            \
+    } while (0)
+
 /* |a - b| <= tol * |b| (b the reference); NaN fails. */
 #define CHECK_REL(a, b, tol)                                                                                    \
     do {                                                                                                        \

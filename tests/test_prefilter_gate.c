@@ -17,13 +17,6 @@
  *                                   (every field of the gate's results, exactly, for comparing builds) */
 #include "mf_test.h"
 
-#define CHECKF(cond, ...)                                                                                       \
-    do {                                                                                                        \
-        ++mf_test_checks;                                                                                       \
-        if (!(cond))                                                                                            \
-            MF_FAIL_AT(__VA_ARGS__);                                                                            \
-    } while (0)
-
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>

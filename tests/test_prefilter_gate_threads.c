@@ -16,13 +16,6 @@
  * the threads). */
 #include "mf_test.h"
 
-#define CHECKF(cond, ...)                                                                                       \
-    do {                                                                                                        \
-        ++mf_test_checks;                                                                                       \
-        if (!(cond))                                                                                            \
-            MF_FAIL_AT(__VA_ARGS__);                                                                            \
-    } while (0)
-
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
