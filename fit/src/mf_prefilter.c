@@ -185,22 +185,29 @@ static double mix_pdf(const mf_brdf_model *m, const mf_brdf_params *p, mf_vec3 w
     return pdf;
 }
 
-/* The texel from u[0] (the first j with u0 < cdf[j]) and u[0] rescaled into [0, 1) inside its
- * interval, then the base sampler at the texel's view, rotated to the geometric frame. */
-static mf_vec3 mix_sample_texel(const mf_prefilter_mix *x, const mf_brdf_params *p, mf_vec3 wo, const double u[2],
-                                double *base_pdf, const double *vc)
+/* The texel from u0 (the first j with u0 < cdf[j]); *v: u0 rescaled into [0, 1) inside its interval. */
+static int mix_pick_texel(const mf_prefilter_mix *x, double u0, double *v)
 {
     int lo = 0, hi = x->n - 1;
     while (lo < hi) {
         int mid = (lo + hi) / 2;
-        if (u[0] < x->cdf[mid])
+        if (u0 < x->cdf[mid])
             hi = mid;
         else
             lo = mid + 1;
     }
     double c0 = lo > 0 ? x->cdf[lo - 1] : 0.0;
-    double v[2] = {(u[0] - c0) / x->w[lo], u[1]};
-    v[0] = fmin(fmax(v[0], 0.0), nextafter(1.0, 0.0));
+    *v = fmin(fmax((u0 - c0) / x->w[lo], 0.0), nextafter(1.0, 0.0));
+    return lo;
+}
+
+/* The texel from u[0] and u[0] rescaled (mix_pick_texel), then the base sampler at the texel's view,
+ * rotated to the geometric frame. */
+static mf_vec3 mix_sample_texel(const mf_prefilter_mix *x, const mf_brdf_params *p, mf_vec3 wo, const double u[2],
+                                double *base_pdf, const double *vc)
+{
+    double v[2] = {0.0, u[1]};
+    int lo = mix_pick_texel(x, u[0], &v[0]);
     const double *r = x->rot + 9 * lo;
     if (x->kind == MF_PREFILTER_BASE_LAMBERT) { /* the cosine about n(q) (Malley) */
         double rr = sqrt(v[0]), ph = 2.0 * MF_PI * v[1];
@@ -307,20 +314,9 @@ static void mix_sample_chunk(const mf_prefilter_mix *x, double alpha, const doub
 {
     int lo_[MIX_CHUNK];
     double v0[MIX_CHUNK], cs[MIX_CHUNK], sn[MIX_CHUNK];
-    for (int i = 0; i < cnt; ++i) { /* mix_sample_texel's texel and rescaled u[0] */
+    for (int i = 0; i < cnt; ++i) { /* the texel and u[0] rescaled, as mix_sample_texel (mix_pick_texel) */
         const double *ui = u + 2 * i;
-        int lo = 0, hi = x->n - 1;
-        while (lo < hi) {
-            int mid = (lo + hi) / 2;
-            if (ui[0] < x->cdf[mid])
-                hi = mid;
-            else
-                lo = mid + 1;
-        }
-        double c0 = lo > 0 ? x->cdf[lo - 1] : 0.0;
-        double v = (ui[0] - c0) / x->w[lo];
-        v0[i] = fmin(fmax(v, 0.0), nextafter(1.0, 0.0));
-        lo_[i] = lo;
+        lo_[i] = mix_pick_texel(x, ui[0], &v0[i]);
         double phi = 2.0 * MF_PI * ui[1];
         cs[i] = cos(phi);
         sn[i] = sin(phi);
