@@ -750,15 +750,273 @@ static void mask_light(const light *l, const workspace *ws, int live, int k, uin
 }
 #undef MASK_EDGES
 
+/* ---- the containment sets by cells (use_masks) ------------------------------------------------
+ * The sets of mask_light, bit for bit, for less: the live directions are sorted once per
+ * preparation into cells of a grid, each cell and each block of cells bounded by a cap (unit
+ * centre b, angular radius r), and every light first classifies the caps: a cap provably outside
+ * the light (outside its bounding cap, or on the outer side of one edge plane) is skipped, one
+ * provably inside (inside its cap and on the inner side of every edge plane) sets its members' bits
+ * without a test, and only the directions of the others are tested, by mask_light's predicate with
+ * its operations in its order (cap test, then every edge plane), two at a time.  A proof holds with
+ * a slack of MC_SLACK in cosines and sines, far above the rounding of the dot products (a few
+ * 1e-16 for the unit directions it accepts), so a proof never decides a direction whose computed
+ * test could go the other way:
+ *   - d within r of b (r < pi / 2), light cap (c, cr), A = angle(b, c): max d.c = cos(A - r) when
+ *     A > r, min d.c = cos(A + r) (A + r < pi / 2 whenever that exceeds cr > 0);
+ *   - edge plane of unit normal n: d.n >= sin(asin(b.n) - r) and <= sin(asin(b.n) + r), so
+ *     b.n > sin r + slack puts every member strictly inside, b.n < -sin r - slack strictly
+ *     outside (the plane's test is a sign test: its scale |v_i x v_i+1| does not matter).
+ * A cap whose members are not unit to 1e-12, or whose radius is not below acos(1e-3), proves
+ * nothing.  The grid: the stereographic projection about the lobe's mean m (R_m^T d = l,
+ * p = (l.x, l.y) / (1 + l.z), defined and one to one everywhere but at -m), MC_G x MC_G cells
+ * over [-2.5 s, 2.5 s]^2 with s the RMS |p| of the directions in m's hemisphere (the coordinates
+ * clamped to the grid; directions at -m or non-finite in one extra cell, always tested), grouped
+ * into (MC_G / MC_B)^2 blocks of MC_B x MC_B cells; a block's cells are contiguous in the sorted
+ * order, so a block is one range. */
+#define MC_G 16
+#define MC_B 4
+#define MC_NBLOCK ((MC_G / MC_B) * (MC_G / MC_B))
+#define MC_FAR (MC_G * MC_G)  /* the extra cell's key */
+#define MC_KEYS (MC_G * MC_G + 1)
+#define MC_SLACK 1e-7
+
+typedef struct {
+    double bx, by, bz, cb, sb; /* unit centre, cos and sin of the radius */
+    int start, end;            /* members: sorted positions start .. end - 1 */
+    int ok;                    /* proofs apply */
+} mc_cap;
+
+typedef struct {
+    double *x, *y, *z, *px, *py; /* sorted directions; the projection (in direction order) */
+    int *orig, *key;             /* the direction of a sorted position; the key of a direction */
+    uint64_t *m;                 /* the sets in sorted order */
+    mc_cap cell[MC_KEYS], block[MC_NBLOCK];
+} mc_scratch;
+
+/* The bytes of mc_scratch and its arrays for n directions. */
+static size_t mc_scratch_bytes(size_t n) { return sizeof(mc_scratch) + n * (5 * sizeof(double) + 2 * sizeof(int) + sizeof(uint64_t)); }
+
+/* mc_scratch in the memory at p (mc_scratch_bytes(n), aligned as malloc aligns). */
+static mc_scratch *mc_scratch_at(void *p, size_t n)
+{
+    mc_scratch *s = p;
+    double *d = (double *)(s + 1);
+    s->x = d, s->y = d + n, s->z = d + 2 * n, s->px = d + 3 * n, s->py = d + 4 * n;
+    s->m = (uint64_t *)(d + 5 * n);
+    s->orig = (int *)(s->m + n);
+    s->key = s->orig + n;
+    return s;
+}
+
+/* The cap of sorted positions start .. end - 1 (see above for ok). */
+static void mc_cap_fill(const mc_scratch *s, int start, int end, mc_cap *c)
+{
+    c->start = start, c->end = end, c->ok = 0;
+    c->bx = c->by = c->bz = 0.0, c->cb = -1.0, c->sb = 1.0;
+    if (end <= start)
+        return;
+    double sx = 0.0, sy = 0.0, sz = 0.0;
+    int unit = 1;
+    for (int i = start; i < end; ++i) {
+        sx += s->x[i], sy += s->y[i], sz += s->z[i];
+        unit &= fabs(s->x[i] * s->x[i] + s->y[i] * s->y[i] + s->z[i] * s->z[i] - 1.0) <= 1e-12;
+    }
+    double l = sqrt(sx * sx + sy * sy + sz * sz);
+    if (!unit || !(l > 1e-300 && l < INFINITY))
+        return;
+    c->bx = sx / l, c->by = sy / l, c->bz = sz / l;
+    double cb = 1.0;
+    for (int i = start; i < end; ++i) {
+        double d = s->x[i] * c->bx + s->y[i] * c->by + s->z[i] * c->bz;
+        cb = d < cb ? d : cb; /* finite: the members are unit */
+    }
+    cb -= 1e-9; /* the centre's own rounding and the members' norms, far below this */
+    if (!(cb > 1e-3))
+        return;
+    c->cb = cb;
+    c->sb = sqrt(1.0 - cb * cb); /* of the reduced cosine: at least the true sine */
+    c->ok = 1;
+}
+
+/* Sorts the live directions into the cells and fills the caps. */
+static void mc_sort(const atexel *t, const workspace *ws, int live, mc_scratch *s)
+{
+    const double *r = t->r;
+    double ss = 0.0;
+    int nf = 0;
+    for (int j = 0; j < live; ++j) {
+        double x = ws->x[j], y = ws->y[j], z = ws->z[j];
+        double lx = r[0] * x + r[3] * y + r[6] * z, ly = r[1] * x + r[4] * y + r[7] * z, lz = r[2] * x + r[5] * y + r[8] * z;
+        double den = 1.0 + lz;
+        double px = den > 1e-6 ? lx / den : NAN, py = den > 1e-6 ? ly / den : NAN;
+        s->px[j] = px, s->py[j] = py;
+        if (lz > 0.0 && isfinite(px) && isfinite(py)) {
+            ss += px * px + py * py;
+            ++nf;
+        }
+    }
+    double sc = nf > 0 ? sqrt(ss / nf) : 0.0;
+    if (!(sc > 1e-12 && sc < INFINITY))
+        sc = 1.0;
+    const double w = 2.5 * sc, f = MC_G / (2.0 * w);
+    int cnt[MC_KEYS + 1];
+    for (int q = 0; q <= MC_KEYS; ++q)
+        cnt[q] = 0;
+    for (int j = 0; j < live; ++j) {
+        double px = s->px[j], py = s->py[j];
+        int key = MC_FAR;
+        if (isfinite(px) && isfinite(py)) {
+            double gx = (px + w) * f, gy = (py + w) * f; /* clamped without fmin / fmax calls */
+            int ix = gx > 0.0 ? (gx < MC_G - 1.0 ? (int)gx : MC_G - 1) : 0;
+            int iy = gy > 0.0 ? (gy < MC_G - 1.0 ? (int)gy : MC_G - 1) : 0;
+            key = ((iy / MC_B) * (MC_G / MC_B) + ix / MC_B) * (MC_B * MC_B) + (iy % MC_B) * MC_B + ix % MC_B;
+        }
+        s->key[j] = key;
+        ++cnt[key + 1];
+    }
+    for (int q = 0; q < MC_KEYS; ++q)
+        cnt[q + 1] += cnt[q];
+    int pos[MC_KEYS];
+    for (int q = 0; q < MC_KEYS; ++q)
+        pos[q] = cnt[q];
+    for (int j = 0; j < live; ++j) {
+        int i = pos[s->key[j]]++;
+        s->x[i] = ws->x[j], s->y[i] = ws->y[j], s->z[i] = ws->z[j];
+        s->orig[i] = j;
+    }
+    for (int q = 0; q < MC_KEYS; ++q)
+        mc_cap_fill(s, cnt[q], cnt[q + 1], &s->cell[q]);
+    s->cell[MC_FAR].ok = 0;
+    for (int b = 0; b < MC_NBLOCK; ++b)
+        mc_cap_fill(s, cnt[b * MC_B * MC_B], cnt[(b + 1) * MC_B * MC_B], &s->block[b]);
+}
+
+/* 0: every member is outside the light; 2: every member is inside; 1: not proved.  lc: the
+ * light's centre and cos radius (cap: whether it has a cap test worth a proof, cos radius above
+ * -1); nu: its edge planes' unit normals (ne of them, 0 if one is degenerate). */
+static int mc_classify(const mc_cap *c, const double lc[4], int cap, const double *nu, int ne)
+{
+    if (!c->ok)
+        return 1;
+    int in = 1;
+    if (cap) {
+        double ca = c->bx * lc[0] + c->by * lc[1] + c->bz * lc[2];
+        double qx = c->by * lc[2] - c->bz * lc[1], qy = c->bz * lc[0] - c->bx * lc[2], qz = c->bx * lc[1] - c->by * lc[0];
+        double sa = sqrt(qx * qx + qy * qy + qz * qz); /* sin A, accurate at both ends */
+        if (ca < c->cb && ca * c->cb + sa * c->sb < lc[3] - MC_SLACK)
+            return 0;
+        in = lc[3] > 0.0 && ca * c->cb - sa * c->sb > lc[3] + MC_SLACK;
+    }
+    if (ne == 0)
+        return 1;
+    for (int e = 0; e < ne; ++e) {
+        double d = c->bx * nu[3 * e] + c->by * nu[3 * e + 1] + c->bz * nu[3 * e + 2];
+        if (d < -c->sb - MC_SLACK)
+            return 0;
+        in &= d > c->sb + MC_SLACK;
+    }
+    return in ? 2 : 1;
+}
+
+/* mask_light's predicate on sorted positions i0 .. i1 - 1: the cap test and every edge plane, each
+ * dot product mf_vec3_dot's operations in its order, two directions at a time where the compiler
+ * has 2-wide vectors (nothing contracted). */
+#if defined(__GNUC__) || defined(__clang__)
+#define MC_VEC2 1
+typedef double mc_v2d __attribute__((vector_size(16)));
+typedef long long mc_v2l __attribute__((vector_size(16)));
+#endif
+static void mc_test(mc_scratch *s, int i0, int i1, const light *l, int k)
+{
+    const double cx = l->centre.x, cy = l->centre.y, cz = l->centre.z, cr = l->cos_radius;
+    const mf_vec3 *en = l->edge_n;
+    const int ne = l->poly.n;
+    const double *x = s->x, *y = s->y, *z = s->z;
+    uint64_t *m = s->m;
+    int i = i0;
+#ifdef MC_VEC2
+    for (; i + 2 <= i1; i += 2) {
+        mc_v2d ax, ay, az;
+        memcpy(&ax, x + i, sizeof ax);
+        memcpy(&ay, y + i, sizeof ay);
+        memcpy(&az, z + i, sizeof az);
+        mc_v2l in = ax * cx + ay * cy + az * cz >= cr;
+        for (int e = 0; e < ne; ++e)
+            in &= ax * en[e].x + ay * en[e].y + az * en[e].z > 0.0;
+        m[i] |= (uint64_t)(in[0] & 1) << k;
+        m[i + 1] |= (uint64_t)(in[1] & 1) << k;
+    }
+#endif
+    for (; i < i1; ++i) {
+        int in = x[i] * cx + y[i] * cy + z[i] * cz >= cr;
+        for (int e = 0; e < ne; ++e)
+            in &= x[i] * en[e].x + y[i] * en[e].y + z[i] * en[e].z > 0.0;
+        m[i] |= (uint64_t)in << k;
+    }
+}
+
+static void mc_set(mc_scratch *s, const mc_cap *c, int k)
+{
+    for (int i = c->start; i < c->end; ++i)
+        s->m[i] |= (uint64_t)1 << k;
+}
+
+/* The sets of lights 0 .. nl - 1 (nl <= 64) as bit k of mask[j] (mask_light's, bit for bit). */
+static void mc_masks(const atexel *t, const workspace *ws, const light *lights, int nl, int live, mc_scratch *s,
+                     uint64_t *mask)
+{
+    mc_sort(t, ws, live, s);
+    for (int i = 0; i < live; ++i)
+        s->m[i] = 0;
+    for (int k = 0; k < nl; ++k) {
+        const light *l = &lights[k];
+        const double lc[4] = {l->centre.x, l->centre.y, l->centre.z, l->cos_radius};
+        const int cap = l->cos_radius > -1.0;
+        double nu[3 * MF_POLYGON_MAX_VERTICES];
+        int ne = l->poly.n;
+        for (int e = 0; e < l->poly.n; ++e) {
+            mf_vec3 v = l->edge_n[e];
+            double len = sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
+            if (!(len > 1e-150 && len < INFINITY))
+                ne = 0;
+            else
+                nu[3 * e] = v.x / len, nu[3 * e + 1] = v.y / len, nu[3 * e + 2] = v.z / len;
+        }
+        for (int b = 0; b < MC_NBLOCK; ++b) {
+            const mc_cap *bc = &s->block[b];
+            if (bc->end <= bc->start)
+                continue;
+            int cls = mc_classify(bc, lc, cap, nu, ne);
+            if (cls == 0)
+                continue;
+            if (cls == 2) {
+                mc_set(s, bc, k);
+                continue;
+            }
+            for (int q = b * MC_B * MC_B; q < (b + 1) * MC_B * MC_B; ++q) {
+                const mc_cap *cc = &s->cell[q];
+                if (cc->end <= cc->start)
+                    continue;
+                int cq = mc_classify(cc, lc, cap, nu, ne);
+                if (cq == 2)
+                    mc_set(s, cc, k);
+                else if (cq == 1)
+                    mc_test(s, cc->start, cc->end, l, k);
+            }
+        }
+        mc_test(s, s->cell[MC_FAR].start, s->cell[MC_FAR].end, l, k);
+    }
+    for (int i = 0; i < live; ++i)
+        mask[s->orig[i]] = s->m[i];
+}
+
 static int use_masks(atexel *t, workspace *ws)
 {
     if (!t->mask || t->k > 64)
         return 0;
-    if (!t->mask_ok) {
-        for (int j = 0; j < t->live; ++j)
-            t->mask[j] = 0;
-        for (int k = 0; k < t->k; ++k)
-            mask_light(&t->lights[k], ws, t->live, k, t->mask);
+    if (!t->mask_ok) { /* the scratch after the masks: pf_workspace_get */
+        size_t n = (size_t)GRAZING_FACTOR * ws->base;
+        mc_masks(t, ws, t->lights, t->k, t->live, mc_scratch_at(t->mask + n, n), t->mask);
         t->mask_ok = 1;
     }
     return 1;
@@ -904,6 +1162,61 @@ int mf_ltcfit_aniso_gradient_compare(const double p[7], const double *v, int n, 
         worst = fmax(worst, fabs(g[j] - ed.d[j]) / fmax(1.0, fabs(ed.d[j])));
     *grad_diff = worst;
     return 0;
+}
+
+int mf_ltcfit_aniso_mask_compare(const double *dirs, int n, const double axis[3], int nl, const int *nv,
+                                 const double *verts, uint64_t *cells, uint64_t *direct)
+{
+    if (!dirs || n < 1 || !axis || nl < 1 || nl > 64 || !nv || !verts || !cells || !direct)
+        return -1;
+    mf_vec3 ax = mf_vec3_make(axis[0], axis[1], axis[2]);
+    double al = mf_vec3_length(ax);
+    if (!(al > 0.0 && al < INFINITY) || !(ax.z / al > -0.5))
+        return -1;
+    for (int k = 0; k < nl; ++k)
+        if (nv[k] < 3 || nv[k] > MF_POLYGON_MAX_VERTICES)
+            return -1;
+    light *l = malloc(sizeof *l * (size_t)nl);
+    atexel *t = malloc(sizeof *t);
+    workspace ws;
+    memset(&ws, 0, sizeof ws);
+    ws.x = malloc(sizeof *ws.x * 3 * (size_t)n);
+    ws.cand = malloc(sizeof *ws.cand * (size_t)n);
+    void *scr = malloc(mc_scratch_bytes((size_t)n));
+    int rc = -1;
+    if (l && t && ws.x && ws.cand && scr) {
+        ws.y = ws.x + n, ws.z = ws.x + 2 * (size_t)n;
+        for (int j = 0; j < n; ++j)
+            ws.x[j] = dirs[3 * j], ws.y[j] = dirs[3 * j + 1], ws.z[j] = dirs[3 * j + 2];
+        min_rotation(mf_vec3_scale(ax, 1.0 / al), t->r);
+        const double *v = verts;
+        for (int k = 0; k < nl; ++k) { /* make_lights_random's construction */
+            mf_vec3 p[MF_POLYGON_MAX_VERTICES];
+            for (int q = 0; q < nv[k]; ++q, v += 3)
+                p[q] = mf_vec3_make(v[0], v[1], v[2]);
+            l[k].poly = mf_polygon_make(nv[k], p);
+            mf_vec3 c = mf_vec3_make(0.0, 0.0, 0.0);
+            for (int q = 0; q < nv[k]; ++q)
+                c = mf_vec3_add(c, mf_vec3_normalize(p[q]));
+            c = mf_vec3_normalize(c);
+            double cr = 1.0;
+            for (int q = 0; q < nv[k]; ++q) {
+                l[k].edge_n[q] = mf_vec3_cross(p[q], p[(q + 1) % nv[k]]);
+                cr = fmin(cr, mf_vec3_dot(c, mf_vec3_normalize(p[q])));
+            }
+            l[k].centre = c;
+            l[k].cos_radius = cr > 1e-6 ? cr - 1e-9 : -2.0;
+            l[k].factor = 1.0;
+        }
+        for (int j = 0; j < n; ++j)
+            direct[j] = 0;
+        for (int k = 0; k < nl; ++k)
+            mask_light(&l[k], &ws, n, k, direct);
+        mc_masks(t, &ws, l, nl, n, mc_scratch_at(scr, (size_t)n), cells);
+        rc = 0;
+    }
+    free(l), free(t), free(ws.x), free(ws.cand), free(scr);
+    return rc;
 }
 
 /* ---- the least-squares problem ---------------------------------------------------------------- */
@@ -1269,7 +1582,9 @@ static pf_workspace *pf_workspace_get(int base)
     w = calloc(1, sizeof *w);
     if (!w)
         return NULL;
-    w->mask = malloc(sizeof *w->mask * (size_t)GRAZING_FACTOR * base);
+    /* the masks, then use_masks' scratch (mc_scratch_at) */
+    size_t n = (size_t)GRAZING_FACTOR * base;
+    w->mask = malloc(sizeof *w->mask * n + mc_scratch_bytes(n));
     if (!ws_init(&w->ws, base) || !w->mask || pthread_setspecific(g_pf_ws_key, w) != 0) {
         pf_workspace_free(w);
         return NULL;
