@@ -752,36 +752,39 @@ static void mask_light(const light *l, const workspace *ws, int live, int k, uin
 
 /* ---- the containment sets by cells (use_masks) ------------------------------------------------
  * The sets of mask_light, bit for bit, for less: the live directions are sorted once per
- * preparation into cells of a grid, each cell and each block of cells bounded by a cap (unit
- * centre b, angular radius r), and every light first classifies the caps: a cap provably outside
- * the light (outside its bounding cap, or on the outer side of one edge plane) is skipped, one
- * provably inside (inside its cap and on the inner side of every edge plane) sets its members' bits
- * without a test, and only the directions of the others are tested, by mask_light's predicate with
- * its operations in its order (cap test, then every edge plane), two at a time.  A proof holds with
- * a slack of MC_SLACK in cosines and sines, far above the rounding of the dot products (a few
- * 1e-16 for the unit directions it accepts), so a proof never decides a direction whose computed
- * test could go the other way:
+ * preparation into the cells of a quadtree, each node bounded by a cap (unit centre b, angular
+ * radius r), and every light descends the tree classifying the caps: a node provably outside the
+ * light (outside its bounding cap, or on the outer side of one edge plane) is skipped, one provably
+ * inside (inside its cap and on the inner side of every edge plane) sets its members' bits without
+ * a test, and only the directions of unproved leaves (or of nodes of at most MC_DIRECT members) are
+ * tested, by mask_light's predicate with its operations in its order (cap test, then every edge
+ * plane), two at a time.  A proof holds with a slack of MC_SLACK in cosines and sines, far above the
+ * rounding of the dot products (a few 1e-16 for the unit directions it accepts), so a proof never
+ * decides a direction whose computed test could go the other way:
  *   - d within r of b (r < pi / 2), light cap (c, cr), A = angle(b, c): max d.c = cos(A - r) when
- *     A > r, min d.c = cos(A + r) (A + r < pi / 2 whenever that exceeds cr > 0);
+ *     A > r, min d.c = cos(A + r) (for cr > 0: A + r < pi / 2 whenever that exceeds cr);
  *   - edge plane of unit normal n: d.n >= sin(asin(b.n) - r) and <= sin(asin(b.n) + r), so
  *     b.n > sin r + slack puts every member strictly inside, b.n < -sin r - slack strictly
  *     outside (the plane's test is a sign test: its scale |v_i x v_i+1| does not matter).
- * A cap whose members are not unit to 1e-12, or whose radius is not below acos(1e-3), proves
- * nothing.  The grid: the stereographic projection about the lobe's mean m (R_m^T d = l,
- * p = (l.x, l.y) / (1 + l.z), defined and one to one everywhere but at -m), MC_G x MC_G cells
- * over [-2.5 s, 2.5 s]^2 with s the RMS |p| of the directions in m's hemisphere (the coordinates
- * clamped to the grid; directions at -m or non-finite in one extra cell, always tested), grouped
- * into (MC_G / MC_B)^2 blocks of MC_B x MC_B cells; a block's cells are contiguous in the sorted
- * order, so a block is one range. */
-#define MC_G 16
-#define MC_B 4
-#define MC_NBLOCK ((MC_G / MC_B) * (MC_G / MC_B))
-#define MC_FAR (MC_G * MC_G)  /* the extra cell's key */
+ * A leaf's cap: b its members' normalised sum, cos r their smallest b.d less 1e-9; a node's: b the
+ * normalised sum of its children's sums, cos r the smallest cos(angle(b, b_child) + r_child) less
+ * 1e-9.  A cap whose members are not unit to 1e-12, or whose radius is not below acos(1e-3), proves
+ * nothing.  The tree: the stereographic projection about the lobe's mean m (R_m^T d = l,
+ * p = (l.x, l.y) / (1 + l.z), defined and one to one everywhere but at -m), a 2^MC_L x 2^MC_L grid
+ * over [-2.5 s, 2.5 s]^2 with s the RMS |p| of the directions in m's hemisphere (coordinates clamped
+ * to the grid; directions at -m or non-finite in one extra cell, always tested), its cells in
+ * Morton order so that every node of the quadtree is one range of the sorted directions. */
+#define MC_L 5
+#define MC_G (1 << MC_L)
+#define MC_FAR (MC_G * MC_G) /* the extra cell's key */
 #define MC_KEYS (MC_G * MC_G + 1)
+#define MC_NODES ((4 * MC_G * MC_G - 1) / 3) /* 1 + 4 + ... + 4^MC_L */
+#define MC_DIRECT 6
 #define MC_SLACK 1e-7
 
 typedef struct {
     double bx, by, bz, cb, sb; /* unit centre, cos and sin of the radius */
+    double sx, sy, sz;         /* the members' sum */
     int start, end;            /* members: sorted positions start .. end - 1 */
     int ok;                    /* proofs apply */
 } mc_cap;
@@ -790,7 +793,8 @@ typedef struct {
     double *x, *y, *z, *px, *py; /* sorted directions; the projection (in direction order) */
     int *orig, *key;             /* the direction of a sorted position; the key of a direction */
     uint64_t *m;                 /* the sets in sorted order */
-    mc_cap cell[MC_KEYS], block[MC_NBLOCK];
+    mc_cap node[MC_NODES];       /* level by level from the root: level v's 4^v nodes from (4^v - 1) / 3 */
+    int cnt[MC_KEYS + 1];        /* the first sorted position of each key */
 } mc_scratch;
 
 /* The bytes of mc_scratch and its arrays for n directions. */
@@ -808,11 +812,12 @@ static mc_scratch *mc_scratch_at(void *p, size_t n)
     return s;
 }
 
-/* The cap of sorted positions start .. end - 1 (see above for ok). */
-static void mc_cap_fill(const mc_scratch *s, int start, int end, mc_cap *c)
+/* A leaf's cap: sorted positions start .. end - 1. */
+static void mc_leaf_fill(const mc_scratch *s, int start, int end, mc_cap *c)
 {
     c->start = start, c->end = end, c->ok = 0;
     c->bx = c->by = c->bz = 0.0, c->cb = -1.0, c->sb = 1.0;
+    c->sx = c->sy = c->sz = 0.0;
     if (end <= start)
         return;
     double sx = 0.0, sy = 0.0, sz = 0.0;
@@ -821,6 +826,7 @@ static void mc_cap_fill(const mc_scratch *s, int start, int end, mc_cap *c)
         sx += s->x[i], sy += s->y[i], sz += s->z[i];
         unit &= fabs(s->x[i] * s->x[i] + s->y[i] * s->y[i] + s->z[i] * s->z[i] - 1.0) <= 1e-12;
     }
+    c->sx = sx, c->sy = sy, c->sz = sz;
     double l = sqrt(sx * sx + sy * sy + sz * sz);
     if (!unit || !(l > 1e-300 && l < INFINITY))
         return;
@@ -836,6 +842,50 @@ static void mc_cap_fill(const mc_scratch *s, int start, int end, mc_cap *c)
     c->cb = cb;
     c->sb = sqrt(1.0 - cb * cb); /* of the reduced cosine: at least the true sine */
     c->ok = 1;
+}
+
+/* A node's cap from its four children's (ch[0 .. 3], consecutive in sorted order). */
+static void mc_node_fill(const mc_cap *ch, mc_cap *c)
+{
+    c->start = ch[0].start, c->end = ch[3].end, c->ok = 0;
+    c->bx = c->by = c->bz = 0.0, c->cb = -1.0, c->sb = 1.0;
+    c->sx = ch[0].sx + ch[1].sx + ch[2].sx + ch[3].sx;
+    c->sy = ch[0].sy + ch[1].sy + ch[2].sy + ch[3].sy;
+    c->sz = ch[0].sz + ch[1].sz + ch[2].sz + ch[3].sz;
+    if (c->end <= c->start)
+        return;
+    int ok = 1;
+    for (int q = 0; q < 4; ++q)
+        ok &= ch[q].end <= ch[q].start || ch[q].ok;
+    double l = sqrt(c->sx * c->sx + c->sy * c->sy + c->sz * c->sz);
+    if (!ok || !(l > 1e-300 && l < INFINITY))
+        return;
+    c->bx = c->sx / l, c->by = c->sy / l, c->bz = c->sz / l;
+    double cb = 1.0;
+    for (int q = 0; q < 4; ++q) {
+        const mc_cap *h = &ch[q];
+        if (h->end <= h->start)
+            continue;
+        double ca = c->bx * h->bx + c->by * h->by + c->bz * h->bz;
+        double qx = c->by * h->bz - c->bz * h->by, qy = c->bz * h->bx - c->bx * h->bz, qz = c->bx * h->by - c->by * h->bx;
+        double d = ca * h->cb - sqrt(qx * qx + qy * qy + qz * qz) * h->sb; /* cos(A + r_child) */
+        cb = d < cb ? d : cb;
+    }
+    cb -= 1e-9;
+    if (!(cb > 1e-3))
+        return;
+    c->cb = cb;
+    c->sb = sqrt(1.0 - cb * cb);
+    c->ok = 1;
+}
+
+/* v's MC_L bits spread to the even bit positions. */
+static int mc_spread(int v)
+{
+    int r = 0;
+    for (int b = 0; b < MC_L; ++b)
+        r |= ((v >> b) & 1) << (2 * b);
+    return r;
 }
 
 /* Sorts the live directions into the cells and fills the caps. */
@@ -859,7 +909,10 @@ static void mc_sort(const atexel *t, const workspace *ws, int live, mc_scratch *
     if (!(sc > 1e-12 && sc < INFINITY))
         sc = 1.0;
     const double w = 2.5 * sc, f = MC_G / (2.0 * w);
-    int cnt[MC_KEYS + 1];
+    int spread[MC_G];
+    for (int v = 0; v < MC_G; ++v)
+        spread[v] = mc_spread(v);
+    int *cnt = s->cnt;
     for (int q = 0; q <= MC_KEYS; ++q)
         cnt[q] = 0;
     for (int j = 0; j < live; ++j) {
@@ -869,7 +922,7 @@ static void mc_sort(const atexel *t, const workspace *ws, int live, mc_scratch *
             double gx = (px + w) * f, gy = (py + w) * f; /* clamped without fmin / fmax calls */
             int ix = gx > 0.0 ? (gx < MC_G - 1.0 ? (int)gx : MC_G - 1) : 0;
             int iy = gy > 0.0 ? (gy < MC_G - 1.0 ? (int)gy : MC_G - 1) : 0;
-            key = ((iy / MC_B) * (MC_G / MC_B) + ix / MC_B) * (MC_B * MC_B) + (iy % MC_B) * MC_B + ix % MC_B;
+            key = spread[ix] | spread[iy] << 1;
         }
         s->key[j] = key;
         ++cnt[key + 1];
@@ -879,16 +932,20 @@ static void mc_sort(const atexel *t, const workspace *ws, int live, mc_scratch *
     int pos[MC_KEYS];
     for (int q = 0; q < MC_KEYS; ++q)
         pos[q] = cnt[q];
-    for (int j = 0; j < live; ++j) {
-        int i = pos[s->key[j]]++;
-        s->x[i] = ws->x[j], s->y[i] = ws->y[j], s->z[i] = ws->z[j];
-        s->orig[i] = j;
+    for (int j = 0; j < live; ++j) /* the indices scattered, then the directions gathered (one line each) */
+        s->orig[pos[s->key[j]]++] = j;
+    for (int i = 0; i < live; ++i) {
+        const mf_vec3 *d = &ws->dir[s->orig[i]]; /* ws->x, y, z hold its components */
+        s->x[i] = d->x, s->y[i] = d->y, s->z[i] = d->z;
     }
-    for (int q = 0; q < MC_KEYS; ++q)
-        mc_cap_fill(s, cnt[q], cnt[q + 1], &s->cell[q]);
-    s->cell[MC_FAR].ok = 0;
-    for (int b = 0; b < MC_NBLOCK; ++b)
-        mc_cap_fill(s, cnt[b * MC_B * MC_B], cnt[(b + 1) * MC_B * MC_B], &s->block[b]);
+    int off = (MC_G * MC_G - 1) / 3; /* the leaves' level */
+    for (int q = 0; q < MC_G * MC_G; ++q)
+        mc_leaf_fill(s, cnt[q], cnt[q + 1], &s->node[off + q]);
+    for (int nv = MC_G * MC_G / 4; nv >= 1; nv /= 4) {
+        int up = (nv - 1) / 3, down = (4 * nv - 1) / 3;
+        for (int q = 0; q < nv; ++q)
+            mc_node_fill(&s->node[down + 4 * q], &s->node[up + q]);
+    }
 }
 
 /* 0: every member is outside the light; 2: every member is inside; 1: not proved.  lc: the
@@ -955,10 +1012,35 @@ static void mc_test(mc_scratch *s, int i0, int i1, const light *l, int k)
     }
 }
 
-static void mc_set(mc_scratch *s, const mc_cap *c, int k)
+typedef struct {
+    const light *l;
+    double lc[4], nu[3 * MF_POLYGON_MAX_VERTICES];
+    int cap, ne, k;
+} mc_light;
+
+/* Node q of level v for light L: skipped, set, tested or descended. */
+static void mc_descend(mc_scratch *s, const mc_light *L, int v, int q)
 {
-    for (int i = c->start; i < c->end; ++i)
-        s->m[i] |= (uint64_t)1 << k;
+    const mc_cap *c = &s->node[(((1 << (2 * v)) - 1) / 3) + q];
+    if (c->end <= c->start)
+        return;
+    if (c->end - c->start > MC_DIRECT) {
+        int cls = mc_classify(c, L->lc, L->cap, L->nu, L->ne);
+        if (cls == 0)
+            return;
+        if (cls == 2) {
+            const uint64_t bit = (uint64_t)1 << L->k;
+            for (int i = c->start; i < c->end; ++i)
+                s->m[i] |= bit;
+            return;
+        }
+        if (v < MC_L) {
+            for (int h = 0; h < 4; ++h)
+                mc_descend(s, L, v + 1, 4 * q + h);
+            return;
+        }
+    }
+    mc_test(s, c->start, c->end, L->l, L->k);
 }
 
 /* The sets of lights 0 .. nl - 1 (nl <= 64) as bit k of mask[j] (mask_light's, bit for bit). */
@@ -970,41 +1052,21 @@ static void mc_masks(const atexel *t, const workspace *ws, const light *lights, 
         s->m[i] = 0;
     for (int k = 0; k < nl; ++k) {
         const light *l = &lights[k];
-        const double lc[4] = {l->centre.x, l->centre.y, l->centre.z, l->cos_radius};
-        const int cap = l->cos_radius > -1.0;
-        double nu[3 * MF_POLYGON_MAX_VERTICES];
-        int ne = l->poly.n;
+        mc_light L;
+        L.l = l, L.k = k;
+        L.lc[0] = l->centre.x, L.lc[1] = l->centre.y, L.lc[2] = l->centre.z, L.lc[3] = l->cos_radius;
+        L.cap = l->cos_radius > -1.0;
+        L.ne = l->poly.n;
         for (int e = 0; e < l->poly.n; ++e) {
             mf_vec3 v = l->edge_n[e];
             double len = sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
             if (!(len > 1e-150 && len < INFINITY))
-                ne = 0;
+                L.ne = 0;
             else
-                nu[3 * e] = v.x / len, nu[3 * e + 1] = v.y / len, nu[3 * e + 2] = v.z / len;
+                L.nu[3 * e] = v.x / len, L.nu[3 * e + 1] = v.y / len, L.nu[3 * e + 2] = v.z / len;
         }
-        for (int b = 0; b < MC_NBLOCK; ++b) {
-            const mc_cap *bc = &s->block[b];
-            if (bc->end <= bc->start)
-                continue;
-            int cls = mc_classify(bc, lc, cap, nu, ne);
-            if (cls == 0)
-                continue;
-            if (cls == 2) {
-                mc_set(s, bc, k);
-                continue;
-            }
-            for (int q = b * MC_B * MC_B; q < (b + 1) * MC_B * MC_B; ++q) {
-                const mc_cap *cc = &s->cell[q];
-                if (cc->end <= cc->start)
-                    continue;
-                int cq = mc_classify(cc, lc, cap, nu, ne);
-                if (cq == 2)
-                    mc_set(s, cc, k);
-                else if (cq == 1)
-                    mc_test(s, cc->start, cc->end, l, k);
-            }
-        }
-        mc_test(s, s->cell[MC_FAR].start, s->cell[MC_FAR].end, l, k);
+        mc_descend(s, &L, 0, 0);
+        mc_test(s, s->cnt[MC_FAR], s->cnt[MC_FAR + 1], l, k);
     }
     for (int i = 0; i < live; ++i)
         mask[s->orig[i]] = s->m[i];
@@ -1182,12 +1244,15 @@ int mf_ltcfit_aniso_mask_compare(const double *dirs, int n, const double axis[3]
     memset(&ws, 0, sizeof ws);
     ws.x = malloc(sizeof *ws.x * 3 * (size_t)n);
     ws.cand = malloc(sizeof *ws.cand * (size_t)n);
+    ws.dir = malloc(sizeof *ws.dir * (size_t)n);
     void *scr = malloc(mc_scratch_bytes((size_t)n));
     int rc = -1;
-    if (l && t && ws.x && ws.cand && scr) {
+    if (l && t && ws.x && ws.cand && ws.dir && scr) {
         ws.y = ws.x + n, ws.z = ws.x + 2 * (size_t)n;
-        for (int j = 0; j < n; ++j)
-            ws.x[j] = dirs[3 * j], ws.y[j] = dirs[3 * j + 1], ws.z[j] = dirs[3 * j + 2];
+        for (int j = 0; j < n; ++j) { /* as atexel_prepare leaves them */
+            ws.dir[j] = mf_vec3_make(dirs[3 * j], dirs[3 * j + 1], dirs[3 * j + 2]);
+            ws.x[j] = ws.dir[j].x, ws.y[j] = ws.dir[j].y, ws.z[j] = ws.dir[j].z;
+        }
         min_rotation(mf_vec3_scale(ax, 1.0 / al), t->r);
         const double *v = verts;
         for (int k = 0; k < nl; ++k) { /* make_lights_random's construction */
@@ -1215,7 +1280,7 @@ int mf_ltcfit_aniso_mask_compare(const double *dirs, int n, const double axis[3]
         mc_masks(t, &ws, l, nl, n, mc_scratch_at(scr, (size_t)n), cells);
         rc = 0;
     }
-    free(l), free(t), free(ws.x), free(ws.cand), free(scr);
+    free(l), free(t), free(ws.x), free(ws.cand), free(ws.dir), free(scr);
     return rc;
 }
 
