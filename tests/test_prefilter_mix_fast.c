@@ -2,7 +2,9 @@
  * mix_sample_weights at a cached view: directions sampled in chunks, the mixture evaluated over a
  * chunk two directions at a time) against the per-direction calls it replaces (sample, eval_cos and
  * pdf at the same cached view).  The fused path promises the same bits, so every comparison is
- * exact (memcmp): any reordering or contraction of its operations fails here. */
+ * exact (memcmp): any reordering or contraction of its operations fails here.  The calls change the
+ * points u and their count between cases, so the thread's cache of the angles 2 pi u[1] (their
+ * cosines and sines, mix_angles_get) is filled, grown and partly replaced: a stale entry fails here. */
 #include "mf_test.h"
 
 #include <string.h>
