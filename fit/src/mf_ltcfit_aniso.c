@@ -109,6 +109,13 @@ typedef struct {
     double ladder;   /* the options' ladder_alpha (FAMILY_SHAPED; set before atexel_prepare) */
     uint64_t *mask;  /* NULL, or per live direction the lights (bit k) it is inside (inside_masks) */
     int mask_ok;     /* mask holds this preparation's sets */
+    /* residual_fn's light integrals at the point ic_p (ic 0: none, 1: their values ic_e, 2: also
+     * their gradients ic_g): functions of p and the lights alone, so valid until the next
+     * preparation (atexel_prepare clears ic). */
+    int ic;
+    double ic_p[NP];
+    double ic_e[ALIGHTS_MAX];
+    double ic_g[ALIGHTS_MAX][NP];
 } atexel;
 
 /* The minimal rotation taking z to the unit m (about the axis z x m; m != -z):
@@ -374,6 +381,7 @@ static mf_status atexel_prepare(const mf_brdf_model *m, mf_brdf_params prm, doub
                                 int family, const double *given_mag, const uint32_t scr[2], workspace *ws, atexel *t)
 {
     double cp, sp;
+    t->ic = 0; /* new lights: residual_fn's integrals are stale */
     cos_sin_phi(phi, sym, &cp, &sp);
     double st = theta == 0.0 ? 0.0 : sin(theta), ct = theta == 0.0 ? 1.0 : cos(theta);
     mf_vec3 wo = mf_vec3_make(st * cp, st * sp, ct);
@@ -1291,17 +1299,27 @@ static int is_scale(int i) { return i == PA || i == PD; }
 
 static int residual_fn(void *user, const double *p, double *res, double *jac)
 {
-    const atexel *t = user;
+    atexel *t = user;
     if (!valid(p))
         return 1;
     /* the written-out gradient (integral_grad: the dual numbers' gradient to rounding, at about a
-     * third of their cost; both families) */
-    double adj[9], g[NP];
-    adj_value(p, adj);
+     * third of their cost; both families).  The integrals at the last point are kept (t->ic): the
+     * solver asks for the same point again (the values after the Jacobian, the Jacobian after the
+     * values of an accepted step), and integral_grad's value is integral_value's bit for bit
+     * (test_ltcfit_aniso, gradient_compare), so a kept integral is the one a new pass would give. */
+    if (!(t->ic >= (jac ? 2 : 1) && memcmp(t->ic_p, p, sizeof t->ic_p) == 0)) {
+        double adj[9];
+        adj_value(p, adj);
+        for (int k = 0; k < t->k; ++k) {
+            const light *l = &t->lights[k];
+            t->ic_e[k] = jac ? integral_grad(l->lobe_poly.v, l->lobe_poly.n, p, adj, t->ic_g[k])
+                             : integral_value(l->lobe_poly.v, l->lobe_poly.n, adj);
+        }
+        memcpy(t->ic_p, p, sizeof t->ic_p);
+        t->ic = jac ? 2 : 1;
+    }
     for (int k = 0; k < t->k; ++k) {
-        const light *l = &t->lights[k];
-        double e = jac ? integral_grad(l->lobe_poly.v, l->lobe_poly.n, p, adj, g)
-                       : integral_value(l->lobe_poly.v, l->lobe_poly.n, adj);
+        const double e = t->ic_e[k], *g = t->ic_g[k];
         res[k] = (t->magnitude * e - t->target[k]) * t->inv_weight[k];
         if (jac)
             for (int j = 0; j < NP; ++j)
