@@ -296,6 +296,86 @@ static void mix_eval_pdf_batch(const mf_prefilter_mix *x, double a2, const doubl
     }
 }
 
+/* mix_eval_pdf_batch four directions at a time, compiled for AVX2 (x86-64 with GCC or Clang; 4-wide
+ * vectors of the same operations in the same order per lane: the same bits, nothing contracted, no
+ * FMA), called where the CPU has AVX2 and mf_prefilter_mix_wide is set (mix_eval_pdf_batch_any).
+ * Measured (bench_prefilter --size 8 --threads 1, profile samples): the mixture's sampling and
+ * evaluation 6,251 -> 4,498 samples, the run 30,795 -> 27,625 (docs/prefilter.md). */
+#if defined(MIX_VEC2) && defined(__x86_64__)
+#define MIX_VEC4 1
+#define MIX_AVX2_TARGET __attribute__((target("avx2")))
+typedef double mix_v4d __attribute__((vector_size(32)));
+typedef long long mix_v4l __attribute__((vector_size(32)));
+MIX_AVX2_TARGET static void mix_eval_pdf_batch4(const mf_prefilter_mix *x, double a2, const double *vc, int cnt, const double *vx,
+                               const double *vy, const double *vz, double *f, double *pdf)
+{
+    for (int i = 0; i < cnt; ++i)
+        f[i] = pdf[i] = 0.0;
+    for (int j = 0; j < x->n; ++j) {
+        const double *r = x->rot + 9 * j, *c = vc + VC_N * j, wj = x->w[j];
+        int i = 0;
+#ifdef MIX_VEC4
+        for (; i + 4 <= cnt; i += 4) {
+            mix_v4d ax, ay, az;
+            memcpy(&ax, vx + i, sizeof ax);
+            memcpy(&ay, vy + i, sizeof ay);
+            memcpy(&az, vz + i, sizeof az);
+            const mix_v4d tx = r[0] * ax + r[3] * ay + r[6] * az, ty = r[1] * ax + r[4] * ay + r[7] * az,
+                          tz = r[2] * ax + r[5] * ay + r[8] * az; /* rot_t */
+            const mix_v4d hx = c[0] + tx, hy = c[1] + ty, hz = c[2] + tz;
+            const mix_v4d s2 = hx * hx + hy * hy, z2 = hz * hz;
+            const mix_v4d den = a2 * z2 + s2, l2 = s2 + z2;
+            const mix_v4d dq = c[14] * (l2 * l2) / (den * den);
+            mix_v4d q = tz * tz + a2 * (tx * tx + ty * ty);
+            q = (mix_v4d){sqrt(q[0]), sqrt(q[1]), sqrt(q[2]), sqrt(q[3])};
+            const mix_v4d fj = 2.0 * dq * tz / (c[15] * tz + q);
+            const mix_v4d pj = dq * c[16];
+            const mix_v4l up = tz > 0.0;
+            const mix_v4l dens = up & (hz > 0.0) & ((c[0] * hx + c[1] * hy + c[2] * hz) > 0.0);
+            const mix_v4d fs = (mix_v4d)(up & (mix_v4l)fj), ps = (mix_v4d)(dens & (mix_v4l)pj); /* or +0 */
+            mix_v4d sf, sp;
+            memcpy(&sf, f + i, sizeof sf);
+            memcpy(&sp, pdf + i, sizeof sp);
+            sf += wj * fs;
+            sp += wj * ps;
+            memcpy(f + i, &sf, sizeof sf);
+            memcpy(pdf + i, &sp, sizeof sp);
+        }
+#endif
+        for (; i < cnt; ++i) {
+            double fj, pj;
+            ggx_fpdf_cached(a2, c, rot_t(r, mf_vec3_make(vx[i], vy[i], vz[i])), &fj, &pj);
+            f[i] += wj * fj;
+            pdf[i] += wj * pj;
+        }
+    }
+}
+
+#endif
+
+int mf_prefilter_mix_wide = 1;
+
+int mf_prefilter_mix_wide_available(void)
+{
+#ifdef MIX_VEC4
+    return __builtin_cpu_supports("avx2") ? 1 : 0;
+#else
+    return 0;
+#endif
+}
+
+static void mix_eval_pdf_batch_any(const mf_prefilter_mix *x, double a2, const double *vc, int cnt, const double *vx,
+                                   const double *vy, const double *vz, double *f, double *pdf)
+{
+#ifdef MIX_VEC4
+    if (mf_prefilter_mix_wide && __builtin_cpu_supports("avx2")) {
+        mix_eval_pdf_batch4(x, a2, vc, cnt, vx, vy, vz, f, pdf);
+        return;
+    }
+#endif
+    mix_eval_pdf_batch(x, a2, vc, cnt, vx, vy, vz, f, pdf);
+}
+
 /* The directions of mix_sample_weights' fused path are sampled and evaluated in chunks of this
  * many. */
 #define MIX_CHUNK 64
@@ -448,7 +528,7 @@ static void mix_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, 
                     ++cnt;
                 }
             }
-            mix_eval_pdf_batch(x, a2, vc, cnt, vx, vy, vz, f, pd);
+            mix_eval_pdf_batch_any(x, a2, vc, cnt, vx, vy, vz, f, pd);
             for (int q = 0; q < cnt; ++q) {
                 int i = ix[q];
                 pdf[i] = pd[q];
