@@ -2,7 +2,10 @@
  * mix_sample_weights at a cached view: directions sampled in chunks, the mixture evaluated over a
  * chunk two directions at a time) against the per-direction calls it replaces (sample, eval_cos and
  * pdf at the same cached view).  The fused path promises the same bits, so every comparison is
- * exact (memcmp): any reordering or contraction of its operations fails here. */
+ * exact (memcmp): any reordering or contraction of its operations fails here.  The calls change the
+ * points u and their count between cases, so the thread's cache of the angles 2 pi u[1] (their
+ * cosines and sines, mix_angles_get) is filled, grown and partly replaced: a stale entry fails here.
+ * Both evaluation paths are checked: the 4-wide AVX2 one (where the CPU has it) and the 2-wide one. */
 #include "mf_test.h"
 
 #include <string.h>
@@ -73,9 +76,16 @@ static void check_mix(int ncomp, int n, uint64_t seed)
 int main(void)
 {
     uint64_t seed = mf_test_seed(13);
-    check_mix(1, 131, seed);
-    check_mix(2, 131, seed + 1);
-    check_mix(4, 201, seed + 2);
-    check_mix(13, 131, seed + 3);
+    /* both evaluation paths: 4-wide (AVX2, where this CPU has it) and 2-wide */
+    printf("4-wide AVX2 evaluation %s\n", mf_prefilter_mix_wide_available() ? "available: both paths checked"
+                                                                            : "not available: the 2-wide path twice");
+    for (int wide = 1; wide >= 0; --wide) {
+        mf_prefilter_mix_wide = wide;
+        check_mix(1, 131, seed);
+        check_mix(2, 131, seed + 1);
+        check_mix(4, 201, seed + 2);
+        check_mix(13, 131, seed + 3);
+    }
+    mf_prefilter_mix_wide = 1;
     MF_TEST_MAIN_END();
 }

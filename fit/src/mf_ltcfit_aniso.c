@@ -109,6 +109,13 @@ typedef struct {
     double ladder;   /* the options' ladder_alpha (FAMILY_SHAPED; set before atexel_prepare) */
     uint64_t *mask;  /* NULL, or per live direction the lights (bit k) it is inside (inside_masks) */
     int mask_ok;     /* mask holds this preparation's sets */
+    /* residual_fn's light integrals at the point ic_p (ic 0: none, 1: their values ic_e, 2: also
+     * their gradients ic_g): functions of p and the lights alone, so valid until the next
+     * preparation (atexel_prepare clears ic). */
+    int ic;
+    double ic_p[NP];
+    double ic_e[ALIGHTS_MAX];
+    double ic_g[ALIGHTS_MAX][NP];
 } atexel;
 
 /* The minimal rotation taking z to the unit m (about the axis z x m; m != -z):
@@ -374,6 +381,7 @@ static mf_status atexel_prepare(const mf_brdf_model *m, mf_brdf_params prm, doub
                                 int family, const double *given_mag, const uint32_t scr[2], workspace *ws, atexel *t)
 {
     double cp, sp;
+    t->ic = 0; /* new lights: residual_fn's integrals are stale */
     cos_sin_phi(phi, sym, &cp, &sp);
     double st = theta == 0.0 ? 0.0 : sin(theta), ct = theta == 0.0 ? 1.0 : cos(theta);
     mf_vec3 wo = mf_vec3_make(st * cp, st * sp, ct);
@@ -750,15 +758,335 @@ static void mask_light(const light *l, const workspace *ws, int live, int k, uin
 }
 #undef MASK_EDGES
 
+/* ---- the containment sets by cells (use_masks) ------------------------------------------------
+ * The sets of mask_light, bit for bit, for less: the live directions are sorted once per
+ * preparation into the cells of a quadtree, each node bounded by a cap (unit centre b, angular
+ * radius r), and every light descends the tree classifying the caps: a node provably outside the
+ * light (outside its bounding cap, or on the outer side of one edge plane) is skipped, one provably
+ * inside (inside its cap and on the inner side of every edge plane) sets its members' bits without
+ * a test, and only the directions of unproved leaves (or of nodes of at most MC_DIRECT members) are
+ * tested, by mask_light's predicate with its operations in its order (cap test, then every edge
+ * plane), two at a time.  A proof holds with a slack of MC_SLACK in cosines and sines, far above the
+ * rounding of the dot products (a few 1e-16 for the unit directions it accepts), so a proof never
+ * decides a direction whose computed test could go the other way:
+ *   - d within r of b (r < pi / 2), light cap (c, cr), A = angle(b, c): max d.c = cos(A - r) when
+ *     A > r, min d.c = cos(A + r) (for cr > 0: A + r < pi / 2 whenever that exceeds cr);
+ *   - edge plane of unit normal n: d.n >= sin(asin(b.n) - r) and <= sin(asin(b.n) + r), so
+ *     b.n > sin r + slack puts every member strictly inside, b.n < -sin r - slack strictly
+ *     outside (the plane's test is a sign test: its scale |v_i x v_i+1| does not matter).
+ * A leaf's cap: b its members' normalised sum, cos r their smallest b.d less 1e-9; a node's: b the
+ * normalised sum of its children's sums, cos r the smallest cos(angle(b, b_child) + r_child) less
+ * 1e-9.  A cap whose members are not unit to 1e-12, or whose radius is not below acos(1e-3), proves
+ * nothing.  The tree: the stereographic projection about the lobe's mean m (R_m^T d = l,
+ * p = (l.x, l.y) / (1 + l.z), defined and one to one everywhere but at -m), a 2^MC_L x 2^MC_L grid
+ * over [-2.5 s, 2.5 s]^2 with s the RMS |p| of the directions in m's hemisphere (coordinates clamped
+ * to the grid; directions at -m or non-finite in one extra cell, always tested), its cells in
+ * Morton order so that every node of the quadtree is one range of the sorted directions. */
+#define MC_L 5
+#define MC_G (1 << MC_L)
+#define MC_FAR (MC_G * MC_G) /* the extra cell's key */
+#define MC_KEYS (MC_G * MC_G + 1)
+#define MC_NODES ((4 * MC_G * MC_G - 1) / 3) /* 1 + 4 + ... + 4^MC_L */
+#define MC_DIRECT 6
+#define MC_SLACK 1e-7
+
+typedef struct {
+    double bx, by, bz, cb, sb; /* unit centre, cos and sin of the radius */
+    double sx, sy, sz;         /* the members' sum */
+    int start, end;            /* members: sorted positions start .. end - 1 */
+    int ok;                    /* proofs apply */
+} mc_cap;
+
+typedef struct {
+    double *x, *y, *z, *px, *py; /* sorted directions; the projection (in direction order) */
+    int *orig, *key;             /* the direction of a sorted position; the key of a direction */
+    uint64_t *m;                 /* the sets in sorted order */
+    mc_cap node[MC_NODES];       /* level by level from the root: level v's 4^v nodes from (4^v - 1) / 3 */
+    int cnt[MC_KEYS + 1];        /* the first sorted position of each key */
+} mc_scratch;
+
+/* The bytes of mc_scratch and its arrays for n directions. */
+static size_t mc_scratch_bytes(size_t n) { return sizeof(mc_scratch) + n * (5 * sizeof(double) + 2 * sizeof(int) + sizeof(uint64_t)); }
+
+/* mc_scratch in the memory at p (mc_scratch_bytes(n), aligned as malloc aligns). */
+static mc_scratch *mc_scratch_at(void *p, size_t n)
+{
+    mc_scratch *s = p;
+    double *d = (double *)(s + 1);
+    s->x = d, s->y = d + n, s->z = d + 2 * n, s->px = d + 3 * n, s->py = d + 4 * n;
+    s->m = (uint64_t *)(d + 5 * n);
+    s->orig = (int *)(s->m + n);
+    s->key = s->orig + n;
+    return s;
+}
+
+/* A leaf's cap: sorted positions start .. end - 1. */
+static void mc_leaf_fill(const mc_scratch *s, int start, int end, mc_cap *c)
+{
+    c->start = start, c->end = end, c->ok = 0;
+    c->bx = c->by = c->bz = 0.0, c->cb = -1.0, c->sb = 1.0;
+    c->sx = c->sy = c->sz = 0.0;
+    if (end <= start)
+        return;
+    double sx = 0.0, sy = 0.0, sz = 0.0;
+    int unit = 1;
+    for (int i = start; i < end; ++i) {
+        sx += s->x[i], sy += s->y[i], sz += s->z[i];
+        unit &= fabs(s->x[i] * s->x[i] + s->y[i] * s->y[i] + s->z[i] * s->z[i] - 1.0) <= 1e-12;
+    }
+    c->sx = sx, c->sy = sy, c->sz = sz;
+    double l = sqrt(sx * sx + sy * sy + sz * sz);
+    if (!unit || !(l > 1e-300 && l < INFINITY))
+        return;
+    c->bx = sx / l, c->by = sy / l, c->bz = sz / l;
+    double cb = 1.0;
+    for (int i = start; i < end; ++i) {
+        double d = s->x[i] * c->bx + s->y[i] * c->by + s->z[i] * c->bz;
+        cb = d < cb ? d : cb; /* finite: the members are unit */
+    }
+    cb -= 1e-9; /* the centre's own rounding and the members' norms, far below this */
+    if (!(cb > 1e-3))
+        return;
+    c->cb = cb;
+    c->sb = sqrt(1.0 - cb * cb); /* of the reduced cosine: at least the true sine */
+    c->ok = 1;
+}
+
+/* A node's cap from its four children's (ch[0 .. 3], consecutive in sorted order). */
+static void mc_node_fill(const mc_cap *ch, mc_cap *c)
+{
+    c->start = ch[0].start, c->end = ch[3].end, c->ok = 0;
+    c->bx = c->by = c->bz = 0.0, c->cb = -1.0, c->sb = 1.0;
+    c->sx = ch[0].sx + ch[1].sx + ch[2].sx + ch[3].sx;
+    c->sy = ch[0].sy + ch[1].sy + ch[2].sy + ch[3].sy;
+    c->sz = ch[0].sz + ch[1].sz + ch[2].sz + ch[3].sz;
+    if (c->end <= c->start)
+        return;
+    int ok = 1;
+    for (int q = 0; q < 4; ++q)
+        ok &= ch[q].end <= ch[q].start || ch[q].ok;
+    double l = sqrt(c->sx * c->sx + c->sy * c->sy + c->sz * c->sz);
+    if (!ok || !(l > 1e-300 && l < INFINITY))
+        return;
+    c->bx = c->sx / l, c->by = c->sy / l, c->bz = c->sz / l;
+    double cb = 1.0;
+    for (int q = 0; q < 4; ++q) {
+        const mc_cap *h = &ch[q];
+        if (h->end <= h->start)
+            continue;
+        double ca = c->bx * h->bx + c->by * h->by + c->bz * h->bz;
+        double qx = c->by * h->bz - c->bz * h->by, qy = c->bz * h->bx - c->bx * h->bz, qz = c->bx * h->by - c->by * h->bx;
+        double d = ca * h->cb - sqrt(qx * qx + qy * qy + qz * qz) * h->sb; /* cos(A + r_child) */
+        cb = d < cb ? d : cb;
+    }
+    cb -= 1e-9;
+    if (!(cb > 1e-3))
+        return;
+    c->cb = cb;
+    c->sb = sqrt(1.0 - cb * cb);
+    c->ok = 1;
+}
+
+/* v's MC_L bits spread to the even bit positions. */
+static int mc_spread(int v)
+{
+    int r = 0;
+    for (int b = 0; b < MC_L; ++b)
+        r |= ((v >> b) & 1) << (2 * b);
+    return r;
+}
+
+/* Sorts the live directions into the cells and fills the caps. */
+static void mc_sort(const atexel *t, const workspace *ws, int live, mc_scratch *s)
+{
+    const double *r = t->r;
+    double ss = 0.0;
+    int nf = 0;
+    for (int j = 0; j < live; ++j) {
+        double x = ws->x[j], y = ws->y[j], z = ws->z[j];
+        double lx = r[0] * x + r[3] * y + r[6] * z, ly = r[1] * x + r[4] * y + r[7] * z, lz = r[2] * x + r[5] * y + r[8] * z;
+        double den = 1.0 + lz;
+        double px = den > 1e-6 ? lx / den : NAN, py = den > 1e-6 ? ly / den : NAN;
+        s->px[j] = px, s->py[j] = py;
+        if (lz > 0.0 && isfinite(px) && isfinite(py)) {
+            ss += px * px + py * py;
+            ++nf;
+        }
+    }
+    double sc = nf > 0 ? sqrt(ss / nf) : 0.0;
+    if (!(sc > 1e-12 && sc < INFINITY))
+        sc = 1.0;
+    const double w = 2.5 * sc, f = MC_G / (2.0 * w);
+    int spread[MC_G];
+    for (int v = 0; v < MC_G; ++v)
+        spread[v] = mc_spread(v);
+    int *cnt = s->cnt;
+    for (int q = 0; q <= MC_KEYS; ++q)
+        cnt[q] = 0;
+    for (int j = 0; j < live; ++j) {
+        double px = s->px[j], py = s->py[j];
+        int key = MC_FAR;
+        if (isfinite(px) && isfinite(py)) {
+            double gx = (px + w) * f, gy = (py + w) * f; /* clamped without fmin / fmax calls */
+            int ix = gx > 0.0 ? (gx < MC_G - 1.0 ? (int)gx : MC_G - 1) : 0;
+            int iy = gy > 0.0 ? (gy < MC_G - 1.0 ? (int)gy : MC_G - 1) : 0;
+            key = spread[ix] | spread[iy] << 1;
+        }
+        s->key[j] = key;
+        ++cnt[key + 1];
+    }
+    for (int q = 0; q < MC_KEYS; ++q)
+        cnt[q + 1] += cnt[q];
+    int pos[MC_KEYS];
+    for (int q = 0; q < MC_KEYS; ++q)
+        pos[q] = cnt[q];
+    for (int j = 0; j < live; ++j) /* the indices scattered, then the directions gathered (one line each) */
+        s->orig[pos[s->key[j]]++] = j;
+    for (int i = 0; i < live; ++i) {
+        const mf_vec3 *d = &ws->dir[s->orig[i]]; /* ws->x, y, z hold its components */
+        s->x[i] = d->x, s->y[i] = d->y, s->z[i] = d->z;
+    }
+    int off = (MC_G * MC_G - 1) / 3; /* the leaves' level */
+    for (int q = 0; q < MC_G * MC_G; ++q)
+        mc_leaf_fill(s, cnt[q], cnt[q + 1], &s->node[off + q]);
+    for (int nv = MC_G * MC_G / 4; nv >= 1; nv /= 4) {
+        int up = (nv - 1) / 3, down = (4 * nv - 1) / 3;
+        for (int q = 0; q < nv; ++q)
+            mc_node_fill(&s->node[down + 4 * q], &s->node[up + q]);
+    }
+}
+
+/* 0: every member is outside the light; 2: every member is inside; 1: not proved.  lc: the
+ * light's centre and cos radius (cap: whether it has a cap test worth a proof, cos radius above
+ * -1); nu: its edge planes' unit normals (ne of them, 0 if one is degenerate). */
+static int mc_classify(const mc_cap *c, const double lc[4], int cap, const double *nu, int ne)
+{
+    if (!c->ok)
+        return 1;
+    int in = 1;
+    if (cap) {
+        double ca = c->bx * lc[0] + c->by * lc[1] + c->bz * lc[2];
+        double qx = c->by * lc[2] - c->bz * lc[1], qy = c->bz * lc[0] - c->bx * lc[2], qz = c->bx * lc[1] - c->by * lc[0];
+        double sa = sqrt(qx * qx + qy * qy + qz * qz); /* sin A, accurate at both ends */
+        if (ca < c->cb && ca * c->cb + sa * c->sb < lc[3] - MC_SLACK)
+            return 0;
+        in = lc[3] > 0.0 && ca * c->cb - sa * c->sb > lc[3] + MC_SLACK;
+    }
+    if (ne == 0)
+        return 1;
+    for (int e = 0; e < ne; ++e) {
+        double d = c->bx * nu[3 * e] + c->by * nu[3 * e + 1] + c->bz * nu[3 * e + 2];
+        if (d < -c->sb - MC_SLACK)
+            return 0;
+        in &= d > c->sb + MC_SLACK;
+    }
+    return in ? 2 : 1;
+}
+
+/* mask_light's predicate on sorted positions i0 .. i1 - 1: the cap test and every edge plane, each
+ * dot product mf_vec3_dot's operations in its order, two directions at a time where the compiler
+ * has 2-wide vectors (nothing contracted). */
+#if defined(__GNUC__) || defined(__clang__)
+#define MC_VEC2 1
+typedef double mc_v2d __attribute__((vector_size(16)));
+typedef long long mc_v2l __attribute__((vector_size(16)));
+#endif
+static void mc_test(mc_scratch *s, int i0, int i1, const light *l, int k)
+{
+    const double cx = l->centre.x, cy = l->centre.y, cz = l->centre.z, cr = l->cos_radius;
+    const mf_vec3 *en = l->edge_n;
+    const int ne = l->poly.n;
+    const double *x = s->x, *y = s->y, *z = s->z;
+    uint64_t *m = s->m;
+    int i = i0;
+#ifdef MC_VEC2
+    for (; i + 2 <= i1; i += 2) {
+        mc_v2d ax, ay, az;
+        memcpy(&ax, x + i, sizeof ax);
+        memcpy(&ay, y + i, sizeof ay);
+        memcpy(&az, z + i, sizeof az);
+        mc_v2l in = ax * cx + ay * cy + az * cz >= cr;
+        for (int e = 0; e < ne; ++e)
+            in &= ax * en[e].x + ay * en[e].y + az * en[e].z > 0.0;
+        m[i] |= (uint64_t)(in[0] & 1) << k;
+        m[i + 1] |= (uint64_t)(in[1] & 1) << k;
+    }
+#endif
+    for (; i < i1; ++i) {
+        int in = x[i] * cx + y[i] * cy + z[i] * cz >= cr;
+        for (int e = 0; e < ne; ++e)
+            in &= x[i] * en[e].x + y[i] * en[e].y + z[i] * en[e].z > 0.0;
+        m[i] |= (uint64_t)in << k;
+    }
+}
+
+typedef struct {
+    const light *l;
+    double lc[4], nu[3 * MF_POLYGON_MAX_VERTICES];
+    int cap, ne, k;
+} mc_light;
+
+/* Node q of level v for light L: skipped, set, tested or descended. */
+static void mc_descend(mc_scratch *s, const mc_light *L, int v, int q)
+{
+    const mc_cap *c = &s->node[(((1 << (2 * v)) - 1) / 3) + q];
+    if (c->end <= c->start)
+        return;
+    if (c->end - c->start > MC_DIRECT) {
+        int cls = mc_classify(c, L->lc, L->cap, L->nu, L->ne);
+        if (cls == 0)
+            return;
+        if (cls == 2) {
+            const uint64_t bit = (uint64_t)1 << L->k;
+            for (int i = c->start; i < c->end; ++i)
+                s->m[i] |= bit;
+            return;
+        }
+        if (v < MC_L) {
+            for (int h = 0; h < 4; ++h)
+                mc_descend(s, L, v + 1, 4 * q + h);
+            return;
+        }
+    }
+    mc_test(s, c->start, c->end, L->l, L->k);
+}
+
+/* The sets of lights 0 .. nl - 1 (nl <= 64) as bit k of mask[j] (mask_light's, bit for bit). */
+static void mc_masks(const atexel *t, const workspace *ws, const light *lights, int nl, int live, mc_scratch *s,
+                     uint64_t *mask)
+{
+    mc_sort(t, ws, live, s);
+    for (int i = 0; i < live; ++i)
+        s->m[i] = 0;
+    for (int k = 0; k < nl; ++k) {
+        const light *l = &lights[k];
+        mc_light L;
+        L.l = l, L.k = k;
+        L.lc[0] = l->centre.x, L.lc[1] = l->centre.y, L.lc[2] = l->centre.z, L.lc[3] = l->cos_radius;
+        L.cap = l->cos_radius > -1.0;
+        L.ne = l->poly.n;
+        for (int e = 0; e < l->poly.n; ++e) {
+            mf_vec3 v = l->edge_n[e];
+            double len = sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
+            if (!(len > 1e-150 && len < INFINITY))
+                L.ne = 0;
+            else
+                L.nu[3 * e] = v.x / len, L.nu[3 * e + 1] = v.y / len, L.nu[3 * e + 2] = v.z / len;
+        }
+        mc_descend(s, &L, 0, 0);
+        mc_test(s, s->cnt[MC_FAR], s->cnt[MC_FAR + 1], l, k);
+    }
+    for (int i = 0; i < live; ++i)
+        mask[s->orig[i]] = s->m[i];
+}
+
 static int use_masks(atexel *t, workspace *ws)
 {
     if (!t->mask || t->k > 64)
         return 0;
-    if (!t->mask_ok) {
-        for (int j = 0; j < t->live; ++j)
-            t->mask[j] = 0;
-        for (int k = 0; k < t->k; ++k)
-            mask_light(&t->lights[k], ws, t->live, k, t->mask);
+    if (!t->mask_ok) { /* the scratch after the masks: pf_workspace_get */
+        size_t n = (size_t)GRAZING_FACTOR * ws->base;
+        mc_masks(t, ws, t->lights, t->k, t->live, mc_scratch_at(t->mask + n, n), t->mask);
         t->mask_ok = 1;
     }
     return 1;
@@ -906,6 +1234,64 @@ int mf_ltcfit_aniso_gradient_compare(const double p[7], const double *v, int n, 
     return 0;
 }
 
+int mf_ltcfit_aniso_mask_compare(const double *dirs, int n, const double axis[3], int nl, const int *nv,
+                                 const double *verts, uint64_t *cells, uint64_t *direct)
+{
+    if (!dirs || n < 1 || !axis || nl < 1 || nl > 64 || !nv || !verts || !cells || !direct)
+        return -1;
+    mf_vec3 ax = mf_vec3_make(axis[0], axis[1], axis[2]);
+    double al = mf_vec3_length(ax);
+    if (!(al > 0.0 && al < INFINITY) || !(ax.z / al > -0.5))
+        return -1;
+    for (int k = 0; k < nl; ++k)
+        if (nv[k] < 3 || nv[k] > MF_POLYGON_MAX_VERTICES)
+            return -1;
+    light *l = malloc(sizeof *l * (size_t)nl);
+    atexel *t = malloc(sizeof *t);
+    workspace ws;
+    memset(&ws, 0, sizeof ws);
+    ws.x = malloc(sizeof *ws.x * 3 * (size_t)n);
+    ws.cand = malloc(sizeof *ws.cand * (size_t)n);
+    ws.dir = malloc(sizeof *ws.dir * (size_t)n);
+    void *scr = malloc(mc_scratch_bytes((size_t)n));
+    int rc = -1;
+    if (l && t && ws.x && ws.cand && ws.dir && scr) {
+        ws.y = ws.x + n, ws.z = ws.x + 2 * (size_t)n;
+        for (int j = 0; j < n; ++j) { /* as atexel_prepare leaves them */
+            ws.dir[j] = mf_vec3_make(dirs[3 * j], dirs[3 * j + 1], dirs[3 * j + 2]);
+            ws.x[j] = ws.dir[j].x, ws.y[j] = ws.dir[j].y, ws.z[j] = ws.dir[j].z;
+        }
+        min_rotation(mf_vec3_scale(ax, 1.0 / al), t->r);
+        const double *v = verts;
+        for (int k = 0; k < nl; ++k) { /* make_lights_random's construction */
+            mf_vec3 p[MF_POLYGON_MAX_VERTICES];
+            for (int q = 0; q < nv[k]; ++q, v += 3)
+                p[q] = mf_vec3_make(v[0], v[1], v[2]);
+            l[k].poly = mf_polygon_make(nv[k], p);
+            mf_vec3 c = mf_vec3_make(0.0, 0.0, 0.0);
+            for (int q = 0; q < nv[k]; ++q)
+                c = mf_vec3_add(c, mf_vec3_normalize(p[q]));
+            c = mf_vec3_normalize(c);
+            double cr = 1.0;
+            for (int q = 0; q < nv[k]; ++q) {
+                l[k].edge_n[q] = mf_vec3_cross(p[q], p[(q + 1) % nv[k]]);
+                cr = fmin(cr, mf_vec3_dot(c, mf_vec3_normalize(p[q])));
+            }
+            l[k].centre = c;
+            l[k].cos_radius = cr > 1e-6 ? cr - 1e-9 : -2.0;
+            l[k].factor = 1.0;
+        }
+        for (int j = 0; j < n; ++j)
+            direct[j] = 0;
+        for (int k = 0; k < nl; ++k)
+            mask_light(&l[k], &ws, n, k, direct);
+        mc_masks(t, &ws, l, nl, n, mc_scratch_at(scr, (size_t)n), cells);
+        rc = 0;
+    }
+    free(l), free(t), free(ws.x), free(ws.cand), free(ws.dir), free(scr);
+    return rc;
+}
+
 /* ---- the least-squares problem ---------------------------------------------------------------- */
 
 /* Proximal residuals towards the warm start: the scales a, d relative, the shears absolute. */
@@ -913,17 +1299,27 @@ static int is_scale(int i) { return i == PA || i == PD; }
 
 static int residual_fn(void *user, const double *p, double *res, double *jac)
 {
-    const atexel *t = user;
+    atexel *t = user;
     if (!valid(p))
         return 1;
     /* the written-out gradient (integral_grad: the dual numbers' gradient to rounding, at about a
-     * third of their cost; both families) */
-    double adj[9], g[NP];
-    adj_value(p, adj);
+     * third of their cost; both families).  The integrals at the last point are kept (t->ic): the
+     * solver asks for the same point again (the values after the Jacobian, the Jacobian after the
+     * values of an accepted step), and integral_grad's value is integral_value's bit for bit
+     * (test_ltcfit_aniso, gradient_compare), so a kept integral is the one a new pass would give. */
+    if (!(t->ic >= (jac ? 2 : 1) && memcmp(t->ic_p, p, sizeof t->ic_p) == 0)) {
+        double adj[9];
+        adj_value(p, adj);
+        for (int k = 0; k < t->k; ++k) {
+            const light *l = &t->lights[k];
+            t->ic_e[k] = jac ? integral_grad(l->lobe_poly.v, l->lobe_poly.n, p, adj, t->ic_g[k])
+                             : integral_value(l->lobe_poly.v, l->lobe_poly.n, adj);
+        }
+        memcpy(t->ic_p, p, sizeof t->ic_p);
+        t->ic = jac ? 2 : 1;
+    }
     for (int k = 0; k < t->k; ++k) {
-        const light *l = &t->lights[k];
-        double e = jac ? integral_grad(l->lobe_poly.v, l->lobe_poly.n, p, adj, g)
-                       : integral_value(l->lobe_poly.v, l->lobe_poly.n, adj);
+        const double e = t->ic_e[k], *g = t->ic_g[k];
         res[k] = (t->magnitude * e - t->target[k]) * t->inv_weight[k];
         if (jac)
             for (int j = 0; j < NP; ++j)
@@ -1269,7 +1665,9 @@ static pf_workspace *pf_workspace_get(int base)
     w = calloc(1, sizeof *w);
     if (!w)
         return NULL;
-    w->mask = malloc(sizeof *w->mask * (size_t)GRAZING_FACTOR * base);
+    /* the masks, then use_masks' scratch (mc_scratch_at) */
+    size_t n = (size_t)GRAZING_FACTOR * base;
+    w->mask = malloc(sizeof *w->mask * n + mc_scratch_bytes(n));
     if (!ws_init(&w->ws, base) || !w->mask || pthread_setspecific(g_pf_ws_key, w) != 0) {
         pf_workspace_free(w);
         return NULL;

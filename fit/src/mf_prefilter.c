@@ -296,6 +296,86 @@ static void mix_eval_pdf_batch(const mf_prefilter_mix *x, double a2, const doubl
     }
 }
 
+/* mix_eval_pdf_batch four directions at a time, compiled for AVX2 (x86-64 with GCC or Clang; 4-wide
+ * vectors of the same operations in the same order per lane: the same bits, nothing contracted, no
+ * FMA), called where the CPU has AVX2 and mf_prefilter_mix_wide is set (mix_eval_pdf_batch_any).
+ * Measured (bench_prefilter --size 8 --threads 1, profile samples): the mixture's sampling and
+ * evaluation 6,251 -> 4,498 samples, the run 30,795 -> 27,625 (docs/prefilter.md). */
+#if defined(MIX_VEC2) && defined(__x86_64__)
+#define MIX_VEC4 1
+#define MIX_AVX2_TARGET __attribute__((target("avx2")))
+typedef double mix_v4d __attribute__((vector_size(32)));
+typedef long long mix_v4l __attribute__((vector_size(32)));
+MIX_AVX2_TARGET static void mix_eval_pdf_batch4(const mf_prefilter_mix *x, double a2, const double *vc, int cnt, const double *vx,
+                               const double *vy, const double *vz, double *f, double *pdf)
+{
+    for (int i = 0; i < cnt; ++i)
+        f[i] = pdf[i] = 0.0;
+    for (int j = 0; j < x->n; ++j) {
+        const double *r = x->rot + 9 * j, *c = vc + VC_N * j, wj = x->w[j];
+        int i = 0;
+#ifdef MIX_VEC4
+        for (; i + 4 <= cnt; i += 4) {
+            mix_v4d ax, ay, az;
+            memcpy(&ax, vx + i, sizeof ax);
+            memcpy(&ay, vy + i, sizeof ay);
+            memcpy(&az, vz + i, sizeof az);
+            const mix_v4d tx = r[0] * ax + r[3] * ay + r[6] * az, ty = r[1] * ax + r[4] * ay + r[7] * az,
+                          tz = r[2] * ax + r[5] * ay + r[8] * az; /* rot_t */
+            const mix_v4d hx = c[0] + tx, hy = c[1] + ty, hz = c[2] + tz;
+            const mix_v4d s2 = hx * hx + hy * hy, z2 = hz * hz;
+            const mix_v4d den = a2 * z2 + s2, l2 = s2 + z2;
+            const mix_v4d dq = c[14] * (l2 * l2) / (den * den);
+            mix_v4d q = tz * tz + a2 * (tx * tx + ty * ty);
+            q = (mix_v4d){sqrt(q[0]), sqrt(q[1]), sqrt(q[2]), sqrt(q[3])};
+            const mix_v4d fj = 2.0 * dq * tz / (c[15] * tz + q);
+            const mix_v4d pj = dq * c[16];
+            const mix_v4l up = tz > 0.0;
+            const mix_v4l dens = up & (hz > 0.0) & ((c[0] * hx + c[1] * hy + c[2] * hz) > 0.0);
+            const mix_v4d fs = (mix_v4d)(up & (mix_v4l)fj), ps = (mix_v4d)(dens & (mix_v4l)pj); /* or +0 */
+            mix_v4d sf, sp;
+            memcpy(&sf, f + i, sizeof sf);
+            memcpy(&sp, pdf + i, sizeof sp);
+            sf += wj * fs;
+            sp += wj * ps;
+            memcpy(f + i, &sf, sizeof sf);
+            memcpy(pdf + i, &sp, sizeof sp);
+        }
+#endif
+        for (; i < cnt; ++i) {
+            double fj, pj;
+            ggx_fpdf_cached(a2, c, rot_t(r, mf_vec3_make(vx[i], vy[i], vz[i])), &fj, &pj);
+            f[i] += wj * fj;
+            pdf[i] += wj * pj;
+        }
+    }
+}
+
+#endif
+
+int mf_prefilter_mix_wide = 1;
+
+int mf_prefilter_mix_wide_available(void)
+{
+#ifdef MIX_VEC4
+    return __builtin_cpu_supports("avx2") ? 1 : 0;
+#else
+    return 0;
+#endif
+}
+
+static void mix_eval_pdf_batch_any(const mf_prefilter_mix *x, double a2, const double *vc, int cnt, const double *vx,
+                                   const double *vy, const double *vz, double *f, double *pdf)
+{
+#ifdef MIX_VEC4
+    if (mf_prefilter_mix_wide && __builtin_cpu_supports("avx2")) {
+        mix_eval_pdf_batch4(x, a2, vc, cnt, vx, vy, vz, f, pdf);
+        return;
+    }
+#endif
+    mix_eval_pdf_batch(x, a2, vc, cnt, vx, vy, vz, f, pdf);
+}
+
 /* The directions of mix_sample_weights' fused path are sampled and evaluated in chunks of this
  * many. */
 #define MIX_CHUNK 64
@@ -309,17 +389,87 @@ static void mix_eval_pdf_batch(const mf_prefilter_mix *x, double a2, const doubl
 static inline mix_v2d mix_sqrt2(mix_v2d a) { return (mix_v2d){sqrt(a[0]), sqrt(a[1])}; }
 static inline mix_v2d mix_fmax02(mix_v2d a) { return (mix_v2d){fmax(0.0, a[0]), fmax(0.0, a[1])}; }
 #endif
+/* The cosines and sines of phi = 2 pi u[2 i + 1] (ggx_sample_cached's angle) for the points u:
+ * the fits draw the same Sobol points for every entry, so each thread keeps the last points' values
+ * and recomputes only where a point differs (compared bit for bit; the same function of the same
+ * argument: the same bits). */
+typedef struct {
+    uint64_t *u1; /* the bits of u[2 i + 1] */
+    double *cs, *sn;
+    int cap;
+} mix_angles;
+
+static pthread_key_t g_mix_angles_key;
+static pthread_once_t g_mix_angles_once = PTHREAD_ONCE_INIT;
+static int g_mix_angles_ok;
+
+static void mix_angles_free(void *p)
+{
+    mix_angles *a = p;
+    if (a)
+        free(a->u1), free(a->cs), free(a->sn);
+    free(a);
+}
+
+static void mix_angles_key(void) { g_mix_angles_ok = pthread_key_create(&g_mix_angles_key, mix_angles_free) == 0; }
+
+/* The thread's angles of u[0 .. 2 n - 1]; NULL if out of memory (the caller computes them). */
+static const mix_angles *mix_angles_get(const double *u, int n)
+{
+    pthread_once(&g_mix_angles_once, mix_angles_key);
+    if (!g_mix_angles_ok)
+        return NULL;
+    mix_angles *a = pthread_getspecific(g_mix_angles_key);
+    if (!a || a->cap < n) {
+        mix_angles_free(a);
+        pthread_setspecific(g_mix_angles_key, NULL);
+        a = calloc(1, sizeof *a);
+        if (!a)
+            return NULL;
+        a->u1 = malloc(sizeof *a->u1 * (size_t)n);
+        a->cs = malloc(sizeof *a->cs * (size_t)n);
+        a->sn = malloc(sizeof *a->sn * (size_t)n);
+        if (!a->u1 || !a->cs || !a->sn || pthread_setspecific(g_mix_angles_key, a) != 0) {
+            mix_angles_free(a);
+            return NULL;
+        }
+        a->cap = n;
+        for (int i = 0; i < n; ++i) { /* no point cached: computed below */
+            double phi = 2.0 * MF_PI * u[2 * i + 1];
+            memcpy(&a->u1[i], &u[2 * i + 1], sizeof a->u1[i]);
+            a->cs[i] = cos(phi);
+            a->sn[i] = sin(phi);
+        }
+        return a;
+    }
+    for (int i = 0; i < n; ++i) {
+        uint64_t b;
+        memcpy(&b, &u[2 * i + 1], sizeof b);
+        if (b != a->u1[i]) {
+            double phi = 2.0 * MF_PI * u[2 * i + 1];
+            a->u1[i] = b;
+            a->cs[i] = cos(phi);
+            a->sn[i] = sin(phi);
+        }
+    }
+    return a;
+}
+
+/* ang: the angles' cosines and sines of these cnt points (mix_angles_get), or NULL. */
 static void mix_sample_chunk(const mf_prefilter_mix *x, double alpha, const double *vc, const double *u, int cnt,
-                             mf_vec3 *wi, int *ok)
+                             const double *ang_cs, const double *ang_sn, mf_vec3 *wi, int *ok)
 {
     int lo_[MIX_CHUNK];
-    double v0[MIX_CHUNK], cs[MIX_CHUNK], sn[MIX_CHUNK];
+    double v0[MIX_CHUNK], cs_[MIX_CHUNK], sn_[MIX_CHUNK];
+    const double *cs = ang_cs ? ang_cs : cs_, *sn = ang_sn ? ang_sn : sn_;
     for (int i = 0; i < cnt; ++i) { /* the texel and u[0] rescaled, as mix_sample_texel (mix_pick_texel) */
         const double *ui = u + 2 * i;
         lo_[i] = mix_pick_texel(x, ui[0], &v0[i]);
-        double phi = 2.0 * MF_PI * ui[1];
-        cs[i] = cos(phi);
-        sn[i] = sin(phi);
+        if (!ang_cs) {
+            double phi = 2.0 * MF_PI * ui[1];
+            cs_[i] = cos(phi);
+            sn_[i] = sin(phi);
+        }
     }
     int i = 0;
 #ifdef MIX_VEC2
@@ -362,11 +512,13 @@ static void mix_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, 
     const double *vc = x->kind == MF_PREFILTER_BASE_GGX ? view_cache(x, p, wo) : NULL;
     if (vc && wo.z > 0.0) { /* the cached view: sample a chunk, then evaluate the mixture over it */
         const double a2 = p->alpha_x * p->alpha_x;
+        const mix_angles *ang = mix_angles_get(u, n);
         for (int i0 = 0; i0 < n; i0 += MIX_CHUNK) {
             int ix[MIX_CHUNK], cnt = 0, i1 = i0 + MIX_CHUNK < n ? i0 + MIX_CHUNK : n;
             double vx[MIX_CHUNK], vy[MIX_CHUNK], vz[MIX_CHUNK], f[MIX_CHUNK], pd[MIX_CHUNK];
             int ok[MIX_CHUNK];
-            mix_sample_chunk(x, p->alpha_x, vc, u + 2 * i0, i1 - i0, wi + i0, ok);
+            mix_sample_chunk(x, p->alpha_x, vc, u + 2 * i0, i1 - i0, ang ? ang->cs + i0 : NULL, ang ? ang->sn + i0 : NULL,
+                             wi + i0, ok);
             for (int i = i0; i < i1; ++i) {
                 pdf[i] = 0.0;
                 w[i] = 0.0;
@@ -376,7 +528,7 @@ static void mix_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, 
                     ++cnt;
                 }
             }
-            mix_eval_pdf_batch(x, a2, vc, cnt, vx, vy, vz, f, pd);
+            mix_eval_pdf_batch_any(x, a2, vc, cnt, vx, vy, vz, f, pd);
             for (int q = 0; q < cnt; ++q) {
                 int i = ix[q];
                 pdf[i] = pd[q];

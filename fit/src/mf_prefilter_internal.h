@@ -20,4 +20,10 @@ struct mf_prefilter_mix;
 struct mf_brdf_params;
 mf_status mf_prefilter_mix_set_view(struct mf_prefilter_mix *m, const struct mf_brdf_params *p, mf_vec3 wo);
 
+/* The mixture's 4-wide AVX2 evaluation (mf_prefilter.c, mix_eval_pdf_batch4): used where the CPU
+ * has it while mf_prefilter_mix_wide is non-zero (the default); tests set it to 0 to run the 2-wide
+ * path too.  mf_prefilter_mix_wide_available: 1 if this build and CPU have the 4-wide path. */
+extern int mf_prefilter_mix_wide;
+int mf_prefilter_mix_wide_available(void);
+
 #endif

@@ -230,6 +230,16 @@ int mf_ltcfit_aniso_anchor_matrix(const double m_mid[9], const double m_nb[9], d
 int mf_ltcfit_aniso_gradient_compare(const double p[7], const double *v, int n, double *value_diff,
                                      double *grad_diff);
 
+/* For tests: the containment sets of the prefilter's fits (bit k of cells[j] and direct[j]: whether
+ * direction j, dirs[3 j .. 3 j + 2], is inside light k) for nl <= 64 convex spherical polygons
+ * (nv[k] vertices each, 3 .. MF_POLYGON_MAX_VERTICES, consecutive in verts, counter-clockwise seen
+ * from inside; their bounding caps as the fit's random lights build them), by the fits' cell path
+ * about the lobe axis `axis` (axis.z > -|axis| / 2) into cells and by testing every direction
+ * against every light into direct.  The two promise the same bits.  -1 on bad arguments or
+ * allocation failure. */
+int mf_ltcfit_aniso_mask_compare(const double *dirs, int n, const double axis[3], int nl, const int *nv,
+                                 const double *verts, uint64_t *cells, uint64_t *direct);
+
 /* mf_ltcfit_aniso_entry_fit_general at phi = 0 (the view in the xz plane) for a model the caller
  * knows to be mirror symmetric: mirrors MF_LTCFIT_ANISO_MIRROR_Y (f invariant under y -> -y)
  * holds the phi = 0 zero pattern exactly, MF_LTCFIT_ANISO_MIRROR_X (under x -> -x; theta == 0
