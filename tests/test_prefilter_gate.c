@@ -76,6 +76,9 @@ typedef struct {
                                            gated checks or cross above its bound */
     int either;                     /* all corruptions: the gated checks or cross above its bound */
     double cross[256];              /* the corrupted runs' cross measure */
+    double good_x;                  /* the good run's excess (gated) */
+    int bound_x, vis_x;             /* corruptions with excess above its bound (gated); of the visible ones */
+    double excess[256];             /* the corrupted runs' excess */
 } power;
 
 static int dbl_cmp(const void *a, const void *b)
@@ -176,6 +179,7 @@ static void corrupt_runs(mf_prefilter_level *lv, int nl, const double *n, int w,
             pw->sep_c += g.worst_cont_cross > 1.05 * pw->good_c;
             pw->sep_ct += g.worst_cont_cross_texel > 1.05 * pw->good_ct;
             pw->bound_c += !g.pass_cont_cross;
+            pw->bound_x += !g.pass_cont_excess;
             pw->either += !(g.pass_energy && g.pass_nan && g.pass_level) || !g.pass_cont_cross;
             /* visible: the corrupted lobe(s) change the shading of a gate light by more than 0.1 of the
              * albedo (lobe_change) */
@@ -188,9 +192,10 @@ static void corrupt_runs(mf_prefilter_level *lv, int nl, const double *n, int w,
                 pw->vis_c += g.worst_cont_cross > 1.05 * pw->good_c;
                 pw->vis_bound += !g.pass_cont_cross;
                 pw->vis_either += !(g.pass_energy && g.pass_nan && g.pass_level) || !g.pass_cont_cross;
+                pw->vis_x += !g.pass_cont_excess;
             }
             if (pw->total <= 256)
-                pw->cross[pw->total - 1] = g.worst_cont_cross;
+                pw->cross[pw->total - 1] = g.worst_cont_cross, pw->excess[pw->total - 1] = g.worst_cont_excess;
             if (pw->total <= 256)
                 pw->cont[pw->total - 1] = cm;
         }
@@ -298,8 +303,9 @@ static void run_map(int kind, int w, int nt, int np, int ncorr, double scale, mf
     ps->good_t = pv->good_t = good->worst_cont_texel, ps->good_v = pv->good_v = good->worst_cont_view;
     ps->good_g = pv->good_g = good->worst_cont_grazing;
     ps->good_c = pv->good_c = good->worst_cont_cross, ps->good_ct = pv->good_ct = good->worst_cont_cross_texel;
-    printf("%-8s good: cross %.4f (%s) texel axes %.4f\n", k_names[kind], good->worst_cont_cross,
-           good->where_cont_cross, good->worst_cont_cross_texel);
+    ps->good_x = pv->good_x = good->worst_cont_excess;
+    printf("%-8s good: cross %.4f (%s) texel axes %.4f; excess %.4f (%s)\n", k_names[kind], good->worst_cont_cross,
+           good->where_cont_cross, good->worst_cont_cross_texel, good->worst_cont_excess, good->where_cont_excess);
     corrupt_runs(lv, nl, n, w, &o, ncorr, scale, ps, pv);
     printf("%-8s corrupted: scale entry by %.2f: caught %d / %d (energy/nan/level %d, cont at default bounds %d, cont above this good run's %d), no-ops %d; "
            "phi swap: caught %d / %d (energy/nan/level %d, cont %d, above good %d), no-ops %d\n",
@@ -321,6 +327,12 @@ static void run_map(int kind, int w, int nt, int np, int ncorr, double scale, mf
         static const double qs[7] = {0.0, 0.1, 0.25, 0.5, 0.75, 0.9, 1.0};
         for (int q = 0; q < 7 && m > 0; ++q)
             printf(" %.4f", pw->cross[(int)(qs[q] * (m - 1))]);
+        printf("\n");
+        qsort(pw->excess, (size_t)m, sizeof(double), dbl_cmp);
+        printf("%-8s %s: excess above its bound (gated) %d / %d, visible %d / %d; excess quantiles 0, .1, .25, .5, .75, "
+               ".9, 1:", k_names[kind], t ? "phi swap" : "scaled entry", pw->bound_x, pw->total, pw->vis_x, pw->vis);
+        for (int q = 0; q < 7 && m > 0; ++q)
+            printf(" %.4f", pw->excess[(int)(qs[q] * (m - 1))]);
         printf("\n");
     }
     fflush(stdout);

@@ -32,6 +32,7 @@ void mf_prefilter_gate_bounds_default(mf_prefilter_gate *g)
     g->max_cont_grazing = MF_PREFILTER_GATE_CONT_GRAZING;
     g->max_cont_lambert = MF_PREFILTER_GATE_CONT_LAMBERT;
     g->max_cont_cross = MF_PREFILTER_GATE_CONT_CROSS;
+    g->max_cont_excess = MF_PREFILTER_GATE_CONT_EXCESS;
 }
 
 /* The gate's lights, in the view-azimuth-aligned frame of view theta: quads of half-width
@@ -227,7 +228,7 @@ struct mf_prefilter_gate_stream {
     mf_polygon *lights;
     gate_clipped *clipped; /* the lights clipped to z >= 0, per view theta (GATE_NLIGHTS each) */
     gate_iso *iso;
-    uint64_t k_energy, k_level, k_view, k_texel, k_cont_texel, k_cont_view, k_cont_grazing, k_cont_cross;
+    uint64_t k_energy, k_level, k_view, k_texel, k_cont_texel, k_cont_view, k_cont_grazing, k_cont_cross, k_cont_excess;
     int threads;           /* o->threads (1 without o), at most GS_MAX_THREADS */
     struct gs_part *parts; /* threads of them, reused for every row */
 };
@@ -297,7 +298,7 @@ mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int n
         s->o = *o;
     s->lambert = s->ref && o->base == MF_PREFILTER_BASE_LAMBERT;
     s->k_energy = s->k_level = s->k_view = s->k_texel = UINT64_MAX;
-    s->k_cont_texel = s->k_cont_view = s->k_cont_grazing = s->k_cont_cross = UINT64_MAX;
+    s->k_cont_texel = s->k_cont_view = s->k_cont_grazing = s->k_cont_cross = s->k_cont_excess = UINT64_MAX;
     /* the results this run sets (as mf_prefilter_gate_run and _run_ref cleared them) */
     g->nan_entries = 0;
     g->worst_energy = g->worst_level = g->worst_view_spike = g->worst_texel_spike = 0.0;
@@ -310,6 +311,8 @@ mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int n
         g->where_cont_texel[0] = g->where_cont_view[0] = '\0';
         g->worst_cont_cross = g->worst_cont_cross_texel = 0.0;
         g->where_cont_cross[0] = '\0';
+        g->worst_cont_excess = 0.0;
+        g->where_cont_excess[0] = '\0';
     }
     s->threads = o && o->threads > 1 ? (o->threads < GS_MAX_THREADS ? o->threads : GS_MAX_THREADS) : 1;
     s->L = calloc((size_t)nlevels, sizeof *s->L);
@@ -392,6 +395,35 @@ static int gs_texel_neighbour_errors(const gs_level *L, int r, int col, int ax, 
     return 1;
 }
 
+/* The lobe's lone extreme beyond the effective BRDF's along one axis: x, y0, y1 the shading S of the
+ * entry and of its two neighbours, r, r0, r1 their reference R.  The lobe's lone extreme upwards,
+ * min(x - y0, x - y1), less the reference's own (when it has one upwards), and the same downwards;
+ * 0 when neither is positive.  So a lobe may rise above (or dip below) both neighbours as far as the
+ * effective BRDF does, and may smooth out the effective BRDF's own extremes (a single LTC does,
+ * where a footprint's texel lobes straddle a light). */
+static double gate_excess(double x, double y0, double y1, double r, double r0, double r1)
+{
+    double up = fmin(x - y0, x - y1) - fmax(fmin(r - r0, r - r1), 0.0);
+    double dn = fmin(y0 - x, y1 - x) - fmax(fmin(r0 - r, r1 - r), 0.0);
+    return fmax(fmax(up, dn), 0.0);
+}
+
+/* The shading S and reference R of light k at the two texel neighbours of (r, col) along axis ax, as
+ * gs_texel_neighbour_errors (0 when the axis has fewer than 2 texels). */
+static int gs_texel_neighbour_sr(const gs_level *L, int r, int col, int ax, int a, int b, int k, int nt, int np,
+                                 double *sr)
+{
+    if ((ax ? L->h : L->w) < 2)
+        return 0;
+    int r1 = (r + (ax == 1)) % L->h, c1 = (col + (ax == 0)) % L->w;
+    int r0 = (r - (ax == 1) + L->h) % L->h, c0 = (col - (ax == 0) + L->w) % L->w;
+    size_t i1 = ((size_t)c1 * nt + a) * np + b, i0 = ((size_t)c0 * nt + a) * np + b;
+    int s1 = gs_slot(r1), s0 = gs_slot(r0);
+    sr[0] = L->S[s0][GATE_NLIGHTS * i0 + k], sr[1] = L->S[s1][GATE_NLIGHTS * i1 + k];
+    sr[2] = L->R[s0][GATE_NLIGHTS * i0 + k], sr[3] = L->R[s1][GATE_NLIGHTS * i1 + k];
+    return 1;
+}
+
 /* The texel checks of row r of level index li (its rows r - 1 and r + 1, periodic for the
  * reference's, held), over the row's entries [i0, i1). */
 static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i0, size_t i1)
@@ -439,6 +471,23 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
                     if (ax == 0 ? a > 0 && a + 1 < nt : np >= 3 && a > 0)
                         lv = fmin(lv, gate_lone(ex, S[GATE_NLIGHTS * vq[ax][0] + k] - R[GATE_NLIGHTS * vq[ax][0] + k],
                                                 S[GATE_NLIGHTS * vq[ax][1] + k] - R[GATE_NLIGHTS * vq[ax][1] + k]) / alb);
+                /* excess: the same over the axes, of the lobe's lone extreme beyond the reference's
+                 * (gate_excess) */
+                double xt = INFINITY, xv = INFINITY, rx = R[GATE_NLIGHTS * i + k];
+                for (int ax = 0; ax < 2; ++ax) {
+                    double sr[4];
+                    if (gs_texel_neighbour_sr(L, r, col, ax, a, b, k, nt, np, sr))
+                        xt = fmin(xt, gate_excess(x, sr[0], sr[1], rx, sr[2], sr[3]) / alb);
+                }
+                for (int ax = 0; ax < 2; ++ax)
+                    if (ax == 0 ? a > 0 && a + 1 < nt : np >= 3 && a > 0)
+                        xv = fmin(xv, gate_excess(x, S[GATE_NLIGHTS * vq[ax][0] + k], S[GATE_NLIGHTS * vq[ax][1] + k], rx,
+                                                  R[GATE_NLIGHTS * vq[ax][0] + k], R[GATE_NLIGHTS * vq[ax][1] + k]) /
+                                                 alb);
+                if (isfinite(xt) && isfinite(fmin(xt, xv)))
+                    gs_worst(fmin(xt, xv), &g->worst_cont_excess, &s->k_cont_excess, gs_key(li, e, k, 0),
+                             g->where_cont_excess, sizeof g->where_cont_excess,
+                             "lobe extreme beyond the reference's along every axis", L->level, r, col, a, b);
                 if (isfinite(lt)) {
                     gs_worst(fmin(lt, lv), &g->worst_cont_cross, &s->k_cont_cross, gs_key(li, e, k, 0),
                              g->where_cont_cross, sizeof g->where_cont_cross, "error extreme along every axis", L->level,
@@ -620,6 +669,7 @@ static void gs_part_init(gs_part *p, const mf_prefilter_gate_stream *s)
     p->loc.g = &p->res;
     p->loc.k_energy = p->loc.k_level = p->loc.k_view = p->loc.k_texel = UINT64_MAX;
     p->loc.k_cont_texel = p->loc.k_cont_view = p->loc.k_cont_grazing = p->loc.k_cont_cross = UINT64_MAX;
+    p->loc.k_cont_excess = UINT64_MAX;
 }
 
 static void *gs_part_run(void *arg)
@@ -662,6 +712,7 @@ static void gs_merge(mf_prefilter_gate_stream *s, const gs_part *p)
     GS_MERGE(worst_cont_view, k_cont_view, where_cont_view);
     GS_MERGE(worst_cont_grazing, k_cont_grazing, where_cont_grazing);
     GS_MERGE(worst_cont_cross, k_cont_cross, where_cont_cross);
+    GS_MERGE(worst_cont_excess, k_cont_excess, where_cont_excess);
 #undef GS_MERGE
     gs_max(r->worst_jump_texel, &g->worst_jump_texel);
     gs_max(r->worst_jump_view, &g->worst_jump_view);
@@ -768,6 +819,9 @@ mf_status mf_prefilter_gate_stream_end(mf_prefilter_gate_stream *s)
         g->pass_cont_cross = g->worst_cont_cross <= g->max_cont_cross;
         if (g->cont_gated)
             g->pass = g->pass && g->pass_cont_texel && g->pass_cont_view && g->pass_cont_grazing;
+        /* excess: gated for both tables (docs/prefilter.md, "Gating continuity across texels") */
+        g->pass_cont_excess = g->worst_cont_excess <= g->max_cont_excess;
+        g->pass = g->pass && g->pass_cont_excess;
     }
     mf_prefilter_gate_stream_free(s);
     return MF_OK;
