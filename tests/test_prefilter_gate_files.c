@@ -12,11 +12,13 @@
  *   (x -> -x: its highlight on the other side of the view plane); 3 the lobe replaced by its texel
  *   neighbour's (x + 1, periodic) at the same view.  Levels drawn uniformly, except a 1 x 1 top level (no
  *   texel neighbours: the continuity measures do not cover it). */
+#define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "mfkit/fit/mf_image_oiio.h"
 #include "mfkit/fit/mf_prefilter.h"
@@ -205,7 +207,15 @@ int main(int argc, char **argv)
     }
     mf_prefilter_gate g;
     mf_prefilter_gate_bounds_default(&g);
+    struct timespec t0, t1;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t0);
     mf_status st = mf_prefilter_gate_run_ref(lv, nl, n, W, H, &o, &g);
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t1);
+    long lobes = 0;
+    for (int l = 0; l < nl; ++l)
+        lobes += (long)lv[l].width * lv[l].height * o.n_theta * o.n_phi;
+    double cpu = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+    printf("gate: %ld lobes, %.3f s of process CPU (%.2f us per lobe)\n", lobes, cpu, 1e6 * cpu / (double)lobes);
     if (st != MF_OK) {
         fprintf(stderr, "gate: %s\n", mf_status_str(st));
         return 1;
@@ -217,6 +227,12 @@ int main(int argc, char **argv)
            g.where_cont_grazing, g.worst_ref_error, g.worst_jump_texel, g.worst_jump_view);
     printf("cross %.6g (%s)  cross_texel %.6g\n", g.worst_cont_cross, g.where_cont_cross, g.worst_cont_cross_texel);
     printf("excess %.6g (%s)\n", g.worst_cont_excess, g.where_cont_excess);
+    const char *raw = getenv("MF_GATE_RAW"); /* the result's bytes, for comparing builds */
+    if (raw) {
+        FILE *f = fopen(raw, "wb");
+        if (!f || fwrite(&g, sizeof g, 1, f) != 1 || fclose(f) != 0)
+            return 1;
+    }
     if (argc > 9 && !strcmp(argv[8], "corrupt"))
         corrupt(lv, nl, n, W, H, &o, atoi(argv[9]), argc > 10 ? strtoull(argv[10], NULL, 10) : 12345);
     for (int l = 0; l < nl; ++l)
