@@ -85,8 +85,9 @@
  * The stored M is in the fitter's canonical gauge (one representation per lobe, the polar gauge
  * of the upper-left block), so neighbouring texels, views and levels whose lobes are close have
  * close matrices, which is what trilinear MIP filtering and bilinear view interpolation of M
- * need.  Not verified: that the lobes themselves vary continuously across texels and views (the
- * gate measures it against a reference, but reports it only; see mf_prefilter_gate_run_ref).
+ * need.  That the lobes vary continuously across texels and views is checked by the gate against
+ * a reference: gated as `excess` (a lobe jumping further than the effective BRDF does), the error
+ * spikes reported only for GGX (mf_prefilter_gate_run_ref).
  *
  * Magnitude: the effective BRDF's albedo, exactly the mixture of the texels' albedos
  * (1/N) sum_q rho_q(wo), rho_q the integral over the geometric hemisphere of the texel's
