@@ -1,7 +1,8 @@
 /* mf_prefilter_gate.c -- the prefilter's gate before export (mf_prefilter.h: mf_prefilter_gate_*):
  * energy, NaN, parent vs children, view and texel spikes of the lobes' shading, and (with the
- * normal map) the continuity of the lobes' error against the per-texel reference shading
- * [Nahmias 2022, Ch. 3; docs/prefilter.md, "Gate"].  Moved from mf_prefilter.c unchanged. */
+ * normal map) the continuity of the lobes' error against the per-texel reference shading and the
+ * lobes' own jumps against the reference's (excess, gated) [Nahmias 2022, Ch. 3; docs/prefilter.md,
+ * "Gate" and "Gating continuity across texels"]. */
 #define _POSIX_C_SOURCE 200809L
 #include "mfkit/fit/mf_prefilter.h"
 
