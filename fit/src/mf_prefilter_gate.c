@@ -1,7 +1,8 @@
 /* mf_prefilter_gate.c -- the prefilter's gate before export (mf_prefilter.h: mf_prefilter_gate_*):
  * energy, NaN, parent vs children, view and texel spikes of the lobes' shading, and (with the
- * normal map) the continuity of the lobes' error against the per-texel reference shading
- * [Nahmias 2022, Ch. 3; docs/prefilter.md, "Gate"].  Moved from mf_prefilter.c unchanged. */
+ * normal map) the continuity of the lobes' error against the per-texel reference shading and the
+ * lobes' own jumps against the reference's (excess, gated) [Nahmias 2022, Ch. 3; docs/prefilter.md,
+ * "Gate" and "Gating continuity across texels"]. */
 #define _POSIX_C_SOURCE 200809L
 #include "mfkit/fit/mf_prefilter.h"
 
@@ -32,6 +33,7 @@ void mf_prefilter_gate_bounds_default(mf_prefilter_gate *g)
     g->max_cont_grazing = MF_PREFILTER_GATE_CONT_GRAZING;
     g->max_cont_lambert = MF_PREFILTER_GATE_CONT_LAMBERT;
     g->max_cont_cross = MF_PREFILTER_GATE_CONT_CROSS;
+    g->max_cont_excess = MF_PREFILTER_GATE_CONT_EXCESS;
 }
 
 /* The gate's lights, in the view-azimuth-aligned frame of view theta: quads of half-width
@@ -227,7 +229,7 @@ struct mf_prefilter_gate_stream {
     mf_polygon *lights;
     gate_clipped *clipped; /* the lights clipped to z >= 0, per view theta (GATE_NLIGHTS each) */
     gate_iso *iso;
-    uint64_t k_energy, k_level, k_view, k_texel, k_cont_texel, k_cont_view, k_cont_grazing, k_cont_cross;
+    uint64_t k_energy, k_level, k_view, k_texel, k_cont_texel, k_cont_view, k_cont_grazing, k_cont_cross, k_cont_excess;
     int threads;           /* o->threads (1 without o), at most GS_MAX_THREADS */
     struct gs_part *parts; /* threads of them, reused for every row */
 };
@@ -297,7 +299,7 @@ mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int n
         s->o = *o;
     s->lambert = s->ref && o->base == MF_PREFILTER_BASE_LAMBERT;
     s->k_energy = s->k_level = s->k_view = s->k_texel = UINT64_MAX;
-    s->k_cont_texel = s->k_cont_view = s->k_cont_grazing = s->k_cont_cross = UINT64_MAX;
+    s->k_cont_texel = s->k_cont_view = s->k_cont_grazing = s->k_cont_cross = s->k_cont_excess = UINT64_MAX;
     /* the results this run sets (as mf_prefilter_gate_run and _run_ref cleared them) */
     g->nan_entries = 0;
     g->worst_energy = g->worst_level = g->worst_view_spike = g->worst_texel_spike = 0.0;
@@ -310,6 +312,8 @@ mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int n
         g->where_cont_texel[0] = g->where_cont_view[0] = '\0';
         g->worst_cont_cross = g->worst_cont_cross_texel = 0.0;
         g->where_cont_cross[0] = '\0';
+        g->worst_cont_excess = 0.0;
+        g->where_cont_excess[0] = '\0';
     }
     s->threads = o && o->threads > 1 ? (o->threads < GS_MAX_THREADS ? o->threads : GS_MAX_THREADS) : 1;
     s->L = calloc((size_t)nlevels, sizeof *s->L);
@@ -373,23 +377,17 @@ int mf_prefilter_gate_stream_next(const mf_prefilter_gate_stream *s, int *level_
     return 0;
 }
 
-/* The error e = lobe shading - reference of light k at the two texel neighbours of (r, col) along
- * axis ax (0: x, 1: y; periodic: normal maps tile), view (a, b): e0 before, e1 after, and (if a1)
- * the albedo of the one after.  0 when the axis has fewer than 2 texels. */
-static int gs_texel_neighbour_errors(const gs_level *L, int r, int col, int ax, int a, int b, int k, int nt, int np,
-                                     double *e0, double *e1, double *a1)
+/* The lobe's lone extreme beyond the effective BRDF's along one axis: x, y0, y1 the shading S of the
+ * entry and of its two neighbours, r, r0, r1 their reference R.  The lobe's lone extreme upwards,
+ * min(x - y0, x - y1), less the reference's own (when it has one upwards), and the same downwards;
+ * 0 when neither is positive.  So a lobe may rise above (or dip below) both neighbours as far as the
+ * effective BRDF does, and may smooth out the effective BRDF's own extremes (a single LTC does,
+ * where a footprint's texel lobes straddle a light). */
+static double gate_excess(double x, double y0, double y1, double r, double r0, double r1)
 {
-    if ((ax ? L->h : L->w) < 2)
-        return 0;
-    int r1 = (r + (ax == 1)) % L->h, c1 = (col + (ax == 0)) % L->w;
-    int r0 = (r - (ax == 1) + L->h) % L->h, c0 = (col - (ax == 0) + L->w) % L->w;
-    size_t i1 = ((size_t)c1 * nt + a) * np + b, i0 = ((size_t)c0 * nt + a) * np + b;
-    int s1 = gs_slot(r1), s0 = gs_slot(r0);
-    *e1 = L->S[s1][GATE_NLIGHTS * i1 + k] - L->R[s1][GATE_NLIGHTS * i1 + k];
-    *e0 = L->S[s0][GATE_NLIGHTS * i0 + k] - L->R[s0][GATE_NLIGHTS * i0 + k];
-    if (a1)
-        *a1 = L->A[s1][i1];
-    return 1;
+    double up = fmin(x - y0, x - y1) - fmax(fmin(r - r0, r - r1), 0.0);
+    double dn = fmin(y0 - x, y1 - x) - fmax(fmin(r0 - r, r1 - r), 0.0);
+    return fmax(fmax(up, dn), 0.0);
 }
 
 /* The texel checks of row r of level index li (its rows r - 1 and r + 1, periodic for the
@@ -406,54 +404,80 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
         size_t e = (size_t)r * L->rowlen + i;
         double alb = fmax(A[i], 1e-6);
         int gr = s->ref && cos(mf_prefilter_theta(&s->o, a)) < MF_PREFILTER_MULTISTART_COS;
+        /* the texel neighbours along x and y (periodic: normal maps tile), once per entry: their S and
+         * R (GATE_NLIGHTS each), and the albedo of the one after; inner: not across the map's edge */
+        const double *tS[2][2] = {{NULL, NULL}, {NULL, NULL}}, *tR[2][2] = {{NULL, NULL}, {NULL, NULL}};
+        double ta1[2] = {0.0, 0.0};
+        int has_t[2], inner[2];
+        for (int ax = 0; ax < 2; ++ax) {
+            has_t[ax] = (ax ? L->h : L->w) >= 2;
+            inner[ax] = ax ? r > 0 && r + 1 < L->h : col > 0 && col + 1 < L->w;
+            if (!has_t[ax])
+                continue;
+            int r1 = (r + (ax == 1)) % L->h, c1 = (col + (ax == 0)) % L->w;
+            int r0 = (r - (ax == 1) + L->h) % L->h, c0 = (col - (ax == 0) + L->w) % L->w;
+            size_t j1 = ((size_t)c1 * nt + a) * np + b, j0 = ((size_t)c0 * nt + a) * np + b;
+            int s1 = gs_slot(r1), s0 = gs_slot(r0);
+            tS[ax][0] = L->S[s0] + GATE_NLIGHTS * j0, tS[ax][1] = L->S[s1] + GATE_NLIGHTS * j1;
+            if (s->ref)
+                tR[ax][0] = L->R[s0] + GATE_NLIGHTS * j0, tR[ax][1] = L->R[s1] + GATE_NLIGHTS * j1;
+            ta1[ax] = L->A[s1][j1];
+        }
+        /* the view neighbours: theta (interior rows), phi (periodic; rows theta > 0) */
+        size_t vq[2][2] = {{i - np, i + np}, {i - b + (b + np - 1) % np, i - b + (b + 1) % np}};
+        int has_v[2] = {a > 0 && a + 1 < nt, np >= 3 && a > 0};
         for (int k = 0; k < GATE_NLIGHTS; ++k) {
             double x = S[GATE_NLIGHTS * i + k];
             /* a lone texel above or below both neighbours along x or y (not periodic) */
             for (int ax = 0; ax < 2; ++ax) {
-                int r0 = r - (ax == 1), r1 = r + (ax == 1), c0 = col - (ax == 0), c1 = col + (ax == 0);
-                if (r0 < 0 || c0 < 0 || r1 >= L->h || c1 >= L->w)
+                if (!has_t[ax] || !inner[ax])
                     continue;
-                double y0 = L->S[gs_slot(r0)][GATE_NLIGHTS * (((size_t)c0 * nt + a) * np + b) + k];
-                double y1 = L->S[gs_slot(r1)][GATE_NLIGHTS * (((size_t)c1 * nt + a) * np + b) + k];
+                double y0 = tS[ax][0][k], y1 = tS[ax][1][k];
                 double up = fmin(x - y0, x - y1), dn = fmin(y0 - x, y1 - x);
                 gs_worst(fmax(fmax(up, dn), 0.0) / alb, &g->worst_texel_spike, &s->k_texel, gs_key(li, e, k, 2 + ax),
                          g->where_texel, sizeof g->where_texel, "texel spike", L->level, r, col, a, b);
             }
             if (!s->ref)
                 continue;
-            double ex = x - R[GATE_NLIGHTS * i + k];
+            double rx = R[GATE_NLIGHTS * i + k], ex = x - rx;
             if (!isfinite(ex))
                 continue; /* counted by the nan check */
+            double te[2][2] = {{0.0, 0.0}, {0.0, 0.0}}; /* the texel neighbours' errors */
+            for (int ax = 0; ax < 2; ++ax)
+                if (has_t[ax])
+                    te[ax][0] = tS[ax][0][k] - tR[ax][0][k], te[ax][1] = tS[ax][1][k] - tR[ax][1][k];
             /* cross: the error's lone extreme along every axis at once, the smallest of its lone
              * extremes along the axes the entry has (texels x, y; theta; phi), for the entries with a
-             * texel axis; cross_texel: the same over the texel axes alone */
-            {
-                double lt = INFINITY, lv = INFINITY;
-                for (int ax = 0; ax < 2; ++ax) {
-                    double e0, e1;
-                    if (gs_texel_neighbour_errors(L, r, col, ax, a, b, k, nt, np, &e0, &e1, NULL))
-                        lt = fmin(lt, gate_lone(ex, e0, e1) / alb);
+             * texel axis; cross_texel: the same over the texel axes alone.  excess (gated): the same
+             * over the axes, of the lobe's lone extreme beyond the reference's (gate_excess) */
+            double lt = INFINITY, lv = INFINITY, xt = INFINITY, xv = INFINITY;
+            for (int ax = 0; ax < 2; ++ax)
+                if (has_t[ax]) {
+                    lt = fmin(lt, gate_lone(ex, te[ax][0], te[ax][1]) / alb);
+                    xt = fmin(xt, gate_excess(x, tS[ax][0][k], tS[ax][1][k], rx, tR[ax][0][k], tR[ax][1][k]) / alb);
                 }
-                size_t vq[2][2] = {{i - np, i + np}, {i - b + (b + np - 1) % np, i - b + (b + 1) % np}};
-                for (int ax = 0; ax < 2; ++ax)
-                    if (ax == 0 ? a > 0 && a + 1 < nt : np >= 3 && a > 0)
-                        lv = fmin(lv, gate_lone(ex, S[GATE_NLIGHTS * vq[ax][0] + k] - R[GATE_NLIGHTS * vq[ax][0] + k],
-                                                S[GATE_NLIGHTS * vq[ax][1] + k] - R[GATE_NLIGHTS * vq[ax][1] + k]) / alb);
-                if (isfinite(lt)) {
-                    gs_worst(fmin(lt, lv), &g->worst_cont_cross, &s->k_cont_cross, gs_key(li, e, k, 0),
-                             g->where_cont_cross, sizeof g->where_cont_cross, "error extreme along every axis", L->level,
-                             r, col, a, b);
-                    gs_max(lt, &g->worst_cont_cross_texel);
+            for (int ax = 0; ax < 2; ++ax)
+                if (has_v[ax]) {
+                    double s0 = S[GATE_NLIGHTS * vq[ax][0] + k], s1 = S[GATE_NLIGHTS * vq[ax][1] + k];
+                    double r0 = R[GATE_NLIGHTS * vq[ax][0] + k], r1 = R[GATE_NLIGHTS * vq[ax][1] + k];
+                    lv = fmin(lv, gate_lone(ex, s0 - r0, s1 - r1) / alb);
+                    xv = fmin(xv, gate_excess(x, s0, s1, rx, r0, r1) / alb);
                 }
+            if (isfinite(lt)) {
+                gs_worst(fmin(xt, xv), &g->worst_cont_excess, &s->k_cont_excess, gs_key(li, e, k, 0),
+                         g->where_cont_excess, sizeof g->where_cont_excess,
+                         "lobe extreme beyond the reference's along every axis", L->level, r, col, a, b);
+                gs_worst(fmin(lt, lv), &g->worst_cont_cross, &s->k_cont_cross, gs_key(li, e, k, 0), g->where_cont_cross,
+                         sizeof g->where_cont_cross, "error extreme along every axis", L->level, r, col, a, b);
+                gs_max(lt, &g->worst_cont_cross_texel);
             }
             /* the error's lone texel (periodic neighbours: normal maps tile) */
             for (int ax = 0; ax < 2; ++ax) {
-                double e0, e1, a1;
-                if (!gs_texel_neighbour_errors(L, r, col, ax, a, b, k, nt, np, &e0, &e1, &a1))
+                if (!has_t[ax])
                     continue;
-                double ab = fmax(alb, a1);
-                gs_max(fabs(ex - e1) / ab, &g->worst_jump_texel);
-                gs_worst(gate_lone(ex, e0, e1) / alb, gr ? &g->worst_cont_grazing : &g->worst_cont_texel,
+                double ab = fmax(alb, ta1[ax]);
+                gs_max(fabs(ex - te[ax][1]) / ab, &g->worst_jump_texel);
+                gs_worst(gate_lone(ex, te[ax][0], te[ax][1]) / alb, gr ? &g->worst_cont_grazing : &g->worst_cont_texel,
                          gr ? &s->k_cont_grazing : &s->k_cont_texel, gs_key(li, e, k, 2 + ax),
                          gr ? g->where_cont_grazing : g->where_cont_texel, sizeof g->where_cont_texel,
                          "texel error spike", L->level, r, col, a, b);
@@ -620,6 +644,7 @@ static void gs_part_init(gs_part *p, const mf_prefilter_gate_stream *s)
     p->loc.g = &p->res;
     p->loc.k_energy = p->loc.k_level = p->loc.k_view = p->loc.k_texel = UINT64_MAX;
     p->loc.k_cont_texel = p->loc.k_cont_view = p->loc.k_cont_grazing = p->loc.k_cont_cross = UINT64_MAX;
+    p->loc.k_cont_excess = UINT64_MAX;
 }
 
 static void *gs_part_run(void *arg)
@@ -662,6 +687,7 @@ static void gs_merge(mf_prefilter_gate_stream *s, const gs_part *p)
     GS_MERGE(worst_cont_view, k_cont_view, where_cont_view);
     GS_MERGE(worst_cont_grazing, k_cont_grazing, where_cont_grazing);
     GS_MERGE(worst_cont_cross, k_cont_cross, where_cont_cross);
+    GS_MERGE(worst_cont_excess, k_cont_excess, where_cont_excess);
 #undef GS_MERGE
     gs_max(r->worst_jump_texel, &g->worst_jump_texel);
     gs_max(r->worst_jump_view, &g->worst_jump_view);
@@ -768,6 +794,9 @@ mf_status mf_prefilter_gate_stream_end(mf_prefilter_gate_stream *s)
         g->pass_cont_cross = g->worst_cont_cross <= g->max_cont_cross;
         if (g->cont_gated)
             g->pass = g->pass && g->pass_cont_texel && g->pass_cont_view && g->pass_cont_grazing;
+        /* excess: gated for both tables (docs/prefilter.md, "Gating continuity across texels") */
+        g->pass_cont_excess = g->worst_cont_excess <= g->max_cont_excess;
+        g->pass = g->pass && g->pass_cont_excess;
     }
     mf_prefilter_gate_stream_free(s);
     return MF_OK;

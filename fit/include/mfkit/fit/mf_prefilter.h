@@ -85,8 +85,9 @@
  * The stored M is in the fitter's canonical gauge (one representation per lobe, the polar gauge
  * of the upper-left block), so neighbouring texels, views and levels whose lobes are close have
  * close matrices, which is what trilinear MIP filtering and bilinear view interpolation of M
- * need.  Not verified: that the lobes themselves vary continuously across texels and views (the
- * gate measures it against a reference, but reports it only; see mf_prefilter_gate_run_ref).
+ * need.  That the lobes vary continuously across texels and views is checked by the gate against
+ * a reference: gated as `excess` (a lobe jumping further than the effective BRDF does), the error
+ * spikes reported only for GGX (mf_prefilter_gate_run_ref).
  *
  * Magnitude: the effective BRDF's albedo, exactly the mixture of the texels' albedos
  * (1/N) sum_q rho_q(wo), rho_q the integral over the geometric hemisphere of the texel's
@@ -347,6 +348,19 @@ typedef struct mf_prefilter_gate {
     double max_cont_cross, worst_cont_cross, worst_cont_cross_texel;
     int pass_cont_cross;
     char where_cont_cross[128];
+    /* (mf_prefilter_gate_run_ref; GATED, part of pass, for both tables) excess: continuity across
+     * texels measured against the effective BRDF's own change.  Per entry, light and axis (texels x
+     * and y, periodic; theta, interior rows; phi, rows theta > 0), with S the lobe's shading and R the
+     * reference: the lobe's lone extreme min(S - S0, S - S1) less the reference's own,
+     * max(0, min(R - R0, R - R1)), and the same downwards; the smallest over the axes the entry has,
+     * / albedo, the worst over the entries with a texel axis (levels larger than 1 x 1).  A lobe may
+     * rise (or dip) as far as the footprint's effective BRDF does, and may smooth out the BRDF's own
+     * extremes (the bump maps' worst cross entries were such: the reference dips where a light falls
+     * between the footprint's texel lobes, the lobe does not).  pass_cont_excess: worst_cont_excess <=
+     * max_cont_excess (MF_PREFILTER_GATE_CONT_EXCESS). */
+    double max_cont_excess, worst_cont_excess;
+    int pass_cont_excess;
+    char where_cont_excess[128];
 } mf_prefilter_gate;
 
 /* Sets the default bounds and clears the results. */
@@ -397,6 +411,9 @@ mf_status mf_prefilter_gate_run(const mf_prefilter_level *levels, int nlevels, m
 /* cross's reported bound: above the V-groove's and the constant map's good runs (0), below the
  * bump map's outlier lobes (0.08-0.15) */
 #define MF_PREFILTER_GATE_CONT_CROSS 0.05
+/* excess's gated bound: good runs of every map measured read at most 0.092 at the default views
+ * (docs/prefilter.md, "Gating continuity across texels": false alarms and power) */
+#define MF_PREFILTER_GATE_CONT_EXCESS 0.2
 mf_status mf_prefilter_gate_run_ref(const mf_prefilter_level *levels, int nlevels, const double *normals, int width,
                                     int height, const mf_prefilter_options *o, mf_prefilter_gate *g) MF_WARN_UNUSED;
 
