@@ -181,6 +181,10 @@ static int run_full(const cli_entry *e, unsigned needs, int argc, char **argv)
         return cli_error(cmd, "/proc/self/exe: not an absolute path: %s", self);
     *slash = '\0';
     snprintf(full, sizeof full, "%s/%s", self, MFKIT_CLI_FULL_RELPATH);
+    /* validate TABLE asks for mfkit-full only for its refits: without it (mfkit installed alone),
+     * the front validates as before, with the fitter-free neighbour check */
+    if (e->needs == needs_validate && !(needs & CLI_NEEDS_IMAGE) && access(full, X_OK) != 0)
+        return e->run(argc - 1, argv + 1);
     fflush(NULL);
     execv(full, argv);
     return cli_error(cmd, "%s: %s (the Ceres and OpenImageIO commands run in mfkit-full, installed with mfkit)", full,
