@@ -13,6 +13,9 @@
 #include "cli_util.h"
 
 #include "mfkit/mfkit.h"
+#ifdef MFKIT_CLI_HAVE_SOLVER
+#include "mfkit/fit/mf_ltc_validate.h"
+#endif
 #include "mfkit/io/mf_ltc_export.h"
 #include "mfkit/io/mf_ltc_reference.h"
 #include "mfkit/io/mf_table_io.h"
@@ -150,6 +153,7 @@ static int validate_kind(const char *path, const mf_table *t, const mf_table_kin
     return emit_report(cmd, rc, &jb, &tb, json, json_file);
 }
 
+
 /* The gate of the table's kind on a table file: the LTC gate for LTC tables. */
 static int validate_table(const char *path, const char *path2, const char *brdf, int quick, uint64_t seed, int json,
                           const char *json_file, int quiet)
@@ -213,7 +217,12 @@ static int validate_table(const char *path, const char *path2, const char *brdf,
         fprintf(stderr, "mfkit validate: running the LTC gate on %s (%s)...\n", path, model ? model->name : "no model");
     /* the gate, then with a model every texel against its neighbours' predictions
      * (ltc_texel_neighbours; the Python module's validate() runs the same function) */
+#ifdef MFKIT_CLI_HAVE_SOLVER
+    /* a table mfkit's fitter made: the neighbour check's candidate texels refitted (mf_ltc_validate.h) */
+    st = mf_ltc_validate_fitted(&t, model, &o, checks, MF_LTC_VALIDATE_MAX_CHECKS, &n, NULL);
+#else
     st = mf_ltc_gate_validate(&t, model, &o, checks, MF_LTC_VALIDATE_MAX_CHECKS, &n);
+#endif
     double secs = elapsed(&t0);
     int n_r = t.axes[0].size, n_u = t.naxes > 1 ? t.axes[1].size : 0;
     mf_table_free(&t);

@@ -62,6 +62,18 @@ static unsigned needs_exr_args(int argc, char **argv)
     return CLI_NEEDS_CORE;
 }
 
+/* validate TABLE: as needs_exr_args, and the solver where the build has it: the neighbour check
+ * refits its candidate texels of a table mfkit's fitter made (mf_ltc_gate.h) */
+static unsigned needs_validate(int argc, char **argv)
+{
+    unsigned n = needs_exr_args(argc, argv);
+    if (MFKIT_CLI_WITH_CERES && !has_arg(argc, argv, "--help", "-h"))
+        for (int i = 1; i < argc; ++i)
+            if (argv[i][0] != '-') /* a table (or an option's value: more only costs start-up time) */
+                return n | CLI_NEEDS_SOLVER;
+    return n;
+}
+
 /* fit: the solver, except the usage texts and `fit ltc --list` (the model registry) */
 static unsigned needs_fit(int argc, char **argv)
 {
@@ -101,7 +113,7 @@ static const cli_entry k_commands[] = {
      "energy KIND --out DIR\n"
      "                  DFG (dfg), Kulla-Conty (kulla-conty) or rough-dielectric (dielectric) energy\n"
      "                  tables, gated and exported"},
-    {"validate", cli_validate, needs_exr_args,
+    {"validate", cli_validate, needs_validate,
      "validate [TABLE]\n"
      "                  run the property checks of the core math, or the LTC gate on a table file"},
     {"table", cli_table, needs_exr_args,
@@ -169,6 +181,10 @@ static int run_full(const cli_entry *e, unsigned needs, int argc, char **argv)
         return cli_error(cmd, "/proc/self/exe: not an absolute path: %s", self);
     *slash = '\0';
     snprintf(full, sizeof full, "%s/%s", self, MFKIT_CLI_FULL_RELPATH);
+    /* validate TABLE asks for mfkit-full only for its refits: without it (mfkit installed alone),
+     * the front validates as before, with the fitter-free neighbour check */
+    if (e->needs == needs_validate && !(needs & CLI_NEEDS_IMAGE) && access(full, X_OK) != 0)
+        return e->run(argc - 1, argv + 1);
     fflush(NULL);
     execv(full, argv);
     return cli_error(cmd, "%s: %s (the Ceres and OpenImageIO commands run in mfkit-full, installed with mfkit)", full,

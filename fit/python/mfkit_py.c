@@ -7,6 +7,9 @@
 #include "mfkit/io/mf_ltc_reference.h"
 #include "mfkit/io/mf_table_io.h"
 #include "mfkit/mfkit.h"
+#ifdef MFKIT_PY_HAVE_SOLVER
+#include "mfkit/fit/mf_ltc_validate.h"
+#endif
 
 #include <stddef.h>
 #include <stdint.h>
@@ -82,7 +85,13 @@ mf_status mfpy_validate_table(const mf_table *t, int half_float, const char *brd
         return MF_ERR_DOMAIN;
     }
     /* the gate and, with a model, the neighbour check: what `mfkit validate TABLE` runs */
+#ifdef MFKIT_PY_HAVE_SOLVER
+    /* with the fitters (libmfkit_py_full.so): a table mfkit's fitter made has the neighbour check's
+     * candidate texels refitted, as `mfkit validate` does (mf_ltc_validate.h) */
+    mf_status st = mf_ltc_validate_fitted(t, model, &o, checks, cap, count, NULL);
+#else
     mf_status st = mf_ltc_gate_validate(t, model, &o, checks, cap, count);
+#endif
     if (st == MF_ERR_DOMAIN)
         snprintf(msg, msg_size, "not an LTC table layout (two axes r: alpha = r^2 and u: cos = 1 - u^2, fields "
                                 "minv_00, minv_20, minv_02, minv_22, magnitude)");

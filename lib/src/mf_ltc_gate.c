@@ -1346,6 +1346,13 @@ static double nb_second(const double *dk)
 mf_status mf_ltc_gate_neighbour_scores_box(const mf_table *t, const mf_brdf_model *model, uint64_t seed, int r0,
                                            int r1, int u0, int u1, double *s, double *e, double *v)
 {
+    return mf_ltc_gate_neighbour_scores_box_refit(t, model, seed, r0, r1, u0, u1, NULL, NULL, s, e, v, NULL);
+}
+
+mf_status mf_ltc_gate_neighbour_scores_box_refit(const mf_table *t, const mf_brdf_model *model, uint64_t seed, int r0,
+                                                 int r1, int u0, int u1, mf_ltc_gate_refit_fn refit, void *user,
+                                                 double *s, double *e, double *v, double *refit_d)
+{
     gate_layout L;
     if (!model || !layout_of(t, &L) || r0 < 0 || u0 < 0 || r1 >= L.nr || u1 >= L.nu || r0 > r1 || u0 > u1)
         return MF_ERR_DOMAIN;
@@ -1382,8 +1389,19 @@ mf_status mf_ltc_gate_neighbour_scores_box(const mf_table *t, const mf_brdf_mode
                 s[k] = sk;
             if (e)
                 e[k] = ek;
+            double vk = sk / (NB_TAU + NB_C * ek), rd = NAN;
+            /* A candidate (or a flagged texel) with a fitter at hand: the refit check's own value
+             * (d against a fresh fit of the texel, bound MF_LTC_GATE_TEXEL_REL) replaces the
+             * neighbours' estimate (docs/validation.md, "The refit of candidate texels"). */
+            if (refit && !(vk <= MF_LTC_GATE_NEIGHBOUR_REFIT_FROM)) {
+                rd = refit(user, t, ir, iu);
+                if (!isnan(rd))
+                    vk = rd / MF_LTC_GATE_TEXEL_REL;
+            }
+            if (refit_d)
+                refit_d[k] = rd;
             if (v)
-                v[k] = sk / (NB_TAU + NB_C * ek);
+                v[k] = vk;
         }
 #undef NB_D
     free(d);
@@ -1400,6 +1418,12 @@ mf_status mf_ltc_gate_neighbour_scores(const mf_table *t, const mf_brdf_model *m
 }
 
 mf_status mf_ltc_gate_neighbour_check(const mf_table *t, const mf_brdf_model *model, uint64_t seed, mf_check *c)
+{
+    return mf_ltc_gate_neighbour_check_refit(t, model, seed, NULL, NULL, c);
+}
+
+mf_status mf_ltc_gate_neighbour_check_refit(const mf_table *t, const mf_brdf_model *model, uint64_t seed,
+                                            mf_ltc_gate_refit_fn refit, void *user, mf_check *c)
 {
     if (!c)
         return MF_ERR_DOMAIN;
@@ -1422,25 +1446,38 @@ mf_status mf_ltc_gate_neighbour_check(const mf_table *t, const mf_brdf_model *mo
         return MF_OK;
     }
     size_t n = (size_t)L.nr * (size_t)L.nu;
-    double *s = malloc(sizeof *s * n * 3);
+    double *s = malloc(sizeof *s * n * 4);
     if (!s) {
         mf_check_fail(c, "out of memory");
         return MF_ERR_ALLOC;
     }
-    double *e = s + n, *v = e + n;
-    mf_status st = mf_ltc_gate_neighbour_scores(t, model, seed, s, e, v);
+    double *e = s + n, *v = e + n, *rd = v + n;
+    mf_status st =
+        mf_ltc_gate_neighbour_scores_box_refit(t, model, seed, 0, L.nr - 1, 0, L.nu - 1, refit, user, s, e, v, rd);
     if (st != MF_OK) {
         free(s);
         mf_check_fail(c, "out of memory");
         return st;
     }
+    int nrefit = 0;
     for (int iu = 0; iu < L.nu; ++iu)
         for (int ir = 0; ir < L.nr; ++ir) {
             size_t k = (size_t)ir + (size_t)L.nr * iu;
-            char w[64];
-            snprintf(w, sizeof w, "s %.3g, e %.3g", s[k], e[k]);
+            char w[96];
+            if (isnan(rd[k]))
+                snprintf(w, sizeof w, "s %.3g, e %.3g", s[k], e[k]);
+            else {
+                snprintf(w, sizeof w, "refit d %.3g (neighbours %.3g: s %.3g, e %.3g)", rd[k],
+                         s[k] / (NB_TAU + NB_C * e[k]), s[k], e[k]);
+                ++nrefit;
+            }
             record_texel(c, v[k], w, ir, iu, mf_ltc_table_alpha(t, ir), mf_ltc_table_cos_theta(t, iu));
         }
+    if (refit) {
+        size_t len = strlen(c->what);
+        snprintf(c->what + len, sizeof c->what - len, "; %d texels above %g refitted: d / %g", nrefit,
+                 MF_LTC_GATE_NEIGHBOUR_REFIT_FROM, MF_LTC_GATE_TEXEL_REL);
+    }
     free(s);
     mf_check_finish(c);
     return MF_OK;
@@ -1448,6 +1485,12 @@ mf_status mf_ltc_gate_neighbour_check(const mf_table *t, const mf_brdf_model *mo
 
 mf_status mf_ltc_gate_validate(const mf_table *t, const mf_brdf_model *model, const mf_ltc_gate_options *o,
                                mf_check *checks, int cap, int *count)
+{
+    return mf_ltc_gate_validate_refit(t, model, o, NULL, NULL, checks, cap, count);
+}
+
+mf_status mf_ltc_gate_validate_refit(const mf_table *t, const mf_brdf_model *model, const mf_ltc_gate_options *o,
+                                     mf_ltc_gate_refit_fn refit, void *user, mf_check *checks, int cap, int *count)
 {
     if (!checks || !count || cap < MF_LTC_VALIDATE_MAX_CHECKS)
         return MF_ERR_DOMAIN;
@@ -1460,7 +1503,7 @@ mf_status mf_ltc_gate_validate(const mf_table *t, const mf_brdf_model *model, co
     /* With a model, every texel against its neighbours' predictions (ltc_texel_neighbours: the
      * fitter-free stand-in for fit ltc's refit check, docs/validation.md "The neighbour check"). */
     if (model && (st == MF_OK || st == MF_ERR_CHECK_FAILED)) {
-        mf_status ns = mf_ltc_gate_neighbour_check(t, model, o->seed, &checks[*count]);
+        mf_status ns = mf_ltc_gate_neighbour_check_refit(t, model, o->seed, refit, user, &checks[*count]);
         if (ns == MF_ERR_ALLOC)
             return ns;
         if (ns == MF_OK) {

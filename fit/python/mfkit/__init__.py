@@ -667,8 +667,9 @@ def validate(table=None, brdf=None, quick=False, seed=1, progress=True):
     """The checks of ``mfkit validate``: without table the property checks of the core math; with a
     table (a path, or a Table) the gate of its kind (the LTC gate with the BRDF ``brdf``, else the
     table's "brdf" metadata, "none" for model-free checks only; with a BRDF also
-    ltc_texel_neighbours, every texel against its neighbours' predictions: the same C function as
-    the command, so the same report).  Returns a Report; raises on an unreadable file or a table
+    ltc_texel_neighbours, every texel against its neighbours' predictions, and where the fitters are
+    built, the candidate texels of a table mfkit's fitter made refitted: the same C function as the
+    command, so the same report).  Returns a Report; raises on an unreadable file or a table
     of no known kind.  progress: show progress on stderr."""
     if table is None:
         n = _lib.mf_validate_core_count()
@@ -688,6 +689,10 @@ def validate(table=None, brdf=None, quick=False, seed=1, progress=True):
     else:
         lib, t, info = _read_c(table)
         half = info.half_float
+    try:  # with the fitters, a table mfkit's fitter made has its candidate texels refitted, as the command does
+        lib = _full("fit")
+    except UnsupportedError:
+        pass
     checks = (_Check * 32)()
     count = _I()
     kind = ctypes.create_string_buffer(64)

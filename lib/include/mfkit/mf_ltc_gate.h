@@ -226,10 +226,29 @@ mf_status mf_ltc_gate_neighbour_scores_box(const mf_table *t, const mf_brdf_mode
                                            int r1, int u0, int u1, double *s, double *e,
                                            double *value) MF_WARN_UNUSED;
 
+/* The refit of candidate texels.  A fitter-free comparison with neighbours cannot tell a real bend
+ * of a fitted table at the grid's scale from a corrupted texel (docs/validation.md: charlie 64 x 64),
+ * and misses some corruptions where the neighbours predict poorly (the grazing rows at 16 x 16).
+ * When the caller has the fitter that made the table (`mfkit validate` of a table whose metadata
+ * names mfkit's fitter, its model, seed and samples), it passes `refit`: d of texel (ir, iu) against
+ * a fresh fit of that texel (the refit check "ltc_texel_refit" of mf_ltc_bake.h at one texel), NaN
+ * when it cannot say.  Every texel whose neighbour value exceeds MF_LTC_GATE_NEIGHBOUR_REFIT_FROM
+ * (or is not a number) is refitted, and its value becomes d / MF_LTC_GATE_TEXEL_REL: the issue's
+ * own measure against the fitted texel, which the neighbours only estimate.  (refit NULL: the
+ * fitter-free check above.)  *refit_d (may be NULL, else nr * nu): the refit's d, NaN where none ran. */
+typedef double (*mf_ltc_gate_refit_fn)(void *user, const mf_table *t, int ir, int iu);
+#define MF_LTC_GATE_NEIGHBOUR_REFIT_FROM 0.15
+mf_status mf_ltc_gate_neighbour_scores_box_refit(const mf_table *t, const mf_brdf_model *model, uint64_t seed, int r0,
+                                                 int r1, int u0, int u1, mf_ltc_gate_refit_fn refit, void *user,
+                                                 double *s, double *e, double *value, double *refit_d) MF_WARN_UNUSED;
+
 /* The check ltc_texel_neighbours into *c (begun and finished here; the worst texel with its s and e).
  * Returns MF_OK when it ran (c->passed says whether it passed), else as mf_ltc_gate_neighbour_scores
  * (c then failed). */
 mf_status mf_ltc_gate_neighbour_check(const mf_table *t, const mf_brdf_model *model, uint64_t seed, mf_check *c);
+/* The same with the refit of candidate texels (refit, user: as above). */
+mf_status mf_ltc_gate_neighbour_check_refit(const mf_table *t, const mf_brdf_model *model, uint64_t seed,
+                                            mf_ltc_gate_refit_fn refit, void *user, mf_check *c);
 
 /* What `mfkit validate TABLE` runs on an LTC table (and the Python module's validate(), so both
  * give the same report): mf_ltc_gate_run, then with a model the neighbour check
@@ -239,6 +258,11 @@ mf_status mf_ltc_gate_neighbour_check(const mf_table *t, const mf_brdf_model *mo
 #define MF_LTC_VALIDATE_MAX_CHECKS (MF_LTC_GATE_MAX_CHECKS + 1)
 mf_status mf_ltc_gate_validate(const mf_table *t, const mf_brdf_model *model, const mf_ltc_gate_options *o,
                                mf_check *checks, int cap, int *count) MF_WARN_UNUSED;
+/* The same with the refit of candidate texels in the neighbour check (refit, user: as above;
+ * `mfkit validate` passes them for tables its own fitter made). */
+mf_status mf_ltc_gate_validate_refit(const mf_table *t, const mf_brdf_model *model, const mf_ltc_gate_options *o,
+                                     mf_ltc_gate_refit_fn refit, void *user, mf_check *checks, int cap,
+                                     int *count) MF_WARN_UNUSED;
 
 #ifdef __cplusplus
 }
