@@ -1478,7 +1478,7 @@ static void diel_split(void *vctx, mf_check *c)
 /* The split closed by the walk (tables with its fields only; mf_energy_dielectric_walk_split):
  * (1) every column: t_split, t_split_inv in [0, 1], constant along mu, and equal to the projection of the
  *     stored t_walk, se onto the balance with the stored E_avg, E_avg_inv (mf_energy_walk_split_project),
- *     to 1e-12 + 4 u; its balance t (1 - E_avg) = eta^2 t' (1 - E_avg_inv) is then exact to rounding;
+ *     to 1e-12 plus the storage rounding propagated (below); its balance t (1 - E_avg) = eta^2 t' (1 - E_avg_inv) is then exact to rounding;
  * (2) at the 3 x 3 gate columns, both sides: the stored t_walk against a fresh walk with another seed
  *     (the recorded seed + 1, the same count), |t_walk - t_fresh| / (4.5 sqrt(se^2 + se_fresh^2)) <= 1:
  *     4.5 standard errors, 18 pairs of independent estimates, a false alarm about once in 3e4 gates.
@@ -1509,7 +1509,15 @@ static void diel_walk(void *vctx, mf_check *c)
                 v = INFINITY;
             } else if (a + b > 0.0) {
                 mf_energy_walk_split_project(tw, se, a, b, tp, NULL);
-                v = fmax(fabs(tp[0] - r0[WF_SPLIT]), fabs(tp[1] - r0[WF_SPLIT_INV])) / (1e-12 + 4.0 * g->u);
+                /* storage rounding u of every input: a = eta^2 (1 - E_avg_inv) and b = 1 - E_avg carry the
+                 * relative error ra = u (1 + E_avg_inv / (1 - E_avg_inv)) + 2u, rb likewise; t_walk, se u each.
+                 * lambda = N / D (N linear in a, b, t_walk; D quadratic in a, b, in 1/se^2) moves by at most
+                 * 3 (ra + rb) + 6 u relative (first order, times 1.5), t = lambda a by ra more, and the stored
+                 * t_split by u: the bound t (4 (ra + rb) + 12 u) + 1e-12 */
+                double ra = g->u * (1.0 + r0[12] / fmax(1.0 - r0[12], 1e-300)) + 2.0 * g->u;
+                double rb = g->u * (1.0 + r0[5] / fmax(1.0 - r0[5], 1e-300)) + 2.0 * g->u;
+                double rel = 4.0 * (ra + rb) + 12.0 * g->u;
+                v = fmax(fabs(tp[0] - r0[WF_SPLIT]) / (tp[0] * rel + 1e-12), fabs(tp[1] - r0[WF_SPLIT_INV]) / (tp[1] * rel + 1e-12));
             } else {
                 v = 0.0; /* nothing to split: the fallback pair (Kulla-Conty's) */
             }
