@@ -36,8 +36,8 @@ static const cli_opt k_opts[O_N] = {
     {.name = "--threads", .metavar = "N", .kind = CLI_OPT_INT, .lo = 1, .hi = 256, .def = "the number of online CPUs",
      .help = "worker threads (dielectric); the result does not depend on it, bit for bit"},
     {.name = "--split", .kind = CLI_OPT_ENUM, .choices = k_split, .def = "kulla-conty",
-     .help = "dielectric: kulla-conty = the 14 fields, renderers compute Kulla and Conty's split from E_avg and F_avg;\n"
-             "walk = 6 more fields: t_walk (the random walk's transmitted fraction of its multiple scattering, both\n"
+     .help = "dielectric: kulla-conty = the 14 fields, renderers compute Kulla and Conty's split from E_avg and F_avg; "
+             "walk = 6 more fields: t_walk (the random walk's transmitted fraction of its multiple scattering, both "
              "sides, with standard errors) and t_split (that pair balanced for reciprocity: the split to use)"},
     {.name = "--walks", .metavar = "N", .kind = CLI_OPT_INT, .lo = 1000, .hi = 1000000000, .def = "262144",
      .help = "walks per (alpha, eta) column and side for --split walk (se ~ 0.5 / sqrt(N x multiple-scattering share))"},
