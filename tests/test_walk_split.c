@@ -56,7 +56,10 @@ static void projection_identities(void)
     double tu[2] = {0.25, 0.4};
     mf_energy_walk_split_project(tu, se, a, b, t, &chi);
     CHECK_REL(t[0] * b, t[1] * a, 1e-14);
-    CHECK(fabs(t[0] - tu[0]) < fabs(t[1] - tu[1]) * (a / b) + 1e-15 || fabs(t[0] - tu[0]) < 0.05);
+    /* least squares in se units: the residuals satisfy the normal equation a r0 / se0^2 + b r1 / se1^2 = 0 */
+    double r0 = tu[0] - t[0], r1 = tu[1] - t[1];
+    CHECK_ABS(a * r0 / (se[0] * se[0]) + b * r1 / (se[1] * se[1]), 0.0, 1e-9);
+    CHECK(fabs(r0) > 1e-6 && fabs(r1) > 1e-6); /* the unbalanced pair did move */
     /* a pair pushed above 1 is scaled back onto the line, max = 1 */
     double th[2] = {1.5, 3.0};
     mf_energy_walk_split_project(th, se, a, b, t, NULL);
