@@ -967,12 +967,16 @@ def plot_random_walk(d, out_dir, made):
 
 
 def _plot_random_walk_one(d, out_dir, made, name, ndf_label):
-    """mfkit's energy compensation against the random walk on the Smith microsurface, one NDF.  Top: the dielectric compensation's transmitted fraction t (mf_energy_dielectric_ms_split;
-    lines) against the fraction of the walk's own multiple scattering that is transmitted (markers, +-2 s.e.),
-    cosine averages over the view, outside (eta > 1) and inside (eta < 1); bottom left: the compensated
-    transmitted albedo against the walk's, T_kc - T_walk (cosine averages); bottom middle: its single-scattering
-    part E_t - T1_beta (mfkit's transmission G2 against the walk's Beta-function G2) per view; bottom right:
-    the conductor's Kulla-Conty albedo with Fresnel against the walk's (gold-like channels)."""
+    """mfkit's energy compensation against the random walk on the Smith microsurface, one NDF.  Top left and
+    middle: the dielectric compensation's transmitted fraction, Kulla and Conty's t (mf_energy_dielectric_ms_split;
+    solid lines), the split closed by the walk (mf_energy_dielectric_walk_split, column t_clos; dotted) and the
+    fraction of the walk's own multiple scattering that is transmitted (markers, +-2 s.e.), cosine averages over
+    the view, outside (eta > 1) and inside (eta < 1); top right: the compensated transmitted albedo against the
+    walk's, T_kc - T_walk (markers with error bars) and T_clos - T_walk (dotted, open markers), cosine averages;
+    bottom left: the single-scattering part E_t - T1_beta (mfkit's transmission G2 against the walk's
+    Beta-function G2) per view; bottom middle: the Kulla-Conty compensation's transmitted energy against the
+    walk's; bottom right: the conductor's Kulla-Conty albedo with Fresnel against the walk's (gold-like
+    channels)."""
     diel = d["case"] == "dielectric"
     cond = d["case"] == "conductor"
     avg = d["avg"] == 1
@@ -988,7 +992,9 @@ def _plot_random_walk_one(d, out_dir, made, name, ndf_label):
             order = np.argsort(d["alpha"][sel])
             al = d["alpha"][sel][order]
             colour = "C%d" % k
-            ax.plot(al, d["t_split"][sel][order], "-", color=colour, label="mfkit t, eta %.3g" % e)
+            ax.plot(al, d["t_split"][sel][order], "-", color=colour, label="Kulla-Conty t, eta %.3g" % e)
+            if "t_clos" in d.cols:
+                ax.plot(al, d["t_clos"][sel][order], ":", lw=1.6, color=colour, label="walk closure, eta %.3g" % e)
             ax.errorbar(al, d["t_walk"][sel][order], yerr=2 * d["t_walk_se"][sel][order], fmt="o", ms=3,
                         color=colour, label="walk, eta %.3g" % e)
         ax.set_xlabel("alpha")
@@ -1004,9 +1010,12 @@ def _plot_random_walk_one(d, out_dir, made, name, ndf_label):
             order = np.argsort(d["alpha"][sel])
             ax.errorbar(d["alpha"][sel][order], d["err_T"][sel][order], yerr=2 * d["T_walk_se"][sel][order],
                         fmt=style, ms=3, color="C%d" % k, label="eta %.3g" % e)
+            if "err_T_clos" in d.cols:
+                ax.plot(d["alpha"][sel][order], d["err_T_clos"][sel][order], style[0] + ":", ms=2, mfc="none",
+                        color="C%d" % k)
     ax.axhline(0, color="0.5", lw=0.8)
     ax.set_xlabel("alpha")
-    ax.set_ylabel("T_kc - T_walk (cosine average)")
+    ax.set_ylabel("T - T_walk (cosine average); dotted: walk closure")
     ax.set_title("compensated transmission against the walk", fontsize=9)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=6, ncol=2)

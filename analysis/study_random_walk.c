@@ -3,7 +3,7 @@
  * on the Smith microsurface (mf_walk.h) [Heitz, Hanika, d'Eon and Dachsbacher 2016], GGX and Beckmann
  * (issue 14).
  *
- *   build-dir/analysis/study_random_walk [--walks N] [--seed S] [--ndf ggx|beckmann|ggx,beckmann]
+ *   build-dir/analysis/study_random_walk [--walks N] [--split-walks N] [--seed S] [--ndf ggx|beckmann|ggx,beckmann]
  *                                        [--alphas LIST] [--mus LIST] [--etas LIST] [--out FILE]
  *
  * Every row starts with its NDF (ndf: ggx or beckmann; default both, GGX first, so GGX's numbers do not
@@ -27,6 +27,10 @@
  *                      dT_ms = t (1 - E) - (T_walk - T1_walk) (the compensation's transmitted energy
  *                      against the walk's); dt = t - t_walk (the split itself, on the walk's own
  *                      multiple scattering), dt_z = dt / t_walk_se.
+ *   the walk closure   t_clos: mfkit's split closed by the walk (mf_energy_dielectric_walk_split, --split-walks
+ *                      walks per side from its own stream, seed 14: the table's estimator, not this study's
+ *                      walks), the same on all rows of an (alpha, eta); T_clos = E_t + t_clos (1 - E),
+ *                      err_T_clos = T_clos - T_walk, err_T_clos_z = err_T_clos / T_walk_se.
  *   In the avg rows E_r, E_t are cosine averages by Gauss-Legendre in mu (12 points per panel, panels
  *   ending at the kinks of E(mu) for eta < 1, as in mf_energy_dielectric_eavg), E = E_avg.
  * Conductor (case=conductor), for every alpha and mu (and avg), channel F: none (F = 1) and the three
@@ -183,17 +187,18 @@ static int conductor_avg_ef(mf_ndf ndf, mf_fresnel f, int ng, double *ef)
 
 static void usage(FILE *f)
 {
-    fprintf(f, "usage: study_random_walk [--walks N] [--seed S] [--ndf ggx|beckmann|ggx,beckmann] [--alphas LIST]\n"
+    fprintf(f, "usage: study_random_walk [--walks N] [--split-walks N] [--seed S] [--ndf ggx|beckmann|ggx,beckmann] [--alphas LIST]\n"
                "                         [--mus LIST] [--etas LIST] [--out FILE]\n"
                "  mfkit's dielectric and conductor energy compensation against the random walk on the Smith\n"
                "  microsurface (default both NDFs); LIST is comma-separated: alphas in [0.01, 1], mus in (0, 1], etas in\n"
-               "  (1, 3] (each with its inverse).  Defaults: --walks 100000 --seed 1 --alphas 0.1,0.2,0.3,0.5,0.7,1\n"
+               "  (1, 3] (each with its inverse); --split-walks: walks per side of the walk closure (default 262144, the\n"
+               "  table's).  Defaults: --walks 100000 --seed 1 --alphas 0.1,0.2,0.3,0.5,0.7,1\n"
                "  --mus 0.1,0.3,0.5,0.7,0.9 --etas 1.1,1.33,1.5,2 --out notebooks_data/random_walk.csv\n");
 }
 
 int main(int argc, char **argv)
 {
-    long walks = 100000;
+    long walks = 100000, split_walks = MF_ENERGY_WALK_SPLIT_WALKS;
     mf_ndf_type ndf_types[2] = {MF_NDF_GGX, MF_NDF_BECKMANN};
     int n_ndf = 2;
     unsigned long long seed = 1;
@@ -217,6 +222,12 @@ int main(int argc, char **argv)
             walks = strtol(v, &end, 10);
             if (*end || walks < 100 || walks > 1000000000L) {
                 fprintf(stderr, "study_random_walk: --walks %s: expected an integer in [100, 1e9]\n", v);
+                return 2;
+            }
+        } else if (!strcmp(a, "--split-walks")) {
+            split_walks = strtol(v, &end, 10);
+            if (*end || split_walks < 1000 || split_walks > 1000000000L) {
+                fprintf(stderr, "study_random_walk: --split-walks %s: expected an integer in [1000, 1e9]\n", v);
                 return 2;
             }
         } else if (!strcmp(a, "--seed")) {
@@ -270,9 +281,9 @@ int main(int argc, char **argv)
     study_write_header(f, "study_random_walk", argc, argv, seed_s);
     fprintf(f, "ndf,case,channel,alpha,eta,mu,avg,walks,R_walk,R_walk_se,T_walk,T_walk_se,R1_walk,T1_walk,T1_beta,"
                "T1_beta_err,E_r,E_t,E_avg,E_avg_inv,F_avg,F_avg_inv,t_split,R_kc,T_kc,err_R,err_T,err_T_z,dT_single,"
-               "dT_ms,t_walk,t_walk_se,dt,dt_z\n");
+               "dT_ms,t_walk,t_walk_se,dt,dt_z,t_clos,T_clos,err_T_clos,err_T_clos_z\n");
 
-    double t_walk = 0.0, t_mfkit = 0.0, t_single = 0.0, wall0 = (double)time(NULL);
+    double t_walk = 0.0, t_mfkit = 0.0, t_single = 0.0, t_closure = 0.0, wall0 = (double)time(NULL);
     double cpu0 = cpu_now();
     unsigned long long stream = 0;
     int status = 0;
@@ -280,6 +291,7 @@ int main(int argc, char **argv)
     char worst_z_at[128] = "", worst_dt_at[128] = "", worst_err_at[128] = "";
     long total_stopped = 0;
     /* per (alpha, eta side): the cosine averages of mfkit's split and the walk's (for the summary) */
+    static double sum_tc[MAXLIST][MAXLIST], worst_clos[MAXLIST], worst_clos_z[MAXLIST], worst_kc[MAXLIST];
     static double sum_t[MAXLIST][MAXLIST], sum_tw[MAXLIST][MAXLIST], sum_tw_se[MAXLIST][MAXLIST],
         sum_ew[MAXLIST][MAXLIST], sum_favg[MAXLIST][MAXLIST];
 
@@ -288,6 +300,8 @@ int main(int argc, char **argv)
     const char *ndf_name = mf_ndf_type_name(type);
     worst_z = worst_dt = worst_err = 0.0;
     worst_z_at[0] = worst_dt_at[0] = worst_err_at[0] = '\0';
+    for (int a = 0; a < na; ++a)
+        worst_clos[a] = worst_clos_z[a] = worst_kc[a] = 0.0;
     /* ---- dielectric ---- */
     printf("== %s\ndielectric: T_kc - T_walk and t - t_walk (z = in walk standard errors)\n", ndf_name);
     printf("%6s %7s %6s %9s %9s %7s %9s %9s %9s %7s\n", "alpha", "eta", "mu", "T_walk", "err_T", "z", "dT_single",
@@ -308,6 +322,18 @@ int main(int argc, char **argv)
                 break;
             }
             t_mfkit += cpu_now() - c0;
+            c0 = cpu_now();
+            /* the closure by the walk: its own walks (stream 2 x cell index, seed 14), independent of the study's */
+            mf_energy_walk_split ws;
+            if (mf_energy_dielectric_walk_split(type, alphas[a], eta, eavg.val, eavg_inv.val, favg.val, favg_inv.val,
+                                                split_walks, MF_ENERGY_WALK_SPLIT_SEED,
+                                                2u * (uint64_t)(((nd * MAXLIST) + a) * MAXLIST + e), &ws) != MF_OK) {
+                fprintf(stderr, "study_random_walk: the walk closure failed at alpha %g, eta %g\n", alphas[a], eta);
+                status = 1;
+                break;
+            }
+            double t_clos = ws.t[0];
+            t_closure += cpu_now() - c0;
             for (int m = 0; m <= nm && !status; ++m) {
                 int avg = m == nm;
                 double mu = avg ? -1.0 : mus[m];
@@ -357,12 +383,13 @@ int main(int argc, char **argv)
                 double dt = t - tw, dtz = dt / tw_se;
                 double dT_single = avg ? NAN : et - t1b;
                 double dT_ms = t * (1.0 - E) - (s.down - s.down1) / n;
+                double T_clos = et + t_clos * fmax(0.0, 1.0 - E), err_c = T_clos - T_w;
                 fprintf(f,
                         "%s,dielectric,none,%.17g,%.17g,%.17g,%d,%ld,%.10g,%.4g,%.10g,%.4g,%.10g,%.10g,%.10g,%.4g,%.12g,%.12g,"
-                        "%.12g,%.12g,%.12g,%.12g,%.12g,%.10g,%.10g,%.6g,%.6g,%.4g,%.6g,%.6g,%.10g,%.4g,%.6g,%.4g\n",
+                        "%.12g,%.12g,%.12g,%.12g,%.12g,%.10g,%.10g,%.6g,%.6g,%.4g,%.6g,%.6g,%.10g,%.4g,%.6g,%.4g,%.10g,%.10g,%.6g,%.4g\n",
                         ndf_name, alphas[a], eta, avg ? NAN : mu, avg, s.n, R_w, se, T_w, se, s.up1 / n, s.down1 / n, t1b, t1b_err,
                         er, et, eavg.val, eavg_inv.val, favg.val, favg_inv.val, t, R_kc, T_kc, R_kc - R_w, err_T, z,
-                        dT_single, dT_ms, tw, tw_se, dt, dtz);
+                        dT_single, dT_ms, tw, tw_se, dt, dtz, t_clos, T_clos, err_c, err_c / se);
                 if (avg || m == 0 || m == nm - 1)
                     printf("%6.2f %7.4f %6s %9.5f %+9.5f %+7.1f %+9.5f %9.4f %9.4f %+7.1f\n", alphas[a], eta,
                            avg ? "avg" : (m == 0 ? "min" : "max"), T_w, err_T, z, dT_single, t, tw, dtz);
@@ -376,8 +403,13 @@ int main(int argc, char **argv)
                     snprintf(worst_err_at, sizeof worst_err_at, "alpha %g, eta %.4f, mu %s%.2f (z %+.1f)", alphas[a],
                              eta, avg ? "avg " : "", avg ? 0.0 : mu, z);
                 }
+                if (avg && fabs(err_c) > fabs(worst_clos[a]))
+                    worst_clos[a] = err_c, worst_clos_z[a] = err_c / se;
+                if (avg && fabs(err_T) > fabs(worst_kc[a]))
+                    worst_kc[a] = err_T;
                 if (avg) {
                     sum_t[a][e] = t;
+                    sum_tc[a][e] = t_clos;
                     sum_tw[a][e] = tw;
                     sum_tw_se[a][e] = tw_se;
                     sum_ew[a][e] = (s.up1 + s.down1) / n; /* the walk's own single-scattering E_avg */
@@ -395,7 +427,8 @@ int main(int argc, char **argv)
      * the Beta-function transmission): does the formula, or the E it is given, put the energy on the wrong side? */
     if (!status) {
         printf("split, cosine averages: mfkit's t, the same formula with the walk's own E_avg (t_self), the walk's "
-               "t_walk\n%6s %7s %8s %8s %8s %8s\n", "alpha", "eta", "t", "t_self", "t_walk", "se");
+               "t_walk, the walk closure t_clos\n%6s %7s %8s %8s %8s %8s %8s\n", "alpha", "eta", "t", "t_self", "t_walk", "se",
+               "t_clos");
         for (int a = 0; a < na; ++a)
             for (int e = 0; e < 2 * ne; ++e) {
                 int o = e < ne ? e + ne : e - ne;
@@ -403,9 +436,13 @@ int main(int argc, char **argv)
                 if (mf_energy_dielectric_ms_split(eta, fmin(1.0, sum_ew[a][e]), fmin(1.0, sum_ew[a][o]), sum_favg[a][e],
                                                   sum_favg[a][o], &ts) != MF_OK)
                     ts = NAN;
-                printf("%6.2f %7.4f %8.4f %8.4f %8.4f %8.4f\n", alphas[a], eta, sum_t[a][e], ts, sum_tw[a][e],
-                       sum_tw_se[a][e]);
+                printf("%6.2f %7.4f %8.4f %8.4f %8.4f %8.4f %8.4f\n", alphas[a], eta, sum_t[a][e], ts, sum_tw[a][e],
+                       sum_tw_se[a][e], sum_tc[a][e]);
             }
+        printf("renderer-visible, cosine averages: worst over the etas of T_kc - T_walk and T_clos - T_walk (z)\n");
+        for (int a = 0; a < na; ++a)
+            printf("  alpha %.2f: kc %+.4f  closure %+.4f (%+.1f se)\n", alphas[a], worst_kc[a], worst_clos[a],
+                   worst_clos_z[a]);
     }
 
     /* ---- conductor ---- */
@@ -490,7 +527,7 @@ int main(int argc, char **argv)
                 double z = se > 0.0 ? err / se : NAN;
                 fprintf(f,
                         "%s,conductor,%s,%.17g,nan,%.17g,%d,%ld,%.10g,%.4g,0,0,%.10g,0,nan,nan,%.12g,0,%.12g,nan,%.12g,nan,nan,"
-                        "%.10g,0,%.6g,nan,%.4g,nan,nan,nan,nan,nan,nan\n",
+                        "%.10g,0,%.6g,nan,%.4g,nan,nan,nan,nan,nan,nan,nan,nan,nan,nan\n",
                         ndf_name, chan[c], alphas[a], avg ? NAN : mu, avg, walks, mean, se, s1[c] / n, ef[c], eavg.val, fa, r_kc,
                         err, z);
                 if (isfinite(z) && fabs(z) > fabs(worst_cz)) {
@@ -522,9 +559,9 @@ int main(int argc, char **argv)
         return 3;
     }
     printf("walks stopped at %d bounces: %ld\n", MAX_BOUNCES, total_stopped);
-    printf("CPU: walks %.1f s, mfkit's energy terms %.1f s, single-scattering quadrature %.1f s; total %.1f s "
-           "(wall %.0f s)\n",
-           t_walk, t_mfkit, t_single, cpu_now() - cpu0, (double)time(NULL) - wall0);
+    printf("CPU: walks %.1f s, mfkit's energy terms %.1f s, single-scattering quadrature %.1f s, walk closure %.1f s; "
+           "total %.1f s (wall %.0f s)\n",
+           t_walk, t_mfkit, t_single, t_closure, cpu_now() - cpu0, (double)time(NULL) - wall0);
     printf("wrote %s\n", out_path);
     return 0;
 }

@@ -21,8 +21,9 @@
 static const char *const k_kinds[] = {"dfg", "kulla-conty", "dielectric", NULL};
 static const char *const k_ndf[] = {"ggx", "beckmann", NULL};
 static const char *const k_g2[] = {"joint", "separable", NULL};
+static const char *const k_split[] = {"kulla-conty", "walk", NULL};
 
-enum { O_OUT, O_SIZE, O_NDF, O_G2, O_NO_GATE, O_QUIET, O_THREADS, O_N };
+enum { O_OUT, O_SIZE, O_NDF, O_G2, O_NO_GATE, O_QUIET, O_THREADS, O_SPLIT, O_WALKS, O_N };
 static const cli_opt k_opts[O_N] = {
     {.name = "--out", .metavar = "DIR", .kind = CLI_OPT_STRING, .required = 1,
      .help = "directory of the files KIND.json .npy .h .dds (and .exr with the image bridge); created if missing"},
@@ -34,6 +35,12 @@ static const cli_opt k_opts[O_N] = {
     {.name = "--quiet", .kind = CLI_OPT_FLAG, .help = "no progress on a terminal"},
     {.name = "--threads", .metavar = "N", .kind = CLI_OPT_INT, .lo = 1, .hi = 256, .def = "the number of online CPUs",
      .help = "worker threads (dielectric); the result does not depend on it, bit for bit"},
+    {.name = "--split", .kind = CLI_OPT_ENUM, .choices = k_split, .def = "kulla-conty",
+     .help = "dielectric: kulla-conty = the 14 fields, renderers compute Kulla and Conty's split from E_avg and F_avg; "
+             "walk = 6 more fields: t_walk (the random walk's transmitted fraction of its multiple scattering, both "
+             "sides, with standard errors) and t_split (that pair balanced for reciprocity: the split to use)"},
+    {.name = "--walks", .metavar = "N", .kind = CLI_OPT_INT, .lo = 1000, .hi = 1000000000, .def = "262144",
+     .help = "walks per (alpha, eta) column and side for --split walk (se ~ 0.5 / sqrt(N x multiple-scattering share))"},
 };
 static const cli_command k_cmd = {
     .name = "energy",
@@ -44,7 +51,8 @@ static const cli_command k_cmd = {
                    "albedo (dfg.dds holds R scale, G bias, B Charlie), kulla-conty = E and\n"
                    "E_avg for multiple-scattering compensation) over (cos theta_o, sqrt(alpha)) at texel centres,\n"
                    "dielectric = E_r, E_t, E, E_avg of a rough dielectric over (cos theta_o, sqrt(alpha), z) with\n"
-                   "eta = 1 + 2 z^2, outside (eta) and inside (1 / eta: fields _inv), Cycles' glass-table layout),\n"
+                   "eta = 1 + 2 z^2, outside (eta) and inside (1 / eta: fields _inv), Cycles' glass-table layout;\n"
+                   "--split walk adds the split of the compensation closed by the random walk on the microsurface),\n"
                    "runs its gate and writes it.\n",
     .opts = k_opts,
     .nopts = O_N,
@@ -88,9 +96,10 @@ static void *diel_worker(void *arg)
     }
 }
 
-static mf_status dielectric_table(mf_table *t, mf_ndf_type ndf, mf_g2_form g2, int n, int threads, int show)
+static mf_status dielectric_table(mf_table *t, mf_ndf_type ndf, mf_g2_form g2, int n, int threads, int show, long walks)
 {
-    mf_status st = mf_energy_dielectric_table_init(t, ndf, g2, n, n, n);
+    mf_status st = walks > 0 ? mf_energy_dielectric_table_init_walk(t, ndf, g2, n, n, n, walks)
+                             : mf_energy_dielectric_table_init(t, ndf, g2, n, n, n);
     if (st != MF_OK)
         return st;
     diel_queue q = {t, 0, 0, (long)n * n, MF_OK, show, PTHREAD_MUTEX_INITIALIZER};
@@ -136,6 +145,12 @@ int cli_energy(int argc, char **argv)
     int threads = v[O_THREADS].set ? (int)v[O_THREADS].i : (online >= 1 ? (int)(online > 256 ? 256 : online) : 1);
     mf_ndf_type ndf = v[O_NDF].set && v[O_NDF].i == 1 ? MF_NDF_BECKMANN : MF_NDF_GGX;
     mf_g2_form g2 = v[O_G2].set && v[O_G2].i == 1 ? MF_G2_SEPARABLE : MF_G2_JOINT;
+    int split_walk = v[O_SPLIT].set && v[O_SPLIT].i == 1;
+    long walks = v[O_WALKS].set ? (long)v[O_WALKS].i : MF_ENERGY_WALK_SPLIT_WALKS;
+    if (kind != 2 && (v[O_SPLIT].set || v[O_WALKS].set))
+        return cli_error("energy", "--split, --walks: only for KIND dielectric, not %s", pos[0]);
+    if (v[O_WALKS].set && !split_walk)
+        return cli_error("energy", "--walks %ld: needs --split walk", walks);
     struct stat sb;
     if (stat(dir, &sb) == 0 && !S_ISDIR(sb.st_mode))
         return cli_error("energy", "--out: %s: not a directory", dir);
@@ -144,7 +159,7 @@ int cli_energy(int argc, char **argv)
     mf_table t;
     mf_status st = kind == 0   ? mf_energy_dfg_table(&t, ndf, g2, n, n, progress, &show)
                    : kind == 1 ? mf_energy_kulla_conty_table(&t, ndf, g2, n, n, progress, &show)
-                               : dielectric_table(&t, ndf, g2, n, threads, show);
+                               : dielectric_table(&t, ndf, g2, n, threads, show, split_walk ? walks : 0);
     if (st != MF_OK)
         return cli_error("energy", "%s: the table could not be computed (%s)", pos[0], mf_status_str(st));
     if (!v[O_NO_GATE].set) {

@@ -2,6 +2,7 @@
 #include "mfkit/mf_energy.h"
 #include "mfkit/mf_quad.h"
 #include "mfkit/mf_table_kind.h"
+#include "mfkit/mf_walk.h"
 
 #include <float.h>
 #include <stdio.h>
@@ -459,9 +460,13 @@ mf_status mf_energy_kulla_conty_gate(const mf_table *t, double storage_u, mf_che
 
 /* ---- the rough dielectric: E_R, E_T over (mu, alpha, eta) and its E_avg -------------------- */
 
-const char *const mf_dielectric_table_fields[MF_DIELECTRIC_NFIELDS] = {
+const char *const mf_dielectric_table_fields[MF_DIELECTRIC_WALK_NFIELDS] = {
     "E_r", "E_r_err", "E_t", "E_t_err", "E", "E_avg", "E_avg_err",
-    "E_r_inv", "E_r_inv_err", "E_t_inv", "E_t_inv_err", "E_inv", "E_avg_inv", "E_avg_inv_err"};
+    "E_r_inv", "E_r_inv_err", "E_t_inv", "E_t_inv_err", "E_inv", "E_avg_inv", "E_avg_inv_err",
+    "t_walk", "t_walk_se", "t_walk_inv", "t_walk_inv_se", "t_split", "t_split_inv"};
+
+/* the walk split's fields, after the 14 */
+enum { WF_T = MF_DIELECTRIC_NFIELDS, WF_SE, WF_T_INV, WF_SE_INV, WF_SPLIT, WF_SPLIT_INV };
 
 double mf_energy_dielectric_eta(double z) { return 1.0 + 2.0 * z * z; }
 
@@ -636,6 +641,7 @@ static double axis_value(const mf_table *t, int a, int i)
 }
 
 static mf_status diel_gate_setup_kind(const mf_table *t, mf_ndf_type *ndf, mf_g2_form *g2);
+static mf_status diel_walk_meta(const mf_table *t, long *walks, unsigned long long *seed);
 
 mf_status mf_energy_dielectric_column(mf_table *t, long column)
 {
@@ -659,12 +665,133 @@ mf_status mf_energy_dielectric_column(mf_table *t, long column)
             st = mf_albedo_dielectric(mf_ndf_make(ndf, alpha, alpha), g2, axis_value(t, 0, i), e, &r, &tr);
             if (st != MF_OK)
                 return st;
-            double *rec = t->data + ((size_t)column * n_mu + i) * MF_DIELECTRIC_NFIELDS + 7 * side;
+            double *rec = t->data + ((size_t)column * n_mu + i) * t->nfields + 7 * side;
             rec[0] = r.val, rec[1] = r.err, rec[2] = tr.val, rec[3] = tr.err, rec[4] = r.val + tr.val;
             rec[5] = avg.val, rec[6] = avg.err;
         }
     }
+    if (t->nfields == MF_DIELECTRIC_WALK_NFIELDS) {
+        long walks;
+        unsigned long long seed;
+        if (diel_walk_meta(t, &walks, &seed) != MF_OK)
+            return MF_ERR_DOMAIN;
+        const double *r0 = t->data + (size_t)column * n_mu * t->nfields;
+        mf_result fa, fai;
+        mf_energy_walk_split ws;
+        mf_status st = mf_energy_favg_dielectric(eta, &fa);
+        if (st == MF_OK)
+            st = mf_energy_favg_dielectric(1.0 / eta, &fai);
+        if (st == MF_OK)
+            st = mf_energy_dielectric_walk_split(ndf, alpha, eta, r0[5], r0[12], fa.val, fai.val, walks, seed,
+                                                 2u * (uint64_t)column, &ws);
+        if (st != MF_OK)
+            return st;
+        for (int i = 0; i < n_mu; ++i) {
+            double *rec = t->data + ((size_t)column * n_mu + i) * t->nfields;
+            rec[WF_T] = ws.t_walk[0], rec[WF_SE] = ws.se[0], rec[WF_T_INV] = ws.t_walk[1], rec[WF_SE_INV] = ws.se[1];
+            rec[WF_SPLIT] = ws.t[0], rec[WF_SPLIT_INV] = ws.t[1];
+        }
+    }
     return MF_OK;
+}
+
+/* ---- the split closed by the random walk ------------------------------------------------------ */
+
+static mf_status diel_walk_meta(const mf_table *t, long *walks, unsigned long long *seed)
+{
+    const char *s = mf_table_get_meta(t, "split"), *w = mf_table_get_meta(t, "split_walks"),
+               *d = mf_table_get_meta(t, "split_seed");
+    char *end;
+    if (!s || strcmp(s, "walk") || !w || !d)
+        return MF_ERR_DOMAIN;
+    *walks = strtol(w, &end, 10);
+    if (*end || *walks < 1000)
+        return MF_ERR_DOMAIN;
+    *seed = strtoull(d, &end, 10);
+    return *end || !*d ? MF_ERR_DOMAIN : MF_OK;
+}
+
+void mf_energy_walk_split_project(const double t_walk[2], const double se[2], double a, double b, double t[2],
+                                  double *chi)
+{
+    /* weighted least squares of (t_walk, t_walk') on the line (lambda a, lambda b): the balanced pairs */
+    double w0 = 1.0 / (se[0] * se[0]), w1 = 1.0 / (se[1] * se[1]);
+    double den = w0 * a * a + w1 * b * b;
+    double lam = den > 0.0 ? (w0 * a * t_walk[0] + w1 * b * t_walk[1]) / den : 0.0;
+    double m = fmax(lam * a, lam * b);
+    if (m > 1.0)
+        lam /= m;
+    t[0] = fmin(1.0, lam * a);
+    t[1] = fmin(1.0, lam * b);
+    if (chi)
+        *chi = sqrt(w0 * (t_walk[0] - t[0]) * (t_walk[0] - t[0]) + w1 * (t_walk[1] - t[1]) * (t_walk[1] - t[1]));
+}
+
+mf_status mf_energy_dielectric_walk_split(mf_ndf_type ndf, double alpha, double eta, double eavg, double eavg_inv,
+                                          double favg, double favg_inv, long walks, uint64_t seed, uint64_t stream,
+                                          mf_energy_walk_split *out)
+{
+    memset(out, 0, sizeof *out);
+    if (!diel_args_ok(ndf, MF_G2_JOINT, alpha, eta) || walks < 1)
+        return MF_ERR_DOMAIN;
+    double kc[2];
+    mf_status st = mf_energy_dielectric_ms_split(eta, eavg, eavg_inv, favg, favg_inv, &kc[0]);
+    if (st == MF_OK)
+        st = mf_energy_dielectric_ms_split(1.0 / eta, eavg_inv, eavg, favg_inv, favg, &kc[1]);
+    if (st != MF_OK)
+        return st;
+    for (int side = 0; side < 2; ++side) {
+        mf_walk_split w;
+        /* 100000 bounces: a cut walk is counted (out->stopped) and none was met in the study */
+        st = mf_walk_dielectric_split(mf_ndf_make(ndf, alpha, alpha), side ? 1.0 / eta : eta, walks, 100000, seed,
+                                      stream + (uint64_t)side, &w);
+        if (st != MF_OK)
+            return st;
+        out->ms[side] = w.ms;
+        out->stopped += w.stopped;
+        out->e1[side] = w.e1;
+        out->t_walk[side] = w.ms > 0 ? w.t : kc[side];
+        out->se[side] = w.ms > 0 ? w.t_se : 0.5;
+    }
+    double a = eta * eta * fmax(0.0, 1.0 - eavg_inv), b = fmax(0.0, 1.0 - eavg);
+    if (!(a + b > 0.0)) { /* no compensation energy on either side: nothing to split */
+        out->t[0] = kc[0], out->t[1] = kc[1], out->chi = 0.0;
+        return MF_OK;
+    }
+    mf_energy_walk_split_project(out->t_walk, out->se, a, b, out->t, &out->chi);
+    return MF_OK;
+}
+
+mf_status mf_energy_dielectric_table_init_walk(mf_table *t, mf_ndf_type ndf, mf_g2_form g2, int n_mu, int n_r,
+                                               int n_z, long walks)
+{
+    memset(t, 0, sizeof *t);
+    if (walks < 1000 || walks > 1000000000L)
+        return MF_ERR_DOMAIN;
+    mf_table tmp;
+    mf_status st = mf_energy_dielectric_table_init(&tmp, ndf, g2, n_mu, n_r, n_z);
+    if (st != MF_OK)
+        return st;
+    mf_table_axis ax[3];
+    for (int a = 0; a < 3; ++a)
+        ax[a] = tmp.axes[a];
+    st = mf_table_create(t, 3, ax, MF_DIELECTRIC_WALK_NFIELDS, mf_dielectric_table_fields);
+    char w[32], sd[32];
+    snprintf(w, sizeof w, "%ld", walks);
+    snprintf(sd, sizeof sd, "%u", MF_ENERGY_WALK_SPLIT_SEED);
+    const mf_table_kind *k = mf_table_kind_find("dielectric");
+    for (int i = 0; st == MF_OK && i < tmp.nmeta; ++i)
+        st = mf_table_set_meta(t, tmp.meta[i].key, tmp.meta[i].value);
+    if (st == MF_OK && (!k || mf_table_kind_tag(t, k) != MF_OK || mf_table_set_meta(t, "split", "walk") != MF_OK
+                        || mf_table_set_meta(t, "split_walks", w) != MF_OK || mf_table_set_meta(t, "split_seed", sd) != MF_OK
+                        || mf_table_set_meta(t, "split_fields", "t_walk(_inv): the walk's transmitted fraction of its multiple "
+                                             "scattering (_se: std. error; 0.5: no data, Kulla-Conty's); t_split(_inv): the "
+                                             "balanced closure") != MF_OK))
+        st = MF_ERR_INTERNAL;
+    mf_table_free(&tmp);
+    if (st != MF_OK)
+        mf_table_free(t);
+    return st;
 }
 
 mf_status mf_energy_dielectric_table(mf_table *t, mf_ndf_type ndf, mf_g2_form g2, int n_mu, int n_r, int n_z,
@@ -1298,9 +1425,13 @@ static void diel_split(void *vctx, mf_check *c)
             bad |= diel_col_avg(g, col, side, 1, &tv[side], &tvb[side]) != 0;
             bad |= mf_energy_favg_dielectric(side ? 1.0 / eta0 : eta0, &fa[side]) != MF_OK;
         }
+        int walk = t->nfields == MF_DIELECTRIC_WALK_NFIELDS;
         for (int side = 0; side < 2 && !bad; ++side)
-            bad |= mf_energy_dielectric_ms_split(side ? 1.0 / eta0 : eta0, ea[side], ea[1 - side], fa[side].val,
-                                                 fa[1 - side].val, &ts[side]) != MF_OK;
+            if (walk) /* the split the table ships (the walk's closure) */
+                ts[side] = drec(t, 0, j, k)[side ? WF_SPLIT_INV : WF_SPLIT];
+            else
+                bad |= mf_energy_dielectric_ms_split(side ? 1.0 / eta0 : eta0, ea[side], ea[1 - side], fa[side].val,
+                                                     fa[1 - side].val, &ts[side]) != MF_OK;
         if (bad || !(ea[0] < 1.0) || !(ea[1] < 1.0)) {
             mf_check_recordf(c, INFINITY, "column (%d, %d): alpha %.6g, eta %.6g: %s", j, k, alpha, eta0,
                              bad ? "an average or the split failed" : "E_avg >= 1 leaves no lobe");
@@ -1336,9 +1467,86 @@ static void diel_split(void *vctx, mf_check *c)
             fb[side] = tvb[side] + msb + 1e-15 * (tv[side] + ms);
         }
         double bound = fb[0] + e2 * fb[1] + 2.0 * (fa[0].err + e2 * fa[1].err) + 1e-13;
+        if (walk) /* stored t_split (balanced to rounding in double) rounded by the storage: u t on each side */
+            bound += g->u * (fabs(flux[0] - tv[0]) + e2 * fabs(flux[1] - tv[1])) * 2.0;
         mf_check_recordf(c, fabs(flux[0] - e2 * flux[1]) / bound,
                          "column (%d, %d): alpha %.6g, eta %.6g: transmitted flux %.12g out, eta^2 x %.12g in", j, k, alpha,
                          eta0, flux[0], e2 * flux[1]);
+    }
+}
+
+/* The split closed by the walk (tables with its fields only; mf_energy_dielectric_walk_split):
+ * (1) every column: t_split, t_split_inv in [0, 1], constant along mu, and equal to the projection of the
+ *     stored t_walk, se onto the balance with the stored E_avg, E_avg_inv (mf_energy_walk_split_project),
+ *     to 1e-12 plus the storage rounding propagated (below); its balance t (1 - E_avg) = eta^2 t' (1 - E_avg_inv) is then exact to rounding;
+ * (2) at the 3 x 3 gate columns, both sides: the stored t_walk against a fresh walk with another seed
+ *     (the recorded seed + 1, the same count), |t_walk - t_fresh| / (4.5 sqrt(se^2 + se_fresh^2)) <= 1:
+ *     4.5 standard errors, 18 pairs of independent estimates, a false alarm about once in 3e4 gates.
+ * The values are the residuals over their bounds (<= 1 passes). */
+static void diel_walk(void *vctx, mf_check *c)
+{
+    const gate_ctx *g = vctx;
+    const mf_table *t = g->t;
+    long walks;
+    unsigned long long seed;
+    if (diel_walk_meta(t, &walks, &seed) != MF_OK) {
+        mf_check_fail(c, "the split fields without their metadata (split, split_walks, split_seed)");
+        return;
+    }
+    int n_mu = t->axes[0].size, n_r = t->axes[1].size, n_z = t->axes[2].size;
+    for (int k = 0; k < n_z; ++k)
+        for (int j = 0; j < n_r; ++j) {
+            const double *r0 = drec(t, 0, j, k);
+            double eta = mf_energy_dielectric_eta(axis_value(t, 2, k)), alpha = axis_value(t, 1, j);
+            double tw[2] = {r0[WF_T], r0[WF_T_INV]}, se[2] = {r0[WF_SE], r0[WF_SE_INV]}, tp[2];
+            double a = eta * eta * fmax(0.0, 1.0 - r0[12]), b = fmax(0.0, 1.0 - r0[5]);
+            int flat = 1;
+            for (int i = 1; i < n_mu; ++i)
+                for (int f = WF_T; f <= WF_SPLIT_INV; ++f)
+                    flat &= drec(t, i, j, k)[f] == r0[f];
+            double v;
+            if (!flat || !(se[0] > 0.0) || !(se[1] > 0.0)) {
+                v = INFINITY;
+            } else if (a + b > 0.0) {
+                mf_energy_walk_split_project(tw, se, a, b, tp, NULL);
+                /* storage rounding u of every input: a = eta^2 (1 - E_avg_inv) and b = 1 - E_avg carry the
+                 * relative error ra = u (1 + E_avg_inv / (1 - E_avg_inv)) + 2u, rb likewise; t_walk, se u each.
+                 * lambda = N / D (N linear in a, b, t_walk; D quadratic in a, b, in 1/se^2) moves by at most
+                 * 3 (ra + rb) + 6 u relative (first order, times 1.5), t = lambda a by ra more, and the stored
+                 * t_split by u: the bound t (4 (ra + rb) + 12 u) + 1e-12 */
+                double ra = g->u * (1.0 + r0[12] / fmax(1.0 - r0[12], 1e-300)) + 2.0 * g->u;
+                double rb = g->u * (1.0 + r0[5] / fmax(1.0 - r0[5], 1e-300)) + 2.0 * g->u;
+                double rel = 4.0 * (ra + rb) + 12.0 * g->u;
+                v = fmax(fabs(tp[0] - r0[WF_SPLIT]) / (tp[0] * rel + 1e-12), fabs(tp[1] - r0[WF_SPLIT_INV]) / (tp[1] * rel + 1e-12));
+            } else {
+                v = 0.0; /* nothing to split: the fallback pair (Kulla-Conty's) */
+            }
+            if (!(r0[WF_SPLIT] >= 0.0 && r0[WF_SPLIT] <= 1.0 && r0[WF_SPLIT_INV] >= 0.0 && r0[WF_SPLIT_INV] <= 1.0))
+                v = INFINITY;
+            mf_check_recordf(c, v, "column (%d, %d): alpha %.6g, eta %.6g: t_split %.6g, %.6g (projection %s)", j, k,
+                             alpha, eta, r0[WF_SPLIT], r0[WF_SPLIT_INV], flat ? "recomputed" : "not constant along mu");
+        }
+    for (int col = 0; col < DIEL_NCOLS; ++col) {
+        int j, k;
+        if (!diel_col(t, col, &j, &k))
+            continue;
+        const double *r0 = drec(t, 0, j, k);
+        double eta = mf_energy_dielectric_eta(axis_value(t, 2, k)), alpha = axis_value(t, 1, j);
+        for (int side = 0; side < 2; ++side) {
+            mf_walk_split w;
+            long column = (long)k * n_r + j;
+            if (mf_walk_dielectric_split(mf_ndf_make(g->ndf, alpha, alpha), side ? 1.0 / eta : eta, walks, 100000,
+                                         seed + 1u, 2u * (uint64_t)column + (uint64_t)side, &w) != MF_OK) {
+                mf_check_fail(c, "the walk failed");
+                return;
+            }
+            double ts = r0[side ? WF_T_INV : WF_T], ss = r0[side ? WF_SE_INV : WF_SE];
+            if (w.ms == 0 || ss >= 0.5) /* no multiply scattered walk in one of them: nothing to compare */
+                continue;
+            double v = fabs(ts - w.t) / (4.5 * sqrt(ss * ss + w.t_se * w.t_se));
+            mf_check_recordf(c, v, "column (%d, %d)%s: alpha %.6g, eta %.6g: t_walk %.6g +- %.2g, fresh %.6g +- %.2g", j, k,
+                             side ? " inside" : "", alpha, side ? 1.0 / eta : eta, ts, ss, w.t, w.t_se);
+        }
     }
 }
 
@@ -1356,6 +1564,10 @@ const mf_check_def mf_energy_dielectric_checks[] = {
      "the compensation split into reflection and transmission (Kulla-Conty): |1 - (E_r + E_t + both lobes)| and "
      "|T(eta) - eta^2 T(1/eta)| of the transmitted flux / their propagated bounds, 3 x 3 columns x 2 sides",
      1.0, 0, diel_split},
+    {"diel_walk",
+     "the split closed by the random walk: t_split = the balanced projection of t_walk (every column), t_walk against a "
+     "fresh walk within 4.5 se (3 x 3 columns x 2 sides); only in tables with those fields",
+     1.0, 0, diel_walk},
 };
 const int mf_energy_dielectric_nchecks = MF_ENERGY_DIELECTRIC_NCHECKS;
 
@@ -1372,5 +1584,7 @@ mf_status mf_energy_dielectric_gate(const mf_table *t, double storage_u, mf_chec
     struct diel_avgs avgs;
     memset(&avgs, 0, sizeof avgs);
     g.avgs = &avgs;
-    return mf_check_run_defs(mf_energy_dielectric_checks, mf_energy_dielectric_nchecks, &g, 0, checks, cap, count);
+    /* the walk split's check runs only on tables that have its fields (the default table's gate is unchanged) */
+    int n = t->nfields == MF_DIELECTRIC_WALK_NFIELDS ? mf_energy_dielectric_nchecks : mf_energy_dielectric_nchecks - 1;
+    return mf_check_run_defs(mf_energy_dielectric_checks, n, &g, 0, checks, cap, count);
 }

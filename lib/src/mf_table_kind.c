@@ -350,7 +350,8 @@ static const mf_table_kind k_kinds[] = {
      MF_KULLA_CONTY_NFIELDS, mf_kulla_conty_table_fields, MF_KULLA_CONTY_NFIELDS, kc_layout_ok,
      mf_energy_kulla_conty_checks, 2, kc_gate},
     {"dielectric", "rough dielectric energy: E_r, E_t, E_avg over (cos theta_o, sqrt alpha, eta = 1 + 2 z^2), outside and "
-     "inside", 3, k_diel_axes, MF_DIELECTRIC_NFIELDS, mf_dielectric_table_fields, MF_DIELECTRIC_NFIELDS, diel_layout_ok,
+     "inside (optional: the split closed by the random walk, t_walk, t_split)", 3, k_diel_axes, MF_DIELECTRIC_WALK_NFIELDS,
+     mf_dielectric_table_fields, MF_DIELECTRIC_NFIELDS, diel_layout_ok,
      mf_energy_dielectric_checks, MF_ENERGY_DIELECTRIC_NCHECKS, diel_gate},
     {"ltc_anisotropic", "anisotropic LTC table: forward and inverse 3x3 matrices, magnitude, fresnel over (alpha_x, "
      "alpha_y, theta, phi)", 4, k_ltca_axes, MF_LTCA_NFIELDS, mf_ltc_aniso_table_fields, MF_LTCA_NFIELDS - 1,

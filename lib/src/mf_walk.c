@@ -3,6 +3,8 @@
 #include "mfkit/mf_quad.h"
 #include "mfkit/mf_smith.h"
 
+#include <string.h>
+
 static int walk_ndf_ok(mf_ndf ndf)
 {
     return (ndf.type == MF_NDF_GGX || ndf.type == MF_NDF_BECKMANN) && ndf.alpha_x > 0.0 && ndf.alpha_y > 0.0
@@ -277,6 +279,42 @@ mf_status mf_walk_dielectric(mf_ndf ndf, double eta, mf_vec3 wo, int max_bounces
         e = 1.0 / e;
         side = -side;
     }
+}
+
+mf_status mf_walk_dielectric_split(mf_ndf ndf, double eta, long walks, int max_bounces, uint64_t seed, uint64_t stream,
+                                   mf_walk_split *out)
+{
+    memset(out, 0, sizeof *out);
+    out->t = out->t_se = out->e1 = NAN;
+    if (!walk_ndf_ok(ndf) || !(eta > 0.0) || !isfinite(eta) || walks < 1 || max_bounces < 1)
+        return MF_ERR_DOMAIN;
+    mf_pcg32 rng;
+    mf_pcg32_seed(&rng, seed, stream);
+    for (long i = 0; i < walks; ++i) {
+        double mu = sqrt(1.0 - mf_pcg32_next_double(&rng)); /* density 2 mu on (0, 1] */
+        mf_walk_path p;
+        mf_status st = mf_walk_dielectric(ndf, eta, mf_vec3_make(sqrt(fmax(0.0, 1.0 - mu * mu)), 0.0, mu), max_bounces,
+                                          &rng, &p);
+        if (st != MF_OK)
+            return st;
+        ++out->walks;
+        if (p.side == 0)
+            ++out->stopped;
+        else if (p.bounces == 1) {
+            ++out->single;
+            out->single_trans += p.side < 0;
+        } else {
+            ++out->ms;
+            out->ms_trans += p.side < 0;
+        }
+    }
+    out->e1 = (double)out->single / (double)out->walks;
+    if (out->ms > 0) {
+        double n = (double)out->ms, p = ((double)out->ms_trans + 0.5) / (n + 1.0);
+        out->t = (double)out->ms_trans / n;
+        out->t_se = sqrt(p * (1.0 - p) / n);
+    }
+    return MF_OK;
 }
 
 /* ---- single scattering by quadrature ------------------------------------------------------------ */

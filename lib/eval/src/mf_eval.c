@@ -267,6 +267,31 @@ static void fn_leadr(const eval_opts *o, const double *in, double *out)
 
 #define WO "wo_x", "wo_y", "wo_z"
 #define WI "wi_x", "wi_y", "wi_z"
+static void fn_dielectric_walk_split(const eval_opts *o, const double *in, double *out)
+{
+    /* mf_energy_dielectric_walk_split with this eta's E_avg and F_avg (mf_energy_dielectric_eavg,
+     * mf_energy_favg_dielectric) on both sides; walks per side in [1000, 1e9], the generator stream as
+     * in the table (2 x column, column = z index x n_r + r index), seed MF_ENERGY_WALK_SPLIT_SEED.  NaN
+     * outside alpha in [1e-4, 1], eta > 0 */
+    double alpha = in[0], eta = in[1], walks = in[2], stream = in[3];
+    mf_result ea, eai, fa, fai;
+    mf_energy_walk_split w;
+    if (!(alpha >= MF_ENERGY_ALPHA_MIN && alpha <= 1.0) || !(eta > 0.0 && isfinite(eta)) || !(walks >= 1000.0 && walks <= 1e9)
+        || walks != floor(walks) || !(stream >= 0.0 && stream <= 9007199254740992.0) || stream != floor(stream)
+        || mf_energy_dielectric_eavg(o->ndf, o->g2, alpha, eta, &ea) != MF_OK
+        || mf_energy_dielectric_eavg(o->ndf, o->g2, alpha, 1.0 / eta, &eai) != MF_OK
+        || mf_energy_favg_dielectric(eta, &fa) != MF_OK || mf_energy_favg_dielectric(1.0 / eta, &fai) != MF_OK
+        || mf_energy_dielectric_walk_split(o->ndf, alpha, eta, ea.val, eai.val, fa.val, fai.val, (long)walks,
+                                           MF_ENERGY_WALK_SPLIT_SEED, (uint64_t)stream, &w) != MF_OK)
+        return;
+    out[0] = w.t_walk[0];
+    out[1] = w.se[0];
+    out[2] = w.t_walk[1];
+    out[3] = w.se[1];
+    out[4] = w.t[0];
+    out[5] = w.t[1];
+}
+
 #define LTC_M "m00", "m01", "m02", "m10", "m11", "m12", "m20", "m21", "m22"
 static const eval_function k_functions[] = {
     {"ndf", "D(wm), per steradian of micro-normal", {"alpha_x", "alpha_y", "m_x", "m_y", "m_z"}, {"D"}, {NULL},
@@ -288,6 +313,11 @@ static const eval_function k_functions[] = {
      {"alpha", "cos_theta_o"}, {"dfg_scale", "dfg_bias"}, {NULL}, fn_dfg, 0, OPT_NDF | OPT_G2},
     {"dielectric", "rough dielectric interface: reflected and transmitted energy (exact Fresnel, eta = beyond / view side)",
      {"alpha", "cos_theta_o", "eta"}, {"E_R", "E_R_err", "E_T", "E_T_err"}, {NULL}, fn_dielectric, 0, OPT_NDF | OPT_G2},
+    {"dielectric-walk-split",
+     "the dielectric table's --split walk fields: the random walk's transmitted fraction of its multiple scattering "
+     "(both sides, cosine-averaged, with standard errors) and the balanced closure t_split (stream = 2 x column)",
+     {"alpha", "eta", "walks", "stream"}, {"t_walk", "t_walk_se", "t_walk_inv", "t_walk_inv_se", "t_split", "t_split_inv"},
+     {NULL}, fn_dielectric_walk_split, 0, OPT_NDF | OPT_G2},
     {"dfg-charlie", "the DFG table's Charlie sheen channel: albedo of Charlie D with Neubelt V, F = 1, and its bound",
      {"alpha", "cos_theta_o"}, {"dfg_charlie", "dfg_charlie_err"}, {NULL}, fn_dfg_charlie, 0, 0},
     {"polygon-cosine", "integral of max(0,z)/pi over a polygon (Lambert), and its solid angle (sr)", {"n"},
@@ -337,7 +367,7 @@ static const mf_eval_option k_options[MF_EVAL_NOPTS] = {
     {.name = "fresnel", .kind = MF_EVAL_KIND_ENUM, .choices = k_fresnel_names, .mask = OPT_FRESNEL, .def = "none",
      .help = "brdf only; schlick adds the input column f0"},
     {.name = "g2", .kind = MF_EVAL_KIND_ENUM, .choices = k_g2_names, .mask = OPT_G2, .def = "joint",
-     .help = "masking-shadowing of brdf, albedo, dfg and dielectric"},
+     .help = "masking-shadowing of brdf, albedo, dfg, dielectric and dielectric-walk-split"},
     {.name = "points", .metavar = "N", .kind = MF_EVAL_KIND_INT, .lo = 16, .hi = 2048, .multiple = 8,
      .mask = OPT_POINTS, .optional = 1,
      .help = "albedo only: use the old N x N product rule (a multiple of 8 in [16, 2048]) instead of the default "

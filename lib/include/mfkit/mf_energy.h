@@ -49,6 +49,8 @@
 #include "mfkit/mf_check.h"
 #include "mfkit/mf_table.h"
 
+#include <stdint.h>
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -101,8 +103,13 @@ double mf_energy_kc_lobe(double weight, double e_o, double e_i, double eavg_i);
 /* ---- the dielectric table (kind "dielectric") ---- */
 #define MF_DIELECTRIC_DEFAULT_SIZE 16
 #define MF_DIELECTRIC_NFIELDS 14
-extern const char *const mf_dielectric_table_fields[MF_DIELECTRIC_NFIELDS];
-#define MF_ENERGY_DIELECTRIC_NCHECKS 5
+/* The optional fields of a table made with the walk's split (mf_energy_dielectric_table_init_walk),
+ * appended after the 14: t_walk, t_walk_se, t_walk_inv, t_walk_inv_se (the random walk's transmitted
+ * fraction of its multiple scattering and its standard error, outside and inside), t_split,
+ * t_split_inv (the balanced closure the lobes use), constant along mu. */
+#define MF_DIELECTRIC_WALK_NFIELDS 20
+extern const char *const mf_dielectric_table_fields[MF_DIELECTRIC_WALK_NFIELDS];
+#define MF_ENERGY_DIELECTRIC_NCHECKS 6
 /* eta of the z axis: 1 + 2 z^2 (Cycles' z = sqrt((eta - 1) / 2)). */
 double mf_energy_dielectric_eta(double z);
 /* E_avg = 2 integral_0^1 (E_r + E_t)(mu) mu dmu by global-adaptive Gauss-Kronrod to 1e-8 (at most
@@ -137,6 +144,39 @@ mf_status mf_energy_dielectric_table_init(mf_table *t, mf_ndf_type ndf, mf_g2_fo
                                           int n_z) MF_WARN_UNUSED;
 mf_status mf_energy_dielectric_column(mf_table *t, long column) MF_WARN_UNUSED;
 
+/* The split closed by the random walk (mfkit energy dielectric --split walk).  Kulla and Conty's
+ * split caps the transmitted fraction at 1 - F_avg(eta), which true multiple scattering exceeds
+ * (docs/math.md, "A split closed by the walk").  This one takes, per (alpha, eta) column and side,
+ * the transmitted fraction of the walk's multiple scattering, cosine-averaged over the view
+ * (mf_walk_dielectric_split, `walks` walks per side, generator (seed, stream 2 column + side)), and
+ * projects the pair onto the balance the lobes need, t (1 - E_avg(eta)) = eta^2 t' (1 - E_avg(1/eta)):
+ *   (t, t') = lambda (A, B),  A = eta^2 (1 - E_avg(1/eta)),  B = 1 - E_avg(eta),
+ *   lambda = (A t_w / se^2 + B t'_w / se'^2) / (A^2 / se^2 + B^2 / se'^2)  (least squares in se units),
+ * scaled down if needed so that both are <= 1.  A side without multiply scattered walks takes Kulla and
+ * Conty's value with se 1/2 (no information; with none on either side the result is Kulla and Conty's
+ * pair, which is balanced).  Inputs: E_avg and F_avg of both sides (as mf_energy_dielectric_ms_split).
+ * Outputs (each [2]: outside = this eta, inside = 1 / eta): t_walk, se, t (the closure); chi = the
+ * projection's residual in se units (sqrt of its chi-square, one degree of freedom); e1, the walk's own
+ * single-scattering albedos (cosine averages). */
+typedef struct mf_energy_walk_split {
+    double t_walk[2], se[2], t[2], e1[2], chi;
+    long ms[2], stopped;
+} mf_energy_walk_split;
+#define MF_ENERGY_WALK_SPLIT_WALKS 262144L /* 2^18 walks per side: se <= 0.015 from alpha 0.1 */
+#define MF_ENERGY_WALK_SPLIT_SEED 14u
+mf_status mf_energy_dielectric_walk_split(mf_ndf_type ndf, double alpha, double eta, double eavg, double eavg_inv,
+                                          double favg, double favg_inv, long walks, uint64_t seed, uint64_t stream,
+                                          mf_energy_walk_split *out) MF_WARN_UNUSED;
+/* The projection alone (the gate recomputes it from stored fields): t_walk, se of both sides and the
+ * balance's A, B as above -> t[2]; chi as above. */
+void mf_energy_walk_split_project(const double t_walk[2], const double se[2], double a, double b, double t[2],
+                                  double *chi);
+/* A dielectric table with the walk split's 6 fields (20 in all); `walks` per side (>= 1000), recorded
+ * in the metadata "split" = "walk", "split_walks", "split_seed".  mf_energy_dielectric_column fills
+ * them too. */
+mf_status mf_energy_dielectric_table_init_walk(mf_table *t, mf_ndf_type ndf, mf_g2_form g2, int n_mu, int n_r,
+                                               int n_z, long walks) MF_WARN_UNUSED;
+
 /* Progress callback: done of total texels. */
 typedef void (*mf_energy_progress)(void *user, long done, long total);
 
@@ -169,7 +209,10 @@ mf_status mf_energy_kulla_conty_gate(const mf_table *t, double storage_u, mf_che
  * kulla_conty's) at every mu of 3 x 3 (alpha, eta) columns, both sides (diel_furnace); at the same
  * texels the furnace of E_r + E_t + the lobe split into reflection and transmission
  * (mf_energy_dielectric_ms_split), and per column the reciprocity of the transmitted flux,
- * T(eta) = eta^2 T(1/eta), single scattering plus lobe (diel_split). */
+ * T(eta) = eta^2 T(1/eta), single scattering plus lobe (diel_split; with the stored t_split on a table
+ * made with the walk's split).  Tables with the walk split's fields add diel_walk: t_split is the
+ * balanced projection of the stored t_walk in every column (to rounding plus the propagated storage
+ * rounding), and t_walk agrees with a fresh walk (seed + 1) within 4.5 se at the 3 x 3 gate columns. */
 mf_status mf_energy_dielectric_gate(const mf_table *t, double storage_u, mf_check *checks, int cap,
                                     int *count) MF_WARN_UNUSED;
 /* The gates' check tables (for the registry). */

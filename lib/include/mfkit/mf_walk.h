@@ -86,6 +86,24 @@ mf_status mf_walk_dielectric(mf_ndf ndf, double eta, mf_vec3 wo, int max_bounces
  * isotropic or not (wo in the x-z plane). */
 mf_status mf_walk_single(mf_ndf ndf, double mu, double eta, int n, mf_result *r1, mf_result *t1) MF_WARN_UNUSED;
 
+
+/* The walk's split of its multiple scattering on one side, cosine-averaged over the view: `walks`
+ * walks from views drawn with density 2 mu (mu = sqrt(1 - U)) on the side where the relative index is
+ * eta, each with at most max_bounces bounces, from the generator stream (seed, stream) (so the result
+ * depends only on those, not on threads or order).  Counts: single / single_trans the walks that leave
+ * after one bounce (all / transmitted), ms / ms_trans those with two or more, stopped those cut at
+ * max_bounces.  t = ms_trans / ms, the transmitted fraction of the multiple scattering, with its
+ * binomial standard error t_se = sqrt(p (1 - p) / ms) at p = (ms_trans + 1/2) / (ms + 1) (never 0 for
+ * ms > 0: a side that transmits all of its ms walks still carries an uncertainty); e1 = single / walks
+ * the walk's own single-scattering albedo (cosine average).  ms = 0: t and t_se NaN. */
+typedef struct mf_walk_split {
+    long walks, single, single_trans, ms, ms_trans, stopped;
+    double t, t_se, e1;
+} mf_walk_split;
+
+mf_status mf_walk_dielectric_split(mf_ndf ndf, double eta, long walks, int max_bounces, uint64_t seed, uint64_t stream,
+                                   mf_walk_split *out) MF_WARN_UNUSED;
+
 #ifdef __cplusplus
 }
 #endif
