@@ -951,6 +951,9 @@ mf_status mf_prefilter_texel_albedo(double alpha, const double n[3], mf_vec3 wo,
 
 /* ---- the levels ------------------------------------------------------------------------------- */
 
+/* level-1 directions: samples >> 2 for GGX (see level1_samples) */
+#define MF_PREFILTER_LEVEL1_SHIFT 2
+
 void mf_prefilter_options_default(mf_prefilter_options *o)
 {
     memset(o, 0, sizeof *o);
@@ -964,6 +967,7 @@ void mf_prefilter_options_default(mf_prefilter_options *o)
     o->seed = 1;
     o->cluster_cell = MF_PREFILTER_CLUSTER_CELL;
     o->keep_albedo = 0;
+    o->level1_shift = MF_PREFILTER_LEVEL1_SHIFT;
 }
 
 void mf_prefilter_options_default_diffuse(mf_prefilter_options *o)
@@ -972,6 +976,7 @@ void mf_prefilter_options_default_diffuse(mf_prefilter_options *o)
     o->base = MF_PREFILTER_BASE_LAMBERT;
     o->n_theta = 2;
     o->n_phi = 4;
+    o->level1_shift = 0;
 }
 
 double mf_prefilter_theta(const mf_prefilter_options *o, int i) { return i / (double)(o->n_theta - 1) * MF_PREFILTER_THETA_MAX; }
@@ -1338,6 +1343,26 @@ static mf_status fit_row_entry(mf_prefilter_mix *mix, const mf_brdf_params *p, d
     return MF_OK;
 }
 
+/* The directions of a level-1 fit of a footprint whose texels do not all share one normal
+ * (mf_prefilter_options.level1_shift; a power of two >= 64, as mf_ltcfit_aniso_options.samples
+ * must be).  A uniform footprint keeps `samples` at every level: its effective BRDF is the base
+ * lobe rotated, the same mixture at every level, and its lobe must not depend on the level (a
+ * constant map gives the same lobe at every level, bit for bit: tests/test_prefilter_eval.sh).
+ * Revision 7: a 2 x 2 footprint's effective BRDF is a
+ * mixture of at most 4 GGX lobes, and the preparation (sampling the mixture, the inside sets of
+ * the 51 lights) was about half of a level-1 fit's CPU at 4096 directions.  Measured with 4096 /
+ * 1024 level-1 directions (prefilter-eval, the committed setup of analysis/prefilter_eval_data.sh):
+ * demo map 30 / 30 of 48 cells, level-1 MSE 3.121e-4 / 3.101e-4 (levels 2-4 unchanged: their fits
+ * do not read level 1); the 32 x 32 bump map (make_bump.py) 45 / 45 of 60 cells, level-1 MSE
+ * 5.346e-4 / 5.406e-4 (+1.1 %).  Fewer at every level (1024 at all levels) made levels 2-4 of the
+ * demo 2.6 to 4.4 % worse (2048: 2.5 %), so levels >= 2 keep `samples`.  docs/prefilter.md,
+ * "Speed of revision 7". */
+static int level1_samples(const mf_prefilter_options *o)
+{
+    int n = o->samples >> o->level1_shift;
+    return n < 64 ? 64 : n;
+}
+
 /* One footprint: its (clustered) normals; theta = 0 fitted once (the view along the normal does not
  * depend on phi: the lobe at phi is the phi = 0 lobe rotated, M_phi = R_z(-phi) M_0 R_z(phi)); for
  * every phi the normals in the view-azimuth-aligned frame, their mirror symmetry y -> -y if they
@@ -1363,7 +1388,7 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
     }
     mf_ltcfit_aniso_options fo;
     mf_ltcfit_aniso_options_default(&fo);
-    fo.samples = o->samples;
+    fo.samples = o->samples; /* level 1: see level1_samples, below */
     fo.max_iterations = o->max_iterations;
     fo.seed = o->seed;
     /* the ladder of base-lobe-sized lights (revision 6; mf_ltcfit_aniso_options.ladder_alpha) */
@@ -1384,6 +1409,11 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
         for (int y = row * fh; y < (row + 1) * fh; ++y)
             for (int x = col * fw; x < (col + 1) * fw; ++x, ++k)
                 memcpy(tex + 3 * k, j->normals + 3 * ((size_t)y * j->width + x), 3 * sizeof(double));
+        int uniform = 1;
+        for (int i = 1; i < nfoot && uniform; ++i)
+            uniform = tex[3 * i] == tex[0] && tex[3 * i + 1] == tex[1] && tex[3 * i + 2] == tex[2];
+        if (level == 1 && !uniform)
+            fo.samples = level1_samples(o);
         double h = o->cluster_cell * (o->base == MF_PREFILTER_BASE_LAMBERT ? MF_PREFILTER_CLUSTER_LAMBERT : o->alpha);
         if (h > 0.0 && nfoot >= MF_PREFILTER_CLUSTER_MIN) {
             nc = cluster_normals(tex, nfoot, h, cn, cw);
@@ -1701,6 +1731,8 @@ static mf_status check_run(const double *normals, int width, int height, const m
         return FAIL("fit_lights %d is neither MF_PREFILTER_LIGHTS_LADDER nor MF_PREFILTER_LIGHTS_LOBE", o->fit_lights);
     if (!(o->cluster_cell >= 0.0 && o->cluster_cell <= 4.0))
         return FAIL("cluster cell %g not in [0, 4]", o->cluster_cell);
+    if (o->level1_shift < 0 || o->level1_shift > 8)
+        return FAIL("level1_shift %d not in 0..8", o->level1_shift);
     if (!is_pow2(width) || !is_pow2(height) || (width == 1 && height == 1) || width > 4096 || height > 4096)
         return FAIL("map size %d x %d: width and height must be powers of two, 1..4096, not both 1", width, height);
     for (long t = 0; t < (long)width * height; ++t) {

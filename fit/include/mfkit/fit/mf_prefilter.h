@@ -118,7 +118,7 @@ extern "C" {
 #define MF_PREFILTER_COS_MIN 0.001
 /* Names the fitted values: bump it whenever they change (objective, starts, constants), so that a
  * resumed `mfkit prefilter` refuses tiles of another revision. */
-#define MF_PREFILTER_REVISION 6
+#define MF_PREFILTER_REVISION 7
 #define MF_PREFILTER_ALBEDO_N 64
 #define MF_PREFILTER_THETA_MAX (0.999 * 0.5 * MF_PI)
 /* Footprints of at least MF_PREFILTER_CLUSTER_MIN texels are fitted to a clustered mixture: cells
@@ -228,6 +228,10 @@ typedef struct mf_prefilter_options {
                             same lobes as MF_PREFILTER_LIGHTS_LOBE); MF_PREFILTER_LIGHTS_LOBE (1): the
                             structured family alone, every light sized by the footprint lobe's own spread
                             (revision 5; for comparisons).  docs/prefilter.md, "The fit's light family" */
+    int level1_shift;    /* level 1 (2 x 2 footprints, three quarters of a map's lobes) fits with
+                            max(64, samples >> level1_shift) directions (default 2 for GGX: 1024 of 4096,
+                            revision 7; 0 for Lambert and the diffuse defaults: samples); 0..8.
+                            docs/prefilter.md, "Speed of revision 7" */
 } mf_prefilter_options;
 
 #define MF_PREFILTER_LIGHTS_LADDER 0
