@@ -251,50 +251,61 @@ static mf_vec3 mix_sample(const mf_brdf_model *m, const mf_brdf_params *p, mf_ve
 typedef double mix_v2d __attribute__((vector_size(16)));
 typedef long long mix_v2l __attribute__((vector_size(16)));
 #endif
-static void mix_eval_pdf_batch(const mf_prefilter_mix *x, double a2, const double *vc, int cnt, const double *vx,
-                               const double *vy, const double *vz, double *f, double *pdf)
-{
-    for (int i = 0; i < cnt; ++i)
-        f[i] = pdf[i] = 0.0;
-    for (int j = 0; j < x->n; ++j) {
-        const double *r = x->rot + 9 * j, *c = vc + VC_N * j, wj = x->w[j];
-        int i = 0;
-#ifdef MIX_VEC2
-        for (; i + 2 <= cnt; i += 2) {
-            mix_v2d ax, ay, az;
-            memcpy(&ax, vx + i, sizeof ax);
-            memcpy(&ay, vy + i, sizeof ay);
-            memcpy(&az, vz + i, sizeof az);
-            const mix_v2d tx = r[0] * ax + r[3] * ay + r[6] * az, ty = r[1] * ax + r[4] * ay + r[7] * az,
-                          tz = r[2] * ax + r[5] * ay + r[8] * az; /* rot_t */
-            const mix_v2d hx = c[0] + tx, hy = c[1] + ty, hz = c[2] + tz;
-            const mix_v2d s2 = hx * hx + hy * hy, z2 = hz * hz;
-            const mix_v2d den = a2 * z2 + s2, l2 = s2 + z2;
-            const mix_v2d dq = c[14] * (l2 * l2) / (den * den);
-            mix_v2d q = tz * tz + a2 * (tx * tx + ty * ty);
-            q = (mix_v2d){sqrt(q[0]), sqrt(q[1])};
-            const mix_v2d fj = 2.0 * dq * tz / (c[15] * tz + q);
-            const mix_v2d pj = dq * c[16];
-            const mix_v2l up = tz > 0.0;
-            const mix_v2l dens = up & (hz > 0.0) & ((c[0] * hx + c[1] * hy + c[2] * hz) > 0.0);
-            const mix_v2d fs = (mix_v2d)(up & (mix_v2l)fj), ps = (mix_v2d)(dens & (mix_v2l)pj); /* or +0 */
-            mix_v2d sf, sp;
-            memcpy(&sf, f + i, sizeof sf);
-            memcpy(&sp, pdf + i, sizeof sp);
-            sf += wj * fs;
-            sp += wj * ps;
-            memcpy(f + i, &sf, sizeof sf);
-            memcpy(pdf + i, &sp, sizeof sp);
-        }
-#endif
-        for (; i < cnt; ++i) {
-            double fj, pj;
-            ggx_fpdf_cached(a2, c, rot_t(r, mf_vec3_make(vx[i], vy[i], vz[i])), &fj, &pj);
-            f[i] += wj * fj;
-            pdf[i] += wj * pj;
-        }
+/* One definition for both widths: the vector loop W directions at a time in vectors VD (lanes
+ * compared into VL), then the scalar rule for the rest. */
+#define MIX_EVAL_PDF_BATCH_LANES(VD, VL, W)                                                                 \
+    for (; i + (W) <= cnt; i += (W)) {                                                                      \
+        VD ax, ay, az;                                                                                      \
+        memcpy(&ax, vx + i, sizeof ax);                                                                     \
+        memcpy(&ay, vy + i, sizeof ay);                                                                     \
+        memcpy(&az, vz + i, sizeof az);                                                                     \
+        const VD tx = r[0] * ax + r[3] * ay + r[6] * az, ty = r[1] * ax + r[4] * ay + r[7] * az,           \
+                 tz = r[2] * ax + r[5] * ay + r[8] * az; /* rot_t */                                        \
+        const VD hx = c[0] + tx, hy = c[1] + ty, hz = c[2] + tz;                                            \
+        const VD s2 = hx * hx + hy * hy, z2 = hz * hz;                                                      \
+        const VD den = a2 * z2 + s2, l2 = s2 + z2;                                                          \
+        const VD dq = c[14] * (l2 * l2) / (den * den);                                                      \
+        VD q = tz * tz + a2 * (tx * tx + ty * ty);                                                          \
+        for (int k = 0; k < (W); ++k)                                                                       \
+            q[k] = sqrt(q[k]);                                                                              \
+        const VD fj = 2.0 * dq * tz / (c[15] * tz + q);                                                     \
+        const VD pj = dq * c[16];                                                                           \
+        const VL up = tz > 0.0;                                                                             \
+        const VL dens = up & (hz > 0.0) & ((c[0] * hx + c[1] * hy + c[2] * hz) > 0.0);                      \
+        const VD fs = (VD)(up & (VL)fj), ps = (VD)(dens & (VL)pj); /* or +0 */                              \
+        VD sf, sp;                                                                                          \
+        memcpy(&sf, f + i, sizeof sf);                                                                      \
+        memcpy(&sp, pdf + i, sizeof sp);                                                                    \
+        sf += wj * fs;                                                                                      \
+        sp += wj * ps;                                                                                      \
+        memcpy(f + i, &sf, sizeof sf);                                                                      \
+        memcpy(pdf + i, &sp, sizeof sp);                                                                    \
     }
-}
+
+#define MIX_EVAL_PDF_BATCH_DEF(NAME, LANES)                                                                 \
+    static void NAME(const mf_prefilter_mix *x, double a2, const double *vc, int cnt, const double *vx,     \
+                     const double *vy, const double *vz, double *f, double *pdf)                            \
+    {                                                                                                       \
+        for (int i = 0; i < cnt; ++i)                                                                       \
+            f[i] = pdf[i] = 0.0;                                                                            \
+        for (int j = 0; j < x->n; ++j) {                                                                    \
+            const double *r = x->rot + 9 * j, *c = vc + VC_N * j, wj = x->w[j];                             \
+            int i = 0;                                                                                      \
+            LANES                                                                                           \
+            for (; i < cnt; ++i) {                                                                          \
+                double fj, pj;                                                                              \
+                ggx_fpdf_cached(a2, c, rot_t(r, mf_vec3_make(vx[i], vy[i], vz[i])), &fj, &pj);              \
+                f[i] += wj * fj;                                                                            \
+                pdf[i] += wj * pj;                                                                          \
+            }                                                                                               \
+        }                                                                                                   \
+    }
+
+#ifdef MIX_VEC2
+MIX_EVAL_PDF_BATCH_DEF(mix_eval_pdf_batch, MIX_EVAL_PDF_BATCH_LANES(mix_v2d, mix_v2l, 2))
+#else
+MIX_EVAL_PDF_BATCH_DEF(mix_eval_pdf_batch, )
+#endif
 
 /* mix_eval_pdf_batch four directions at a time, compiled for AVX2 (x86-64 with GCC or Clang; 4-wide
  * vectors of the same operations in the same order per lane: the same bits, nothing contracted, no
@@ -303,54 +314,9 @@ static void mix_eval_pdf_batch(const mf_prefilter_mix *x, double a2, const doubl
  * evaluation 6,251 -> 4,498 samples, the run 30,795 -> 27,625 (docs/prefilter.md). */
 #if defined(MIX_VEC2) && defined(__x86_64__)
 #define MIX_VEC4 1
-#define MIX_AVX2_TARGET __attribute__((target("avx2")))
 typedef double mix_v4d __attribute__((vector_size(32)));
 typedef long long mix_v4l __attribute__((vector_size(32)));
-MIX_AVX2_TARGET static void mix_eval_pdf_batch4(const mf_prefilter_mix *x, double a2, const double *vc, int cnt, const double *vx,
-                               const double *vy, const double *vz, double *f, double *pdf)
-{
-    for (int i = 0; i < cnt; ++i)
-        f[i] = pdf[i] = 0.0;
-    for (int j = 0; j < x->n; ++j) {
-        const double *r = x->rot + 9 * j, *c = vc + VC_N * j, wj = x->w[j];
-        int i = 0;
-#ifdef MIX_VEC4
-        for (; i + 4 <= cnt; i += 4) {
-            mix_v4d ax, ay, az;
-            memcpy(&ax, vx + i, sizeof ax);
-            memcpy(&ay, vy + i, sizeof ay);
-            memcpy(&az, vz + i, sizeof az);
-            const mix_v4d tx = r[0] * ax + r[3] * ay + r[6] * az, ty = r[1] * ax + r[4] * ay + r[7] * az,
-                          tz = r[2] * ax + r[5] * ay + r[8] * az; /* rot_t */
-            const mix_v4d hx = c[0] + tx, hy = c[1] + ty, hz = c[2] + tz;
-            const mix_v4d s2 = hx * hx + hy * hy, z2 = hz * hz;
-            const mix_v4d den = a2 * z2 + s2, l2 = s2 + z2;
-            const mix_v4d dq = c[14] * (l2 * l2) / (den * den);
-            mix_v4d q = tz * tz + a2 * (tx * tx + ty * ty);
-            q = (mix_v4d){sqrt(q[0]), sqrt(q[1]), sqrt(q[2]), sqrt(q[3])};
-            const mix_v4d fj = 2.0 * dq * tz / (c[15] * tz + q);
-            const mix_v4d pj = dq * c[16];
-            const mix_v4l up = tz > 0.0;
-            const mix_v4l dens = up & (hz > 0.0) & ((c[0] * hx + c[1] * hy + c[2] * hz) > 0.0);
-            const mix_v4d fs = (mix_v4d)(up & (mix_v4l)fj), ps = (mix_v4d)(dens & (mix_v4l)pj); /* or +0 */
-            mix_v4d sf, sp;
-            memcpy(&sf, f + i, sizeof sf);
-            memcpy(&sp, pdf + i, sizeof sp);
-            sf += wj * fs;
-            sp += wj * ps;
-            memcpy(f + i, &sf, sizeof sf);
-            memcpy(pdf + i, &sp, sizeof sp);
-        }
-#endif
-        for (; i < cnt; ++i) {
-            double fj, pj;
-            ggx_fpdf_cached(a2, c, rot_t(r, mf_vec3_make(vx[i], vy[i], vz[i])), &fj, &pj);
-            f[i] += wj * fj;
-            pdf[i] += wj * pj;
-        }
-    }
-}
-
+__attribute__((target("avx2"))) MIX_EVAL_PDF_BATCH_DEF(mix_eval_pdf_batch4, MIX_EVAL_PDF_BATCH_LANES(mix_v4d, mix_v4l, 4))
 #endif
 
 int mf_prefilter_mix_wide = 1;
