@@ -1319,7 +1319,8 @@ static mf_status fit_row_entry(mf_prefilter_mix *mix, const mf_brdf_params *p, d
  * the 51 lights) was about half of a level-1 fit's CPU at 4096 directions.  Measured with 4096 /
  * 1024 level-1 directions (prefilter-eval, the committed setup of analysis/prefilter_eval_data.sh):
  * demo map 30 / 30 of 48 cells, level-1 MSE 3.121e-4 / 3.101e-4 (levels 2-4 unchanged: their fits
- * do not read level 1); the 32 x 32 bump map (make_bump.py) 45 / 45 of 60 cells, level-1 MSE
+ * do not read level 1; measured before uniform footprints kept `samples`: the demo's level-1
+ * footprints are all uniform, so with that rule its level 1 is unchanged); the 32 x 32 bump map (make_bump.py) 45 / 45 of 60 cells, level-1 MSE
  * 5.346e-4 / 5.406e-4 (+1.1 %).  Fewer at every level (1024 at all levels) made levels 2-4 of the
  * demo 2.6 to 4.4 % worse (2048: 2.5 %), so levels >= 2 keep `samples`.  docs/prefilter.md,
  * "Speed of revision 7". */
