@@ -18,7 +18,8 @@
  * peak resident set, solver iterations per lobe, unconverged lobes, the worst residual per level
  * and a checksum (FNV-1a of the float32 matrices and magnitudes of every level, for bitwise
  * comparisons across thread counts and code changes).  Where the time goes: run it under a
- * sampling profiler (docs/prefilter.md, "Speed").
+ * sampling profiler (docs/prefilter.md, "Measured: speed, memory and quality"; each revision's
+ * profiles: docs/prefilter_log.md).
  */
 #define _POSIX_C_SOURCE 200809L
 #include "mfkit/mfkit.h"

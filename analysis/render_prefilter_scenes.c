@@ -51,7 +51,8 @@
  *             eight texel taps of the trilinear filter (four texels at each of two MIP levels, views
  *             blended in M) each shaded and summed with their weights; --split chooses the axes split
  *             (a comma-separated list of texel, level, view; none: mf_prefilter_lookup), for the
- *             per-cause measurements of docs/prefilter.md;
+ *             per-cause measurements of docs/prefilter_log.md ("Lookup: where the lobes lost, per
+ *             cause");
  *   naive     the trilinear MIP filter of the box-averaged normals, normalised, shaded with the
  *             per-texel LTC at the base alpha [Nahmias 2022, Sec. 4.1, the "naive baseline"];
  *   toksvig   the same normal, alpha' = sqrt(alpha^2 + 2 (1 - |n|) / |n|), |n| the filtered normal's

@@ -1,6 +1,6 @@
 /*
  * study_prefilter_cell.c -- one `prefilter-eval` record taken apart (issue 13, "Ground truth and
- * evaluation"; docs/prefilter.md, "Where the lost eval cells come from"): for one footprint (level
+ * evaluation"; docs/prefilter_log.md, "Where the lost eval cells come from"): for one footprint (level
  * L, texel (x, y)) and one tabulated view (i_theta, i_phi) of a `mfkit prefilter` output, in the
  * view-azimuth-aligned frame prefilter-eval uses, and for square lights of half side h centred on
  * the view's mirror direction (elevation clamped to 75 deg, as prefilter-eval and the fit's ladder

@@ -200,7 +200,7 @@ static void test_groove(void)
          * smaller than the gap (h = 0.05, 0.2) the ladder must take off at least 15 % of the error (it is
          * there for them); under h = 0.5 it must not add any.
          * Not every elevation gains this much: at 45 deg (a 3-elevation grid) the merged fitter's ladder
-         * is 4 and 7 % better under h = 0.05 and 0.2 and 2 % worse under 0.5 (docs/prefilter.md,
+         * is 4 and 7 % better under h = 0.05 and 0.2 and 2 % worse under 0.5 (docs/prefilter_log.md,
          * "Revision 6 as merged"). */
         CHECK(err_lad[0] < 0.85 * err_lob[0]);
         CHECK(err_lad[1] < 0.85 * err_lob[1]);

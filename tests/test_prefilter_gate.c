@@ -12,7 +12,8 @@
  *
  * Usage: test_prefilter_gate                       (the CTest run: small maps, few views, asserted)
  *        test_prefilter_gate measure W NT NP NCORR [SCALE [MAP [lambert]]]
- *                                   (the figures of docs/prefilter.md; not asserted; MAP 0, 1, 2, -1 all)
+ *                                   (the figures of docs/prefilter_log.md, "Gate"; not asserted;
+ *                                   MAP 0, 1, 2, -1 all)
  *        test_prefilter_gate dump W H NT NP NCORR [lambert]
  *                                   (every field of the gate's results, exactly, for comparing builds) */
 #include "mf_test.h"
@@ -461,7 +462,7 @@ int main(int argc, char **argv)
      *     revision 5's lobes, 9 / 10 with revision 6's; asserted >= 9 / 10), a scaled entry less often (measured 4 / 10, asserted >= 3: the 1 x 1 level has no
      *     texel neighbours, and the view measures of this map are dominated by the grazing row);
      *   - bump map: the good run passes (no false alarm of the gated checks); the power is printed, not
-     *     asserted (weak: docs/prefilter.md). */
+     *     asserted (weak: docs/prefilter_log.md, "Gate"). */
     {
         mf_prefilter_gate g;
         power ps, pv;

@@ -2,7 +2,8 @@
  * `mfkit prefilter` wrote: its levels read back from DIR/ltc_mip<k>.npy, magnitude_mip<k>.npy and
  * albedo_mip<k>.npy, the normals decoded from the map as the command decodes them (unorm PNG, green
  * up, renormalised), the options (base, roughness, views) from the arguments.  A measuring tool for
- * docs/prefilter.md ("Gating cross"), not a CTest test: it prints every figure of the gate's result.
+ * docs/prefilter_log.md ("Gating continuity across texels"), not a CTest test: it prints every
+ * figure of the gate's result.
  *
  * Usage: test_prefilter_gate_files DIR MAP NT NP [ggx|lambert] [ALPHA] [THREADS] [corrupt NCORR [SEED]]
  *   corrupt: then NCORR corruptions of each kind, one at a time on the good table, each gated and

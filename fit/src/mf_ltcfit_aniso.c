@@ -262,7 +262,7 @@ static light make_light_shaped(mf_vec3 m, mf_vec3 t1, mf_vec3 t2, const double l
  * down to the base lobe's own scale and below (a small lamp seen in a highlight), so the ladder spans
  * a / 4 (a quarter of a GGX lobe's reflected half width 2 a) to 10 a (the mixture's scale, about 1
  * rad at a = 0.1), with the family's weights (1 / (I + A)): it adds the absolute error of such lights.
- * Centring the ladder on m instead was measured and rejected (docs/prefilter.md, "The fit's light
+ * Centring the ladder on m instead was measured and rejected (docs/prefilter_log.md, "The fit's light
  * family"): m lies in the gap too, but the fit then pushes the peak from m towards the mirror
  * direction. */
 /* The ladder's centre: the view's mirror direction about z in the frame of the view in the xz plane,
@@ -1431,7 +1431,7 @@ static mf_mat3 polar_gauge(mf_mat3 m)
  * 1e-10 / 1e-6 / 1e-4: 22.0 / 11.6 / 6.8 solver steps per fit, 13.0 / 11.6 / 11.1 s of CPU, worst
  * residual per level 0.0248, 0.0196, 0.0163 / the same / 0.0249, 0.0196, 0.0163: the steps after
  * a relative cost change of 1e-6 move no lobe by a visible amount.  Quality before and after:
- * docs/prefilter.md, "Speed of revision 3".  Revision 7 (unbounded scales, level 1 at 1024
+ * docs/prefilter_log.md, "Speed of revision 4".  Revision 7 (unbounded scales, level 1 at 1024
  * directions): 1e-6 -> 1e-4, measured on `bench_prefilter --size 8 --threads 1`: 19.8 -> 13.7 steps
  * per fit, 2.035 -> 1.866 ms CPU per lobe (-8 %), worst residual per level unchanged to 4 digits;
  * prefilter-eval, the committed setup (analysis/prefilter_eval_data.sh): demo map 30 -> 33 of 48

@@ -311,7 +311,8 @@ MIX_EVAL_PDF_BATCH_DEF(mix_eval_pdf_batch, )
  * vectors of the same operations in the same order per lane: the same bits, nothing contracted, no
  * FMA), called where the CPU has AVX2 and mf_prefilter_mix_wide is set (mix_eval_pdf_batch_any).
  * Measured (bench_prefilter --size 8 --threads 1, profile samples): the mixture's sampling and
- * evaluation 6,251 -> 4,498 samples, the run 30,795 -> 27,625 (docs/prefilter.md). */
+ * evaluation 6,251 -> 4,498 samples, the run 30,795 -> 27,625 (docs/prefilter_log.md, "Speed: cheaper
+ * kernels, the same bits"). */
 #if defined(MIX_VEC2) && defined(__x86_64__)
 #define MIX_VEC4 1
 typedef double mix_v4d __attribute__((vector_size(32)));
@@ -1252,7 +1253,7 @@ static void store(pjob *j, mf_prefilter_level *lv, size_t idx, const double m[9]
  * the same bits at about half the solves.  On the demo groove (8 x 16 views) 4,589 of 8,344 entries
  * meet it, and 981 of those had kept another solve (nearly all at level 1, where the neighbour's solve was up to
  * 65 % worse): prefilter-eval with 4 x 8 views, level 1 mean MSE 2.779e-4 -> 2.788e-4, levels 2-4
- * the same to 4 digits (docs/prefilter.md, "Speed of revision 5").  Skipping the neighbour's solve
+ * the same to 4 digits (docs/prefilter_log.md, "Speed of revision 5").  Skipping the neighbour's solve
  * instead at footprints of one distinct normal cost more (level 1: 3.036e-4) and saved less. */
 #define MF_PREFILTER_ACCEPT 1.1
 
@@ -1276,7 +1277,8 @@ static void store(pjob *j, mf_prefilter_level *lv, size_t idx, const double m[9]
  * residual 0.034 against 0.0225 from the closed-form start and 0.023 from its texel neighbours' lobes.
  * With the closed-form solve wherever the early accept does not take: 4 entries, none 20 % lower;
  * the gate's cross 0.133 -> 0.116; bench_prefilter --size 8: +3 % CPU; prefilter-eval, demo map
- * with 4 x 8 views, level 1 MSE -6 % over three seeds (docs/prefilter.md, Gate). */
+ * with 4 x 8 views, level 1 MSE -6 % over three seeds (docs/prefilter_log.md, "Gate": "Why single
+ * bump-map lobes landed far off"). */
 static mf_status fit_row_entry(mf_prefilter_mix *mix, const mf_brdf_params *p, double th, int mir, const double *alb,
                                const double *prev, const double *nb, double nb_res, const mf_ltcfit_aniso_options *fo,
                                mf_ltcfit_aniso_entry *e)
@@ -1322,7 +1324,7 @@ static mf_status fit_row_entry(mf_prefilter_mix *mix, const mf_brdf_params *p, d
  * do not read level 1; measured before uniform footprints kept `samples`: the demo's level-1
  * footprints are all uniform, so with that rule its level 1 is unchanged); the 32 x 32 bump map (make_bump.py) 45 / 45 of 60 cells, level-1 MSE
  * 5.346e-4 / 5.406e-4 (+1.1 %).  Fewer at every level (1024 at all levels) made levels 2-4 of the
- * demo 2.6 to 4.4 % worse (2048: 2.5 %), so levels >= 2 keep `samples`.  docs/prefilter.md,
+ * demo 2.6 to 4.4 % worse (2048: 2.5 %), so levels >= 2 keep `samples`.  docs/prefilter_log.md,
  * "Speed of revision 7". */
 static int level1_samples(const mf_prefilter_options *o)
 {

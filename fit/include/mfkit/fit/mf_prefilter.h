@@ -40,7 +40,7 @@
  *     half sides alpha / 4 .. 10 alpha (mf_ltcfit_aniso_options.ladder_alpha = alpha; options.fit_lights):
  *     the structured family sizes its lights by the footprint lobe's own spread, so a mixture of
  *     base lobes far apart (a groove seen along the groove) had no light that resolves the gap
- *     where the single lobe puts its peak (docs/prefilter.md, "The fit's light family").
+ *     where the single lobe puts its peak (docs/prefilter_log.md, "The fit's light family").
  *   - its normals, clustered when it has >= MF_PREFILTER_CLUSTER_MIN texels: cells of side
  *     cluster_cell * alpha in slope space, each cell one component (the normalised sum of its
  *     normals, weight count / N).  Measured (tests/test_prefilter.c, test_clusters, 8 x 8 map of
@@ -227,11 +227,11 @@ typedef struct mf_prefilter_options {
                             lobe (mf_ltcfit_aniso_options.ladder_alpha = alpha; Lambert: no ladder, the
                             same lobes as MF_PREFILTER_LIGHTS_LOBE); MF_PREFILTER_LIGHTS_LOBE (1): the
                             structured family alone, every light sized by the footprint lobe's own spread
-                            (revision 5; for comparisons).  docs/prefilter.md, "The fit's light family" */
+                            (revision 5; for comparisons).  docs/prefilter_log.md, "The fit's light family" */
     int level1_shift;    /* level 1 (2 x 2 footprints, three quarters of a map's lobes) fits with
                             max(64, samples >> level1_shift) directions (default 2 for GGX: 1024 of 4096,
                             revision 7; 0 for Lambert and the diffuse defaults: samples); 0..8.
-                            docs/prefilter.md, "Speed of revision 7" */
+                            docs/prefilter_log.md, "Speed of revision 7" */
 } mf_prefilter_options;
 
 #define MF_PREFILTER_LIGHTS_LADDER 0
@@ -345,7 +345,7 @@ typedef struct mf_prefilter_gate {
      * / albedo, over the entries with at least one texel axis (levels larger than 1 x 1); a map's
      * own variation is rarely an extreme along all of them (the V-groove's texels are the same along
      * y), one wrong lobe is.  cross_texel: the same over the texel axes alone.  pass_cont_cross
-     * compares it with max_cont_cross (MF_PREFILTER_GATE_CONT_CROSS).  Measured (docs/prefilter.md,
+     * compares it with max_cont_cross (MF_PREFILTER_GATE_CONT_CROSS).  Measured (docs/prefilter_log.md,
      * "Gate"): 0 on good runs of the constant and V-groove maps, but 0.08-0.15 on the bump map's, at
      * single lobes that are wrong by that much against a brute-force integral of the effective BRDF
      * (so a bound would fail those runs: reported only). */
@@ -399,7 +399,7 @@ mf_status mf_prefilter_gate_run(const mf_prefilter_level *levels, int nlevels, m
  * Why reported only: on good runs (V-groove, bump map; 8 x 8, 4 x 8 views) the single lobes' own
  * error against the reference varies between neighbours by up to 0.25 of the albedo, as much as a
  * lobe with one matrix entry scaled by 1.5 or swapped with its phi neighbour changes it
- * (docs/prefilter.md, "Gate": power and false alarms).  The default bounds (0.3) lie above every
+ * (docs/prefilter_log.md, "Gate": power and false alarms).  The default bounds (0.3) lie above every
  * good run measured.  Lambert: the fits follow the (smooth) diffuse mixture closely, so e stays
  * below 0.012 of the albedo on good runs (constant, V-groove, bump map, 2 x 4 views) and the
  * bound MF_PREFILTER_GATE_CONT_LAMBERT = 0.03 is gated.
