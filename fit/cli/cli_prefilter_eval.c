@@ -27,7 +27,20 @@
  *            footprint's mean and covariance of the texel slopes (-n.x/n.z, -n.y/n.z) plus the base
  *            roughness as a Beckmann slope variance alpha^2/2 per axis.
  *
- * Every method's error is reported against both truths.
+ * A diffuse (Lambert) table (manifest base_brdf {"model": "lambert"}) gets its own methods:
+ *   truth    (1/N) sum_q integral_light max(0, n_q.wi) / pi dwi over wi.z > 0: the diffuse mixture of
+ *            mf_prefilter.c (view independent; the geometric horizon and each texel's), exact in
+ *            closed form (mf_prefilter_texel_lambert: the light clipped to z >= 0, Lambert's formula);
+ *   mfkit    as above;
+ *   naive    the same formula at the footprint's normalised mean normal;
+ *   leadr    mfkit's LEADR diffuse (mf_model_leadr_diffuse [Dupuy 2013, Eq. 21], centred isotropic
+ *            Beckmann slopes) in the mean normal's frame with alpha^2 = var_x + var_y of the texel
+ *            slopes; Monte Carlo over the light (leadr_se its standard error).
+ *   The records: level, row, col, i_theta, theta, i_phi, phi, light_half_side, truth, truth_se (0: the
+ *   truth is exact), mfkit, naive, leadr, leadr_se; the summary: mse_ and relrms_ of mfkit, naive,
+ *   leadr, then mean_leadr_se.  --ltc-table is refused for such a table.
+ *
+ * Every method's error is reported against both truths (GGX).
  * The baselines are integrated with the same light samples as the truth (so their differences
  * from it carry little Monte Carlo noise); mfkit's lobe is integrated in closed form.
  * The light: a square of half side h at distance 1, facing the origin, centred on the mirror
@@ -69,7 +82,7 @@ static const cli_opt k_opts[E_NOPTS] = {
     {.name = "--ltc-table", .metavar = "FILE", .kind = CLI_OPT_STRING,
      .def = "a 64-elevation column fitted here at the base's alpha",
      .help = "isotropic GGX LTC table (an mfkit table file or the reference CSV layout) for the per-texel LTC "
-             "truth"},
+             "truth (GGX tables only)"},
 };
 static const cli_command k_eval_cmd = {
     .name = "prefilter-eval",
@@ -81,6 +94,9 @@ static const cli_command k_eval_cmd = {
         "ground truth (the footprint average of the exact base-GGX integral, Monte Carlo with its standard\n"
         "error) and against the thesis' per-texel LTC shading, beside the baselines naive (mean normal),\n"
         "Toksvig (mean normal, widened roughness) and LEADR.\n"
+        "A diffuse (Lambert) table (mfkit prefilter's DIR/diffuse, or --base lambert) is compared with the exact\n"
+        "truth (the footprint average of each texel's Lambert integral over the light, in closed form), beside\n"
+        "naive (Lambert at the mean normal) and LEADR's diffuse; its files have their own columns.\n"
         "Reads PREFILTER_DIR/prefilter.json, ltc_mip<k>.npy, magnitude_mip<k>.npy and the normal map.\n",
     .opts = k_opts,
     .nopts = E_NOPTS,
@@ -158,6 +174,7 @@ typedef struct pe_acc {
 
 enum { M_MFKIT, M_NAIVE, M_TOKSVIG, M_LEADR, M_TRUTH_SE, M_N };
 static const char *const k_method[4] = {"mfkit", "naive", "toksvig", "leadr"};
+static const char *const k_method_lambert[3] = {"mfkit", "naive", "leadr"}; /* a Lambert table's methods */
 
 /* One record: truth (MC), truth_ltc (per-texel LTC) and the four estimates. */
 typedef struct pe_rec {
@@ -274,6 +291,95 @@ static int eval_record(const mf_brdf_model *ggx, const pe_itab *itab, double alp
     return 0;
 }
 
+/* One record of a diffuse (Lambert) table: truth (exact, mf_prefilter_texel_lambert averaged over the
+ * footprint), mfkit's lobe, naive (the same formula at the normalised mean normal: Lambert at the mean
+ * normal with the same geometric horizon) and LEADR's diffuse (Monte Carlo over the light; est[2] and
+ * r->se its standard error).  The light is eval_record's.  est[0] mfkit, est[1] naive, est[2] leadr. */
+static int eval_record_lambert(const mf_brdf_model *leadr, const double *nrm, int count, double theta, double hside,
+                               const float *m9, float magnitude, int samples, uint64_t seed, pe_rec *r, char *msg,
+                               size_t msz)
+{
+    mf_vec3 wo = mf_vec3_make(sin(theta), 0.0, cos(theta));
+    double tl = theta < PE_LIGHT_MAX_ELEV ? theta : PE_LIGHT_MAX_ELEV;
+    mf_vec3 c = mf_vec3_make(-sin(tl), 0.0, cos(tl)), e1 = mf_vec3_make(cos(tl), 0.0, sin(tl)),
+            e2 = mf_vec3_make(0.0, 1.0, 0.0);
+    mf_vec3 v[4];
+    for (int k = 0; k < 4; ++k) {
+        double a = (k == 0 || k == 3) ? -hside : hside, b = (k < 2) ? -hside : hside;
+        v[k] = mf_vec3_make(c.x + a * e1.x + b * e2.x, c.y + a * e1.y + b * e2.y, c.z + a * e1.z + b * e2.z);
+    }
+    mf_polygon poly = mf_polygon_make(4, v);
+    mf_mat3 M;
+    for (int i = 0; i < 9; ++i)
+        M.m[i / 3][i % 3] = m9[i];
+    mf_ltc ltc;
+    if (mf_ltc_init(&ltc, M) != MF_OK) {
+        snprintf(msg, msz, "a stored LTC matrix is singular");
+        return CLI_EXIT_USAGE;
+    }
+    memset(r, 0, sizeof *r);
+    r->est[0] = (double)magnitude * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
+
+    /* the truth: the footprint average of each texel's exact integral [Nahmias 2022, Eq. 2.36] */
+    double st = 0.0, mean[3] = {0, 0, 0}, sx = 0, sy = 0, sxx = 0, syy = 0;
+    for (int q = 0; q < count; ++q) {
+        const double *n = nrm + 3 * q;
+        st += mf_prefilter_texel_lambert(mf_vec3_make(n[0], n[1], n[2]), v, 4);
+        for (int k = 0; k < 3; ++k)
+            mean[k] += n[k] / count;
+        double px = -n[0] / n[2], py = -n[1] / n[2];
+        sx += px, sy += py, sxx += px * px, syy += py * py;
+    }
+    r->truth = st / count;
+    r->se = 0.0;
+
+    /* naive: Lambert at the normalised mean normal, the same horizons */
+    double len = sqrt(mean[0] * mean[0] + mean[1] * mean[1] + mean[2] * mean[2]);
+    mf_vec3 nbar = mf_vec3_make(mean[0] / len, mean[1] / len, mean[2] / len);
+    r->est[1] = mf_prefilter_texel_lambert(nbar, v, 4);
+
+    /* LEADR's diffuse [Dupuy 2013, Eq. 21] as mfkit has it (mf_model_leadr_diffuse: centred isotropic
+     * Beckmann slopes) in the frame of the mean normal, with alpha^2 = var_x + var_y of the footprint's
+     * slopes (the isotropic Beckmann of the same total slope variance, alpha^2 / 2 per axis; floored at
+     * 1e-4, where the model is Lambert to O(alpha^2)); the view in that frame clamped as the
+     * prefilter clamps it (MF_PREFILTER_COS_MIN at the same azimuth); light directions below the
+     * geometric horizon count 0, as for every method */
+    double mx = sx / count, my = sy / count;
+    double var = (sxx / count - mx * mx) + (syy / count - my * my);
+    double alpha = sqrt(var > 1e-8 ? var : 1e-8);
+    mf_frame fr = mf_frame_from_normal(nbar);
+    mf_vec3 wl = mf_frame_to_local(fr, wo);
+    if (wl.z < MF_PREFILTER_COS_MIN) {
+        double h = sqrt(wl.x * wl.x + wl.y * wl.y), cm = MF_PREFILTER_COS_MIN, sm = sqrt(1.0 - cm * cm);
+        wl = h > 0.0 ? mf_vec3_make(wl.x / h * sm, wl.y / h * sm, cm) : mf_vec3_make(sm, 0.0, cm);
+    }
+    mf_brdf_params p = mf_brdf_params_iso(alpha);
+    mf_pcg32 rng;
+    mf_pcg32_seed(&rng, seed, 0);
+    double area = 4.0 * hside * hside, s1 = 0.0, s2 = 0.0;
+    for (int i = 0; i < samples; ++i) {
+        double a = (2.0 * mf_pcg32_next_double(&rng) - 1.0) * hside;
+        double b = (2.0 * mf_pcg32_next_double(&rng) - 1.0) * hside;
+        mf_vec3 x = mf_vec3_make(c.x + a * e1.x + b * e2.x, c.y + a * e1.y + b * e2.y, c.z + a * e1.z + b * e2.z);
+        double r2 = x.x * x.x + x.y * x.y + x.z * x.z, rl = sqrt(r2);
+        mf_vec3 wi = mf_vec3_make(x.x / rl, x.y / rl, x.z / rl);
+        if (!(wi.z > 0.0))
+            continue;
+        double jac = area * fabs(wi.x * c.x + wi.y * c.y + wi.z * c.z) / r2;
+        double f = leadr->eval_cos(leadr, &p, wl, mf_frame_to_local(fr, wi)) * jac;
+        s1 += f, s2 += f * f;
+    }
+    r->est[2] = s1 / samples;
+    double vs = (s2 / samples - r->est[2] * r->est[2]) * samples / (samples - 1.0);
+    r->se = sqrt(vs > 0.0 ? vs / samples : 0.0); /* LEADR's standard error (the truth is exact) */
+    for (int k = 0; k < 3; ++k)
+        if (!isfinite(r->est[k]) || !isfinite(r->truth)) {
+            snprintf(msg, msz, "a non-finite shading value (%s)", k == 0 ? "mfkit" : k == 1 ? "naive" : "leadr");
+            return CLI_EXIT_IO;
+        }
+    return 0;
+}
+
 /* The isotropic LTC table of the per-texel truth: FILE, or (path NULL) a 2 x 64 table fitted by
  * mf_ltcfit_table whose first roughness texel is the base's alpha (the lookup lands on it exactly). */
 static int pe_itab_make(pe_itab *it, const char *path, const mf_brdf_model *ggx, double alpha, char *msg, size_t msz)
@@ -356,13 +462,16 @@ static int pe_main(int argc, char **argv)
         map = mapbuf;
     }
     double alpha = 0.1;
+    int lambert = strstr(js, "\"base_brdf\": {\"model\": \"lambert\"}") != NULL;
     const char *ap = strstr(js, "\"base_brdf\": {\"model\": \"ggx\", \"alpha\": ");
-    if (!ap || sscanf(ap + strlen("\"base_brdf\": {\"model\": \"ggx\", \"alpha\": "), "%lf", &alpha) != 1 ||
-        !(alpha > 0.0 && alpha <= 1.0)) {
+    if (!lambert && (!ap || sscanf(ap + strlen("\"base_brdf\": {\"model\": \"ggx\", \"alpha\": "), "%lf", &alpha) != 1 ||
+                     !(alpha > 0.0 && alpha <= 1.0))) {
         free(js);
-        return cli_error(k_cmd, "%s: no GGX base with an alpha in (0, 1]", path);
+        return cli_error(k_cmd, "%s: base_brdf is neither GGX with an alpha in (0, 1] nor Lambert", path);
     }
     free(js);
+    if (lambert && v[E_LTC_TABLE].set)
+        return cli_error(k_cmd, "--ltc-table: only for a GGX table (%s is a Lambert table)", dir);
 
     /* the normal map, decoded as mfkit prefilter does */
     mf_image img;
@@ -412,17 +521,19 @@ static int pe_main(int argc, char **argv)
         for (int c = 0; c < 3; ++c)
             normals[3 * t + c] = n[c] / len;
     }
-    const mf_brdf_model *ggx = mf_brdf_model_find("ggx");
-    if (!ggx) {
-        rc = CLI_EXIT_IO, cli_error(k_cmd, "the model registry has no ggx");
+    const mf_brdf_model *ggx = mf_brdf_model_find("ggx"), *leadr = mf_brdf_model_find("leadr-diffuse");
+    if (!ggx || !leadr) {
+        rc = CLI_EXIT_IO, cli_error(k_cmd, "the model registry has no %s", ggx ? "leadr-diffuse" : "ggx");
         goto done;
     }
 
-    if ((rc = pe_itab_make(&itab, v[E_LTC_TABLE].set ? v[E_LTC_TABLE].s : NULL, ggx, alpha, msg, sizeof msg)) != 0) {
-        cli_error(k_cmd, "%s", msg);
-        goto done;
+    if (!lambert) {
+        if ((rc = pe_itab_make(&itab, v[E_LTC_TABLE].set ? v[E_LTC_TABLE].s : NULL, ggx, alpha, msg, sizeof msg)) != 0) {
+            cli_error(k_cmd, "%s", msg);
+            goto done;
+        }
+        have_itab = 1;
     }
-    have_itab = 1;
 
     /* the levels present */
     int nlev = 0;
@@ -449,15 +560,23 @@ static int pe_main(int argc, char **argv)
         rc = CLI_EXIT_IO, cli_error(k_cmd, "%s: cannot write: %s", fr ? stmp : rtmp, strerror(errno));
         goto done;
     }
-    fprintf(fr, "level,row,col,i_theta,theta,i_phi,phi,light_half_side,truth,truth_se,mfkit,naive,toksvig,leadr,"
-                "truth_ltc\n");
-    fprintf(fs, "level,light_half_side,i_theta,theta,records,mean_truth,mean_truth_se");
-    for (int k = 0; k < 4; ++k)
-        fprintf(fs, ",mse_%s,relrms_%s", k_method[k], k_method[k]);
-    fprintf(fs, ",mean_truth_ltc,mse_truth_ltc");
-    for (int k = 0; k < 4; ++k)
-        fprintf(fs, ",mse_ltc_%s,relrms_ltc_%s", k_method[k], k_method[k]);
-    fprintf(fs, "\n");
+    if (lambert) {
+        fprintf(fr, "level,row,col,i_theta,theta,i_phi,phi,light_half_side,truth,truth_se,mfkit,naive,leadr,leadr_se\n");
+        fprintf(fs, "level,light_half_side,i_theta,theta,records,mean_truth,mean_truth_se");
+        for (int k = 0; k < 3; ++k)
+            fprintf(fs, ",mse_%s,relrms_%s", k_method_lambert[k], k_method_lambert[k]);
+        fprintf(fs, ",mean_leadr_se\n");
+    } else {
+        fprintf(fr, "level,row,col,i_theta,theta,i_phi,phi,light_half_side,truth,truth_se,mfkit,naive,toksvig,leadr,"
+                    "truth_ltc\n");
+        fprintf(fs, "level,light_half_side,i_theta,theta,records,mean_truth,mean_truth_se");
+        for (int k = 0; k < 4; ++k)
+            fprintf(fs, ",mse_%s,relrms_%s", k_method[k], k_method[k]);
+        fprintf(fs, ",mean_truth_ltc,mse_truth_ltc");
+        for (int k = 0; k < 4; ++k)
+            fprintf(fs, ",mse_ltc_%s,relrms_ltc_%s", k_method[k], k_method[k]);
+        fprintf(fs, "\n");
+    }
 
     for (int lev = 1; lev <= nlev && rc == 0; ++lev) {
         long d[6], dm[4];
@@ -513,16 +632,26 @@ static int pe_main(int argc, char **argv)
                     for (int l = 0; l < nlights; ++l) {
                         pe_rec r;
                         uint64_t rs = seed * 0x9e3779b97f4a7c15ull + ((((uint64_t)lev * 4096 + t) * 256 + a) * 256 + b) * 8 + l;
-                        rc = eval_record(ggx, &itab, alpha, foot, count, theta, hs[l], lm + 9 * idx, mg[idx], samples, rs, &r,
-                                         msg, sizeof msg);
+                        rc = lambert ? eval_record_lambert(leadr, foot, count, theta, hs[l], lm + 9 * idx, mg[idx], samples,
+                                                           rs, &r, msg, sizeof msg)
+                                     : eval_record(ggx, &itab, alpha, foot, count, theta, hs[l], lm + 9 * idx, mg[idx],
+                                                   samples, rs, &r, msg, sizeof msg);
                         if (rc) {
                             cli_error(k_cmd, "%s: level %d texel (%d, %d): %s", dir, lev, col, row, msg);
                             break;
                         }
+                        pe_acc *A = &acc[l * o.n_theta + a];
+                        if (lambert) { /* truth exact (truth_se 0); r.se is LEADR's standard error */
+                            fprintf(fr, "%d,%d,%d,%d,%.17g,%d,%.17g,%.17g,%.17g,0,%.17g,%.17g,%.17g,%.17g\n", lev, row, col, a,
+                                    theta, b, phi, hs[l], r.truth, r.est[0], r.est[1], r.est[2], r.se);
+                            for (int k = 0; k < 3; ++k)
+                                A->se2[k] += (r.est[k] - r.truth) * (r.est[k] - r.truth);
+                            A->st += r.truth, A->sse += r.se, A->cnt += 1;
+                            continue;
+                        }
                         fprintf(fr, "%d,%d,%d,%d,%.17g,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", lev,
                                 row, col, a, theta, b, phi, hs[l], r.truth, r.se, r.est[0], r.est[1], r.est[2], r.est[3],
                                 r.truth_ltc);
-                        pe_acc *A = &acc[l * o.n_theta + a];
                         for (int k = 0; k < 4; ++k)
                             A->se2[k] += (r.est[k] - r.truth) * (r.est[k] - r.truth),
                                 A->se2l[k] += (r.est[k] - r.truth_ltc) * (r.est[k] - r.truth_ltc);
@@ -536,6 +665,15 @@ static int pe_main(int argc, char **argv)
             for (int a = 0; a < o.n_theta; ++a) {
                 pe_acc *A = &acc[l * o.n_theta + a];
                 double mt = A->st / A->cnt;
+                if (lambert) {
+                    fprintf(fs, "%d,%.17g,%d,%.17g,%.0f,%.17g,0", lev, hs[l], a, mf_prefilter_theta(&o, a), A->cnt, mt);
+                    for (int k = 0; k < 3; ++k) {
+                        double mse = A->se2[k] / A->cnt;
+                        fprintf(fs, ",%.17g,%.17g", mse, mt > 0.0 ? sqrt(mse) / mt : 0.0);
+                    }
+                    fprintf(fs, ",%.17g\n", A->sse / A->cnt);
+                    continue;
+                }
                 fprintf(fs, "%d,%.17g,%d,%.17g,%.0f,%.17g,%.17g", lev, hs[l], a, mf_prefilter_theta(&o, a), A->cnt, mt,
                         A->sse / A->cnt);
                 for (int k = 0; k < 4; ++k) {

@@ -505,6 +505,34 @@ static void mix_sample_weights(const mf_brdf_model *m, const mf_brdf_params *p, 
         }
         return;
     }
+    if (x->kind == MF_PREFILTER_BASE_LAMBERT && wo.z > 0.0) {
+        /* mix_sample_texel's Lambert branch and mix_eval_pdf with the same operations (the same bits),
+         * the cosines and sines of 2 pi u[1] from the thread's angle cache (mix_angles_get: the GGX
+         * path's; they were 9 % of the diffuse table's CPU, bench_prefilter --size 32 --base lambert) */
+        const mix_angles *ang = mix_angles_get(u, n);
+        for (int i = 0; i < n; ++i) {
+            double v0;
+            const double *r = x->rot + 9 * mix_pick_texel(x, u[2 * i], &v0);
+            double rr = sqrt(v0), z = sqrt(fmax(0.0, 1.0 - v0)), cs, sn;
+            if (ang)
+                cs = ang->cs[i], sn = ang->sn[i];
+            else {
+                double ph = 2.0 * MF_PI * u[2 * i + 1];
+                cs = cos(ph), sn = sin(ph);
+            }
+            double bp = z * MF_INV_PI;
+            wi[i] = rot_apply(r, mf_vec3_make(rr * cs, rr * sn, z));
+            pdf[i] = 0.0;
+            w[i] = 0.0;
+            if (bp > 0.0 && wi[i].z > 0.0 && mf_vec3_isfinite(wi[i])) {
+                double f;
+                mix_eval_pdf(x, p, wo, wi[i], &f, &pdf[i]);
+                if (pdf[i] > 0.0)
+                    w[i] = f / pdf[i];
+            }
+        }
+        return;
+    }
     for (int i = 0; i < n; ++i) {
         pdf[i] = 0.0;
         w[i] = 0.0;
@@ -943,6 +971,8 @@ void mf_prefilter_options_default_diffuse(mf_prefilter_options *o)
     o->base = MF_PREFILTER_BASE_LAMBERT;
     o->n_theta = 2;
     o->n_phi = 4;
+    /* 4096 directions at level 1 too: 1024 (shift 2) made the diffuse level-1 MSE of a 32 x 32 bump
+     * map 17 % worse, 2048 (shift 1) 2.2 % (prefilter-eval; docs/prefilter.md, "Diffuse table") */
     o->level1_shift = 0;
 }
 
@@ -1287,13 +1317,23 @@ static mf_status fit_row_entry(mf_prefilter_mix *mix, const mf_brdf_params *p, d
     if (st != MF_OK)
         return st;
     int grazing = cos(th) < MF_PREFILTER_MULTISTART_COS;
+    /* The fitter's elevation: the Lambert mixture does not depend on the view (mix_eval_pdf), and the
+     * fitter reads theta only to sample the model at wo and to take GRAZING_FACTOR times the
+     * directions at grazing views (mf_ltcfit_aniso.c, atexel_prepare), so the diffuse table's rows are
+     * fitted at theta = 0 (the same problem, the base number of directions; revision 8); the starts
+     * stay the elevation's (grazing above).  Measured side by side (bench_prefilter --size 32 --base
+     * lambert, with the Lambert angle cache of mix_sample_weights): 1.30 -> 0.59-0.65 ms of CPU per
+     * lobe, eval MSE per level within -3.1 % .. +1.8 % of revision 7's.  Conjugating the theta = 0
+     * lobe to every view instead (no row fits) made the demo's levels 2-4 6.7 times worse.
+     * docs/prefilter.md, "Diffuse table: evaluation and cost (fitter revision 8)". */
+    double fth = mix->kind == MF_PREFILTER_BASE_LAMBERT ? 0.0 : th;
     if (!nb)
-        return grazing ? mf_ltcfit_aniso_entry_fit_mirrored_two(&mix->model, *p, th, mir, alb[0], alb[1], prev, NULL, fo, e)
-                       : mf_ltcfit_aniso_entry_fit_mirrored(&mix->model, *p, th, mir, alb[0], alb[1], prev, NULL, fo, e);
+        return grazing ? mf_ltcfit_aniso_entry_fit_mirrored_two(&mix->model, *p, fth, mir, alb[0], alb[1], prev, NULL, fo, e)
+                       : mf_ltcfit_aniso_entry_fit_mirrored(&mix->model, *p, fth, mir, alb[0], alb[1], prev, NULL, fo, e);
     const double *starts[3] = {nb, prev, NULL};
     int nsolved = 0;
     mf_ltcfit_aniso_entry ee[3];
-    st = mf_ltcfit_aniso_entry_fit_mirrored_multi(&mix->model, *p, th, mir, alb[0], alb[1], starts, 3,
+    st = mf_ltcfit_aniso_entry_fit_mirrored_multi(&mix->model, *p, fth, mir, alb[0], alb[1], starts, 3,
                                                   nb_res >= 0.0 ? MF_PREFILTER_ACCEPT * nb_res : -1.0, fo, ee,
                                                   &nsolved);
     if (st != MF_OK)

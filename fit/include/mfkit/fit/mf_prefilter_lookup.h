@@ -14,7 +14,8 @@
  * The result: the forward M (row-major, view-azimuth-aligned frame) and the magnitude.
  *
  * Also here: mf_prefilter_texel_ltc, the per-texel LTC shading of one texel, the thesis' ground
- * truth and naive baseline [Nahmias 2022, Sec. 4.1] and mfkit's level 0.
+ * truth and naive baseline [Nahmias 2022, Sec. 4.1] and mfkit's level 0; and
+ * mf_prefilter_texel_lambert, one texel's exact Lambert shading (the diffuse table's ground truth).
  */
 #ifndef MF_PREFILTER_LOOKUP_H
 #define MF_PREFILTER_LOOKUP_H
@@ -217,6 +218,41 @@ static inline double mf_prefilter_texel_ltc(const mf_table *t, const int field[5
         return NAN;
     mf_polygon poly = mf_polygon_make(nq, p);
     return rec[field[4]] * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
+}
+
+/* Lambert shading of one texel under a polygonal light of unit radiance, exactly: the integral over
+ * the polygon q[0..nq-1] (vertices relative to the shading point, tangent frame; two-sided) of
+ * max(0, n.wi) / pi over the directions above the geometric horizon, wi.z > 0 -- the one-texel
+ * term of the prefilter's diffuse effective BRDF (mf_prefilter_mix with the "lambert" base: f cos =
+ * max(0, n(q).wi) / pi for wi.z > 0, independent of the view) [Nahmias 2022, Eq. 2.36].  Closed
+ * form: the polygon clipped to z >= 0 (Sutherland & Hodgman 1974; the plane passes through the
+ * shading point, so the clipped polygon has the same geodesic edges), expressed in the texel's
+ * frame (normal n, a unit vector with n.z > 0), then Lambert's formula, which clips at the
+ * texel's horizon (mf_polygon_integrate_cosine) [Lambert 1760; Baum et al. 1989].  nq in
+ * [3, MF_POLYGON_MAX_VERTICES - 1] (the clip adds at most one vertex); NaN otherwise; 0 when
+ * nothing of the polygon lies above the geometric horizon. */
+static inline double mf_prefilter_texel_lambert(mf_vec3 n, const mf_vec3 *q, int nq)
+{
+    if (nq < 3 || nq > MF_POLYGON_MAX_VERTICES - 1)
+        return NAN;
+    mf_vec3 c[MF_POLYGON_MAX_VERTICES];
+    int m = 0;
+    for (int i = 0; i < nq; ++i) {
+        mf_vec3 a = q[i], b = q[i + 1 == nq ? 0 : i + 1];
+        if (a.z >= 0.0)
+            c[m++] = a;
+        if ((a.z > 0.0 && b.z < 0.0) || (a.z < 0.0 && b.z > 0.0)) {
+            double t = a.z / (a.z - b.z); /* in (0, 1), no cancellation: a.z and -b.z share a sign */
+            c[m++] = mf_vec3_make(a.x + t * (b.x - a.x), a.y + t * (b.y - a.y), 0.0);
+        }
+    }
+    if (m < 3)
+        return 0.0;
+    mf_frame f = mf_frame_from_normal(n);
+    for (int i = 0; i < m; ++i)
+        c[i] = mf_frame_to_local(f, c[i]);
+    mf_polygon poly = mf_polygon_make(m, c);
+    return mf_polygon_integrate_cosine(&poly, MF_POLYGON_TWO_SIDED);
 }
 
 #ifdef __cplusplus
