@@ -903,8 +903,9 @@ mf_status mf_prefilter_gate_stream_end(mf_prefilter_gate_stream *s)
         /* excess: gated for both tables (docs/prefilter.md, "Gating continuity across texels") */
         g->pass_cont_excess = g->worst_cont_excess <= g->max_cont_excess;
         g->pass = g->pass && g->pass_cont_excess;
-        /* own fit: gated for both tables (docs/prefilter.md, "Gating copied lobes (own fit)") */
-        g->pass_cont_owner = g->worst_cont_owner <= g->max_cont_owner;
+        /* own fit, texel and azimuth neighbours: gated for both tables (docs/prefilter.md, "Gating copied
+         * lobes (own fit)") */
+        g->pass_cont_owner = g->worst_cont_owner <= g->max_cont_owner && g->worst_cont_owner_view <= g->max_cont_owner;
         g->pass = g->pass && g->pass_cont_owner;
     }
     mf_prefilter_gate_stream_free(s);
