@@ -434,12 +434,13 @@ mf_status mf_prefilter_gate_run(const mf_prefilter_level *levels, int nlevels, m
 /* excess's gated bound: good runs of every map measured read at most 0.092 at the default views
  * (docs/prefilter.md, "Gating continuity across texels": false alarms and power) */
 #define MF_PREFILTER_GATE_CONT_EXCESS 0.2
-/* own fit's gated bound: good runs of every map measured read at most 0.156 (texel neighbours) and
- * 0.161 (azimuth neighbours) at the default views, on bump maps where a lobe cannot follow a dip of
- * its footprint's BRDF and sits nearer the neighbour's; 0.25 leaves a factor 1.55 and catches
- * copies and swaps that change a light's shading by 0.4 of the albedo or more (docs/prefilter.md,
- * "Gating copied lobes (own fit)") */
-#define MF_PREFILTER_GATE_OWN_FIT 0.25
+/* own fit's gated bound: good runs at the default views read at most 0.170 (texel neighbours, the
+ * 64 x 64 bump map; 0.134, 0.156 at 16 and 32: the tail grows with the map) and 0.161 (azimuth
+ * neighbours), 0.189 with the cheap fits of --samples 128, where a lobe cannot follow a dip of its
+ * footprint's BRDF and sits nearer a neighbour's.  0.3 leaves a factor 1.76 at the default settings
+ * and catches as many of the copies and swaps that change a light's shading by 0.4 of the albedo or
+ * more as 0.25 did (docs/prefilter.md, "Gating copied lobes (own fit)") */
+#define MF_PREFILTER_GATE_OWN_FIT 0.3
 mf_status mf_prefilter_gate_run_ref(const mf_prefilter_level *levels, int nlevels, const double *normals, int width,
                                     int height, const mf_prefilter_options *o, mf_prefilter_gate *g) MF_WARN_UNUSED;
 
