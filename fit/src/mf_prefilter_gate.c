@@ -1,8 +1,9 @@
 /* mf_prefilter_gate.c -- the prefilter's gate before export (mf_prefilter.h: mf_prefilter_gate_*):
  * energy, NaN, parent vs children, view and texel spikes of the lobes' shading, and (with the
  * normal map) the continuity of the lobes' error against the per-texel reference shading and the
- * lobes' own jumps against the reference's (excess, gated) [Nahmias 2022, Ch. 3; docs/prefilter.md,
- * "Gate" and "Gating continuity across texels"]. */
+ * lobes' own jumps against the reference's (excess, gated), and lobes copied, swapped or shifted
+ * between neighbours (own fit, gated) [Nahmias 2022, Ch. 3; docs/prefilter.md, "Gate", "Gating
+ * continuity across texels" and "Gating copied lobes (own fit)"]. */
 #define _POSIX_C_SOURCE 200809L
 #include "mfkit/fit/mf_prefilter.h"
 
@@ -441,14 +442,18 @@ static void gs_own_fit(mf_prefilter_gate_stream *s, int li, int r, int col, int 
                        const double ta0[2], const double ta1[2], const int has_t[2], const size_t vp[2],
                        const double *S, const double *R, const float *A)
 {
-    static const char *what[6] = {
-        "lobe shades the reference of texel x - 1 better than its own", "lobe shades the reference of texel x + 1 better than its own",
-        "lobe shades the reference of texel y - 1 better than its own", "lobe shades the reference of texel y + 1 better than its own",
-        "lobe shades the reference of view phi - 1 better than its own", "lobe shades the reference of view phi + 1 better than its own"};
-    static const char *dwhat[6] = {
-        "texel x - 1's lobe shades the reference better than its own", "texel x + 1's lobe shades the reference better than its own",
-        "texel y - 1's lobe shades the reference better than its own", "texel y + 1's lobe shades the reference better than its own",
-        "view phi - 1's lobe shades the reference better than its own", "view phi + 1's lobe shades the reference better than its own"};
+    static const char *what[6] = {"lobe shades the reference of texel x - 1 better than its own",
+                                  "lobe shades the reference of texel x + 1 better than its own",
+                                  "lobe shades the reference of texel y - 1 better than its own",
+                                  "lobe shades the reference of texel y + 1 better than its own",
+                                  "lobe shades the reference of view phi - 1 better than its own",
+                                  "lobe shades the reference of view phi + 1 better than its own"};
+    static const char *dwhat[6] = {"texel x - 1's lobe shades the reference better than its own",
+                                   "texel x + 1's lobe shades the reference better than its own",
+                                   "texel y - 1's lobe shades the reference better than its own",
+                                   "texel y + 1's lobe shades the reference better than its own",
+                                   "view phi - 1's lobe shades the reference better than its own",
+                                   "view phi + 1's lobe shades the reference better than its own"};
     mf_prefilter_gate *g = s->g;
     const gs_level *L = &s->L[li];
     const double *nS[6], *nR[6];
@@ -504,7 +509,7 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
         double alb = fmax(A[i], 1e-6);
         int gr = s->ref && cos(mf_prefilter_theta(&s->o, a)) < MF_PREFILTER_MULTISTART_COS;
         /* the texel neighbours along x and y (periodic: normal maps tile), once per entry: their S and
-         * R (GATE_NLIGHTS each), and the albedo of the one after; inner: not across the map's edge */
+         * R (GATE_NLIGHTS each) and albedos; inner: not across the map's edge */
         const double *tS[2][2] = {{NULL, NULL}, {NULL, NULL}}, *tR[2][2] = {{NULL, NULL}, {NULL, NULL}};
         double ta0[2] = {0.0, 0.0}, ta1[2] = {0.0, 0.0};
         int has_t[2], inner[2];
