@@ -430,6 +430,115 @@ static void test_stream(void)
     mf_prefilter_levels_free(lv, nl);
 }
 
+/* The own-fit check (mf_prefilter_gate_own_fit) on values worked by hand: s = S / albedo, r = R / albedo,
+ * |.| the largest over the lights.  A lobe copied from neighbour j (s = s_j, which fits r_j to 0.02)
+ * reads owner |s - r| - |s - r_j| = 0.38 - 0.02; a swap (j now holds the entry's own good lobe) reads
+ * dominated |s - r| - |s_j - r| = 0.38; a lobe fitting its own reference reads 0; a non-finite entry
+ * is skipped (0, -1), a non-finite neighbour ignored.  Tolerance 1e-15: a few roundings of numbers
+ * near 1. */
+static void test_own_fit_values(void)
+{
+    const double R[2] = {0.25, 0.25}, Rj[2] = {0.45, 0.25}, Sj[2] = {0.44, 0.25}; /* albedo 0.5 and 0.5 */
+    const double *nS[2] = {Sj, Sj}, *nR[2] = {Rj, Rj}, na[2] = {0.5, 0.5};
+    mf_prefilter_gate_own o;
+    mf_prefilter_gate_own_fit(2, Sj, R, 0.5, 1, nS, nR, na, &o); /* copied: the entry holds s_j */
+    CHECKF(o.owner_at == 0 && fabs(o.owner - 0.36) < 1e-15 && o.dominated == 0.0 && o.dominated_at == -1,
+           "own fit, copy: owner %.17g at %d (want 0.36 at 0), dominated %.17g at %d (want 0, -1)", o.owner, o.owner_at,
+           o.dominated, o.dominated_at);
+    const double *sS[1] = {R}; /* swapped: the neighbour holds a lobe that shades r exactly */
+    mf_prefilter_gate_own_fit(2, Sj, R, 0.5, 1, sS, nR, na, &o);
+    CHECKF(o.owner_at == 0 && fabs(o.owner - 0.36) < 1e-15 && o.dominated_at == 0 && fabs(o.dominated - 0.38) < 1e-15,
+           "own fit, swap: owner %.17g at %d (want 0.36), dominated %.17g at %d (want 0.38 at 0)", o.owner, o.owner_at,
+           o.dominated, o.dominated_at);
+    mf_prefilter_gate_own_fit(2, R, R, 0.5, 2, nS, nR, na, &o); /* a lobe shading its own reference exactly */
+    CHECKF(o.owner == 0.0 && o.owner_at == -1 && o.dominated == 0.0 && o.dominated_at == -1,
+           "own fit, exact lobe: owner %g at %d, dominated %g at %d (want 0, -1)", o.owner, o.owner_at, o.dominated,
+           o.dominated_at);
+    const double bad[2] = {NAN, 0.25}, *bS[2] = {bad, Sj};
+    mf_prefilter_gate_own_fit(2, bad, R, 0.5, 1, nS, nR, na, &o);
+    CHECKF(o.owner == 0.0 && o.owner_at == -1, "own fit, NaN entry: owner %g at %d (want 0, -1)", o.owner, o.owner_at);
+    mf_prefilter_gate_own_fit(2, Sj, R, 0.5, 2, bS, nR, na, &o); /* neighbour 0 non-finite: neighbour 1 counts */
+    CHECKF(o.owner_at == 1 && fabs(o.owner - 0.36) < 1e-15, "own fit, NaN neighbour: owner %.17g at %d (want 0.36 at 1)",
+           o.owner, o.owner_at);
+}
+
+/* The own-fit check on fitted lobes (bump map 8 x 8, 4 x 8 views; GGX): the good run passes with owner
+ * below its bound, and a planted copy and swap of level-1 texel neighbours (x + 1, the same view;
+ * magnitudes scaled to keep each entry's albedo, so the energy check cannot see them) are caught by it.
+ * The planted entry: the first level-1 entry, in storage order, whose copy changes a gate light's
+ * shading by at least 0.5 of the albedo (lobe_change) -- a change the issue's gate must not let through.
+ * Also the constant map (8 x 8): every footprint is the same, so owner is 0 but for rounding. */
+static void test_own_fit_planted(void)
+{
+    const int w = 8, nt = 4, np = 8;
+    double *n = malloc(sizeof(double) * 3 * w * w);
+    CHECK(n != NULL);
+    mf_prefilter_options o;
+    mf_prefilter_options_default(&o);
+    o.n_theta = nt, o.n_phi = np, o.threads = 2, o.keep_albedo = 1;
+    mf_prefilter_level *lv;
+    int nl;
+    char msg[256];
+    make_map(2, w, n);
+    CHECK(mf_prefilter_run(n, w, w, &o, &lv, &nl, msg, sizeof msg) == MF_OK);
+    mf_prefilter_gate g;
+    mf_prefilter_gate_bounds_default(&g);
+    CHECK(mf_prefilter_gate_run_ref(lv, nl, n, w, w, &o, &g) == MF_OK);
+    printf("bump 8x8 4x8 good: own fit %.4f (%s), azimuths %.4f, dominated %.4f\n", g.worst_cont_owner,
+           g.where_cont_owner, g.worst_cont_owner_view, g.worst_cont_dominated);
+    CHECKF(g.pass && g.pass_cont_owner && g.worst_cont_owner > 0.0,
+           "bump: good run: pass %d, own fit %.4g (bound %.3g; 0 would mean the check saw nothing)", g.pass,
+           g.worst_cont_owner, g.max_cont_owner);
+    mf_prefilter_level *L = &lv[0];
+    const size_t nv = (size_t)nt * np, ne = (size_t)L->width * L->height * nv;
+    size_t e = ne, f = 0;
+    float se[10], sf[10];
+    for (size_t i = 0; i < ne && e == ne; ++i) {
+        size_t t = i / nv, row = t / (size_t)L->width, col = t % (size_t)L->width;
+        size_t j = (row * (size_t)L->width + (col + 1) % (size_t)L->width) * nv + i % nv;
+        memcpy(se, L->m + 9 * i, 36), se[9] = L->magnitude[i];
+        memcpy(L->m + 9 * i, L->m + 9 * j, 36), L->magnitude[i] = L->albedo[i] / L->albedo[j] * L->magnitude[j];
+        if (lobe_change(L, i, se, &o) >= 0.5)
+            e = i, f = j;
+        memcpy(L->m + 9 * i, se, 36), L->magnitude[i] = se[9];
+    }
+    CHECKF(e < ne, "bump: no level-1 texel copy changes the shading by 0.5 of the albedo (the plant needs one)");
+    if (e < ne) {
+        memcpy(se, L->m + 9 * e, 36), se[9] = L->magnitude[e];
+        memcpy(sf, L->m + 9 * f, 36), sf[9] = L->magnitude[f];
+        /* the copy: entry e gets f's lobe */
+        memcpy(L->m + 9 * e, sf, 36), L->magnitude[e] = L->albedo[e] / L->albedo[f] * sf[9];
+        double ch = lobe_change(L, e, se, &o);
+        mf_prefilter_gate_bounds_default(&g);
+        CHECK(mf_prefilter_gate_run_ref(lv, nl, n, w, w, &o, &g) == MF_OK);
+        printf("bump: planted copy at level 1, entry %zu (change %.3f): own fit %.4f (%s); excess %.4f, energy %.3g, "
+               "level %.3f\n", e, ch, g.worst_cont_owner, g.where_cont_owner, g.worst_cont_excess, g.worst_energy,
+               g.worst_level);
+        CHECKF(!g.pass && !g.pass_cont_owner, "bump: a copied level-1 lobe (change %.3f of the albedo) passes: own fit "
+               "%.4g (bound %.3g), pass %d", ch, g.worst_cont_owner, g.max_cont_owner, g.pass);
+        /* the swap: f gets e's lobe too */
+        memcpy(L->m + 9 * f, se, 36), L->magnitude[f] = L->albedo[f] / L->albedo[e] * se[9];
+        mf_prefilter_gate_bounds_default(&g);
+        CHECK(mf_prefilter_gate_run_ref(lv, nl, n, w, w, &o, &g) == MF_OK);
+        printf("bump: planted swap: own fit %.4f (%s); dominated %.4f; excess %.4f\n", g.worst_cont_owner,
+               g.where_cont_owner, g.worst_cont_dominated, g.worst_cont_excess);
+        CHECKF(!g.pass && !g.pass_cont_owner, "bump: swapped level-1 lobes pass: own fit %.4g (bound %.3g), pass %d",
+               g.worst_cont_owner, g.max_cont_owner, g.pass);
+        memcpy(L->m + 9 * e, se, 36), L->magnitude[e] = se[9];
+        memcpy(L->m + 9 * f, sf, 36), L->magnitude[f] = sf[9];
+    }
+    mf_prefilter_levels_free(lv, nl);
+    make_map(0, w, n);
+    CHECK(mf_prefilter_run(n, w, w, &o, &lv, &nl, msg, sizeof msg) == MF_OK);
+    mf_prefilter_gate_bounds_default(&g);
+    CHECK(mf_prefilter_gate_run_ref(lv, nl, n, w, w, &o, &g) == MF_OK);
+    /* 1e-12: the footprints and their lobes are the same; what is left is rounding (measured 9.0e-17) */
+    CHECKF(g.pass && g.worst_cont_owner < 1e-12, "constant: own fit %.4g on the good run (want 0: every footprint is "
+           "the same), pass %d", g.worst_cont_owner, g.pass);
+    mf_prefilter_levels_free(lv, nl);
+    free(n);
+}
+
 int main(int argc, char **argv)
 {
     if (argc >= 7 && !strcmp(argv[1], "dump")) { /* dump W H NT NP NCORR [lambert] */
@@ -516,5 +625,7 @@ int main(int argc, char **argv)
     }
     test_facet_continuity();
     test_stream();
+    test_own_fit_values();
+    test_own_fit_planted();
     MF_TEST_MAIN_END();
 }

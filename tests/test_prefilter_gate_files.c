@@ -5,14 +5,20 @@
  * docs/prefilter_log.md ("Gating continuity across texels"), not a CTest test: it prints every
  * figure of the gate's result.
  *
- * Usage: test_prefilter_gate_files DIR MAP NT NP [ggx|lambert] [ALPHA] [THREADS] [corrupt NCORR [SEED]]
- *   corrupt: then NCORR corruptions of each kind, one at a time on the good table, each gated and
+ * Usage: test_prefilter_gate_files DIR MAP NT NP [ggx|lambert] [ALPHA] [THREADS] [corrupt NCORR [SEED [KINDS]]]
+ *   corrupt: then NCORR corruptions of each kind in KINDS (digits, default 0123: the draws of the
+ *   first measurements), one at a time on the good table, each gated and
  *   printed on one line: kind, level, the shading change (lobe_change), the gated checks' verdict and
  *   the continuity measures.  Kinds: 0 one matrix entry (among those >= 0.05 of the largest) scaled by
  *   1 + s, s log-uniform in [0.02, 1]; 1 the lobe swapped with its phi neighbour; 2 the lobe mirrored
  *   (x -> -x: its highlight on the other side of the view plane); 3 the lobe replaced by its texel
- *   neighbour's (x + 1, periodic) at the same view.  Levels drawn uniformly, except a 1 x 1 top level (no
- *   texel neighbours: the continuity measures do not cover it). */
+ *   neighbour's (x + 1, periodic) at the same view; then, each magnitude scaled to keep the entry's
+ *   albedo (so the energy check cannot see the move): 4 the lobe swapped with its texel neighbour
+ *   x + 1; 5 copied from texel y + 1; 6 copied from its phi neighbour b + 1; 7 copied from its theta
+ *   neighbour (a + 1, a - 1 on the last row); 8 swapped with it; 9 a run of 4 texels along x (fewer on
+ *   narrow levels), every view, each given its x + 1 neighbour's lobes (a tile written one texel off).
+ *   Levels drawn uniformly, except a 1 x 1 top level (no texel neighbours: the continuity measures do
+ *   not cover it). */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdint.h>
@@ -59,35 +65,72 @@ static float *read_npy(const char *path, size_t n)
     return v;
 }
 
-static void corrupt(mf_prefilter_level *lv, int nl, const double *n, int W, int H, const mf_prefilter_options *o,
-                    int ncorr, uint64_t seed)
+/* moves lobe f's matrix into entry e, its magnitude scaled so that the lobe keeps e's albedo (the
+ * energy check then cannot see the move; src holds f's saved matrix and magnitude) */
+static void put_lobe(mf_prefilter_level *L, size_t e, size_t f, const float *src)
 {
-    const int nt = o->n_theta, np = o->n_phi;
-    for (int c = 0; c < 4 * ncorr; ++c) {
-        int kind = c % 4;
+    memcpy(L->m + 9 * e, src, 36);
+    L->magnitude[e] = L->albedo[e] / L->albedo[f] * src[9];
+}
+
+static void corrupt(mf_prefilter_level *lv, int nl, const double *n, int W, int H, const mf_prefilter_options *o,
+                    int ncorr, uint64_t seed, const char *kinds)
+{
+    const int nt = o->n_theta, np = o->n_phi, nk = (int)strlen(kinds);
+    size_t nv = (size_t)nt * np;
+    size_t *idx = malloc(sizeof(size_t) * 4 * nv);
+    float *sv = malloc(sizeof(float) * 10 * 4 * nv);
+    for (int c = 0; c < nk * ncorr; ++c) {
+        int kind = kinds[c % nk] - '0';
         int nlt = nl - (lv[nl - 1].width == 1 && lv[nl - 1].height == 1 && nl > 1); /* not the 1 x 1 top level: no texel axis */
         int l = (int)(lcg(&seed) % (uint64_t)nlt);
         mf_prefilter_level *L = &lv[l];
-        size_t nv = (size_t)nt * np, ne = (size_t)L->width * L->height * nv;
+        size_t ne = (size_t)L->width * L->height * nv;
         size_t e = lcg(&seed) % ne, f = e;
-        int b = (int)(e % (size_t)np);
+        int b = (int)(e % (size_t)np), a = (int)(e / (size_t)np % (size_t)nt);
         double s = 0.02 * pow(50.0, (double)lcg(&seed) / 2147483648.0);
-        if (kind == 1)
-            f = e - b + (size_t)((b + 1) % np);
-        float se[10], sf[10];
-        memcpy(se, L->m + 9 * e, 36), se[9] = L->magnitude[e];
+        size_t t = e / nv, row = t / (size_t)L->width, col = t % (size_t)L->width;
+        size_t tx = (row * (size_t)L->width + (col + 1) % (size_t)L->width) * nv + e % nv; /* x + 1, same view */
+        size_t ty = (((row + 1) % (size_t)L->height) * (size_t)L->width + col) * nv + e % nv; /* y + 1 */
+        size_t vphi = e - b + (size_t)((b + 1) % np), vth = a + 1 < nt ? e + np : e - np;
+        int nch = 0; /* the changed entries, saved in idx, sv */
+        if (kind == 1 || kind == 4 || kind == 8)
+            f = kind == 1 ? vphi : kind == 4 ? tx : vth;
+        if (kind == 9) { /* a run of up to 4 texels along x, every view, each given its x + 1 neighbour's lobes */
+            int run = L->width >= 5 ? 4 : L->width - 1;
+            for (int q = 0; q < run; ++q)
+                for (size_t v = 0; v < nv; ++v) {
+                    size_t x = (row * (size_t)L->width + (col + q) % (size_t)L->width) * nv + v;
+                    idx[nch] = x, memcpy(sv + 10 * nch, L->m + 9 * x, 36), sv[10 * nch + 9] = L->magnitude[x], ++nch;
+                }
+            for (int q = 0; q < nch; ++q) { /* in order: x + 1 of the last one is not yet changed */
+                size_t x = idx[q], src = ((row * (size_t)L->width + (col + q / nv + 1) % (size_t)L->width) * nv) + x % nv;
+                float cur[10];
+                memcpy(cur, L->m + 9 * src, 36), cur[9] = L->magnitude[src];
+                put_lobe(L, x, src, cur);
+            }
+        } else {
+            idx[nch] = e, memcpy(sv, L->m + 9 * e, 36), sv[9] = L->magnitude[e], ++nch;
+            if (f != e)
+                idx[nch] = f, memcpy(sv + 10, L->m + 9 * f, 36), sv[19] = L->magnitude[f], ++nch;
+        }
+        float *se = sv, *sf = sv + 10;
         if (kind == 3) { /* texel neighbour x + 1 (periodic) at the same view */
-            size_t t = e / nv, row = t / (size_t)L->width, col = t % (size_t)L->width;
-            size_t g = (row * (size_t)L->width + (col + 1) % (size_t)L->width) * nv + e % nv;
-            memcpy(L->m + 9 * e, L->m + 9 * g, 36), L->magnitude[e] = L->albedo[e] / L->albedo[g] * L->magnitude[g];
+            memcpy(L->m + 9 * e, L->m + 9 * tx, 36), L->magnitude[e] = L->albedo[e] / L->albedo[tx] * L->magnitude[tx];
+        } else if (kind == 5 || kind == 6 || kind == 7) { /* copied: texel y + 1, azimuth b + 1, elevation a +- 1 */
+            size_t src = kind == 5 ? ty : kind == 6 ? vphi : vth;
+            float cur[10];
+            memcpy(cur, L->m + 9 * src, 36), cur[9] = L->magnitude[src];
+            put_lobe(L, e, src, cur);
+        } else if (kind == 4 || kind == 8) { /* swapped: texel x + 1, elevation a +- 1 (magnitudes kept per albedo) */
+            put_lobe(L, e, f, sf), put_lobe(L, f, e, se);
         } else if (kind == 2) {
             float *m = L->m + 9 * e;
             m[1] = -m[1], m[2] = -m[2], m[3] = -m[3], m[6] = -m[6];
         } else if (kind == 1) {
-            memcpy(sf, L->m + 9 * f, 36), sf[9] = L->magnitude[f];
             memcpy(L->m + 9 * e, sf, 36), L->magnitude[e] = sf[9];
             memcpy(L->m + 9 * f, se, 36), L->magnitude[f] = se[9];
-        } else {
+        } else if (kind == 0) {
             float big = 0.0f;
             for (int i = 0; i < 9; ++i)
                 big = fmaxf(big, fabsf(se[i]));
@@ -98,23 +141,23 @@ static void corrupt(mf_prefilter_level *lv, int nl, const double *n, int W, int 
             int i = cand[lcg(&seed) % (uint64_t)nc];
             L->m[9 * e + i] = (float)(se[i] * (1.0 + s));
         }
-        double ch = lobe_change(L, e, se, o);
-        if (kind == 1)
-            ch = fmax(ch, lobe_change(L, f, sf, o));
+        double ch = 0.0;
+        for (int q = 0; q < nch; ++q)
+            ch = fmax(ch, lobe_change(L, idx[q], sv + 10 * q, o));
         mf_prefilter_gate g;
         mf_prefilter_gate_bounds_default(&g);
         if (mf_prefilter_gate_run_ref(lv, nl, n, W, H, o, &g) != MF_OK)
             exit(1);
-        size_t t = e / nv;
-        printf("C kind %d level %d texel %zu %zu view %zu %zu change %.5f gated %d cross %.5f excess %.5f "
-               "cont %.5f %.5f %.5f\n", kind, L->level, t % (size_t)L->width, t / (size_t)L->width, e / (size_t)np % (size_t)nt,
-               e % (size_t)np, ch, !(g.pass_energy && g.pass_nan && g.pass_level), g.worst_cont_cross,
-               g.worst_cont_excess, g.worst_cont_texel, g.worst_cont_view, g.worst_cont_grazing);
+        printf("C kind %d level %d texel %zu %zu view %d %d change %.5f gated %d cross %.5f excess %.5f "
+               "cont %.5f %.5f %.5f owner %.5f ownerv %.5f dominated %.5f pass %d\n", kind, L->level, col, row, a, b, ch,
+               !(g.pass_energy && g.pass_nan && g.pass_level), g.worst_cont_cross, g.worst_cont_excess,
+               g.worst_cont_texel, g.worst_cont_view, g.worst_cont_grazing, g.worst_cont_owner, g.worst_cont_owner_view,
+               g.worst_cont_dominated, g.pass);
         fflush(stdout);
-        memcpy(L->m + 9 * e, se, 36), L->magnitude[e] = se[9];
-        if (kind == 1)
-            memcpy(L->m + 9 * f, sf, 36), L->magnitude[f] = sf[9];
+        for (int q = nch - 1; q >= 0; --q)
+            memcpy(L->m + 9 * idx[q], sv + 10 * q, 36), L->magnitude[idx[q]] = sv[10 * q + 9];
     }
+    free(idx), free(sv);
 }
 
 int main(int argc, char **argv)
@@ -193,6 +236,9 @@ int main(int argc, char **argv)
            g.where_cont_grazing, g.worst_ref_error, g.worst_jump_texel, g.worst_jump_view);
     printf("cross %.6g (%s)  cross_texel %.6g\n", g.worst_cont_cross, g.where_cont_cross, g.worst_cont_cross_texel);
     printf("excess %.6g (%s)\n", g.worst_cont_excess, g.where_cont_excess);
+    printf("own fit, azimuths: owner %.6g (%s)\n", g.worst_cont_owner_view, g.where_cont_owner_view);
+    printf("own fit: owner %.6g (%s)  dominated %.6g (%s)\n", g.worst_cont_owner, g.where_cont_owner,
+           g.worst_cont_dominated, g.where_cont_dominated);
     const char *raw = getenv("MF_GATE_RAW"); /* the result's bytes, for comparing builds */
     if (raw) {
         FILE *f = fopen(raw, "wb");
@@ -200,7 +246,8 @@ int main(int argc, char **argv)
             return 1;
     }
     if (argc > 9 && !strcmp(argv[8], "corrupt"))
-        corrupt(lv, nl, n, W, H, &o, atoi(argv[9]), argc > 10 ? strtoull(argv[10], NULL, 10) : 12345);
+        corrupt(lv, nl, n, W, H, &o, atoi(argv[9]), argc > 10 ? strtoull(argv[10], NULL, 10) : 12345,
+                argc > 11 ? argv[11] : "0123");
     for (int l = 0; l < nl; ++l)
         free(lv[l].m), free(lv[l].magnitude), free(lv[l].albedo);
     free(lv), free(n), mf_image_free(&img);

@@ -120,9 +120,10 @@ static void check_run(int W, int H, int nt, int np, int nan_lobes, int lambert)
             g1 = g;
             /* the tied level-1 worsts sit at their first place: columns 0-3 (of 0-7), rows 0-1 */
             const char *where[] = {g.where_view,         g.where_texel,      g.where_cont_view, g.where_cont_texel,
-                                   g.where_cont_grazing, g.where_cont_cross, g.where_cont_excess};
+                                   g.where_cont_grazing, g.where_cont_cross, g.where_cont_excess,
+                                   g.where_cont_owner,   g.where_cont_owner_view, g.where_cont_dominated};
             int seen = 0;
-            for (int q = 0; q < 7 && !nan_lobes; ++q) { /* (NaN lobes break some ties) */
+            for (int q = 0; q < 10 && !nan_lobes; ++q) { /* (NaN lobes break some ties) */
                 int c, r;
                 if (strstr(where[q], "level 1,") && place(where[q], &c, &r)) {
                     ++seen;
@@ -142,6 +143,12 @@ static void check_run(int W, int H, int nt, int np, int nan_lobes, int lambert)
             /* excess (gated) at level 1, where the ties are: its place is checked above */
             CHECKF(nan_lobes || strstr(g.where_cont_excess, "level 1,"), "%s %dx%d: excess %g not at level 1: %s",
                    lambert ? "lambert" : "ggx", W, H, g.worst_cont_excess, g.where_cont_excess);
+            /* own fit (gated) and its reported companions: worsts to merge, at level 1 (their ties) */
+            CHECKF(g.worst_cont_owner > 0.0 && g.worst_cont_dominated > 0.0 && (np < 2 || g.worst_cont_owner_view > 0.0) &&
+                       (nan_lobes || strstr(g.where_cont_owner, "level 1,")),
+                   "%s %dx%d: own fit %g (%s), azimuths %g, dominated %g: no level-1 worst to compare",
+                   lambert ? "lambert" : "ggx", W, H, g.worst_cont_owner, g.where_cont_owner, g.worst_cont_owner_view,
+                   g.worst_cont_dominated);
             continue;
         }
         CHECKF(memcmp(&g, &g1, sizeof g) == 0,

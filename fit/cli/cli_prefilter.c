@@ -948,6 +948,15 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
                 g.worst_cont_excess, g.max_cont_excess, g.pass_cont_excess ? "ok" : "FAIL");
         if (!g.pass_cont_excess)
             fprintf(stderr, "mfkit prefilter: worst continuity across texels at %s\n", g.where_cont_excess);
+        fprintf(stderr,
+                "mfkit prefilter: own fit, how much better a lobe shades a neighbour's reference than its own: "
+                "texels %.4g, azimuths %.4g (bound %.3g) %s; reported: a neighbour's lobe better on the entry's "
+                "reference %.4g\n",
+                g.worst_cont_owner, g.worst_cont_owner_view, g.max_cont_owner, g.pass_cont_owner ? "ok" : "FAIL",
+                g.worst_cont_dominated);
+        if (!g.pass_cont_owner)
+            fprintf(stderr, "mfkit prefilter: worst own fit at %s\n",
+                    g.worst_cont_owner >= g.worst_cont_owner_view ? g.where_cont_owner : g.where_cont_owner_view);
         if (g.cont_gated && !(g.pass_cont_texel && g.pass_cont_view && g.pass_cont_grazing))
             fprintf(stderr, "mfkit prefilter: worst continuity at %s\n",
                     !g.pass_cont_texel ? g.where_cont_texel : !g.pass_cont_view ? g.where_cont_view : g.where_cont_grazing);
@@ -1070,7 +1079,20 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
                           "extreme less the reference's own, / albedo, entries with a texel axis\", \"where\": ",
                       g.pass_cont_excess ? "true" : "false", g.worst_cont_excess, g.max_cont_excess);
         mf_json_string(&b, g.where_cont_excess);
-        mf_buf_printf(&b, "}, \"largest_jump\": {\"texel\": %.6g, \"view\": %.6g}, \"largest_error\": %.6g},\n"
+        mf_buf_printf(&b, "}, \"own_fit\": {\"passed\": %s, \"worst\": %.6g, \"bound\": %.6g, \"measures\": \"the "
+                          "largest, over an entry's texel neighbours j (x, y, periodic; azimuths apart), of "
+                          "|s - r| - |s - r_j|, s the lobe's shading and r the reference / albedo, |.| the largest "
+                          "over the lights (a lobe copied, swapped or shifted from a neighbour)\", \"where\": ",
+                      g.pass_cont_owner ? "true" : "false", g.worst_cont_owner, g.max_cont_owner);
+        mf_json_string(&b, g.where_cont_owner);
+        mf_buf_printf(&b, ", \"azimuths\": {\"worst\": %.6g, \"where\": ",
+                      g.worst_cont_owner_view);
+        mf_json_string(&b, g.where_cont_owner_view);
+        mf_buf_printf(&b, "}, \"dominated\": {\"reported_only\": true, \"worst\": %.6g, \"measures\": \"the largest "
+                          "|s - r| - |s_j - r| over texel and azimuth neighbours\", \"where\": ",
+                      g.worst_cont_dominated);
+        mf_json_string(&b, g.where_cont_dominated);
+        mf_buf_printf(&b, "}}, \"largest_jump\": {\"texel\": %.6g, \"view\": %.6g}, \"largest_error\": %.6g},\n"
                           "    \"worst_albedo_quadrature_err\": %.6g,\n"
                           "    \"not_checked\": \"%s\"}\n}\n",
                       g.worst_jump_texel, g.worst_jump_view, g.worst_ref_error, worst_alb,

@@ -1,8 +1,9 @@
 /* mf_prefilter_gate.c -- the prefilter's gate before export (mf_prefilter.h: mf_prefilter_gate_*):
  * energy, NaN, parent vs children, view and texel spikes of the lobes' shading, and (with the
  * normal map) the continuity of the lobes' error against the per-texel reference shading and the
- * lobes' own jumps against the reference's (excess, gated) [Nahmias 2022, Ch. 3; docs/prefilter.md,
- * "Gate" and "Gating continuity across texels"]. */
+ * lobes' own jumps against the reference's (excess, gated), and lobes copied, swapped or shifted
+ * between neighbours (own fit, gated) [Nahmias 2022, Ch. 3; docs/prefilter.md, "Gate", "Gating
+ * continuity across texels" and "Gating copied lobes (own fit)"]. */
 #define _POSIX_C_SOURCE 200809L
 #include "mfkit/fit/mf_prefilter.h"
 
@@ -34,6 +35,7 @@ void mf_prefilter_gate_bounds_default(mf_prefilter_gate *g)
     g->max_cont_lambert = MF_PREFILTER_GATE_CONT_LAMBERT;
     g->max_cont_cross = MF_PREFILTER_GATE_CONT_CROSS;
     g->max_cont_excess = MF_PREFILTER_GATE_CONT_EXCESS;
+    g->max_cont_owner = MF_PREFILTER_GATE_OWN_FIT;
 }
 
 /* The gate's lights, in the view-azimuth-aligned frame of view theta: quads of half-width
@@ -230,6 +232,7 @@ struct mf_prefilter_gate_stream {
     gate_clipped *clipped; /* the lights clipped to z >= 0, per view theta (GATE_NLIGHTS each) */
     gate_iso *iso;
     uint64_t k_energy, k_level, k_view, k_texel, k_cont_texel, k_cont_view, k_cont_grazing, k_cont_cross, k_cont_excess;
+    uint64_t k_cont_owner, k_cont_owner_view, k_cont_dominated;
     int threads;           /* o->threads (1 without o), at most GS_MAX_THREADS */
     struct gs_part *parts; /* threads of them, reused for every row */
 };
@@ -300,6 +303,7 @@ mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int n
     s->lambert = s->ref && o->base == MF_PREFILTER_BASE_LAMBERT;
     s->k_energy = s->k_level = s->k_view = s->k_texel = UINT64_MAX;
     s->k_cont_texel = s->k_cont_view = s->k_cont_grazing = s->k_cont_cross = s->k_cont_excess = UINT64_MAX;
+    s->k_cont_owner = s->k_cont_owner_view = s->k_cont_dominated = UINT64_MAX;
     /* the results this run sets (as mf_prefilter_gate_run and _run_ref cleared them) */
     g->nan_entries = 0;
     g->worst_energy = g->worst_level = g->worst_view_spike = g->worst_texel_spike = 0.0;
@@ -314,6 +318,8 @@ mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int n
         g->where_cont_cross[0] = '\0';
         g->worst_cont_excess = 0.0;
         g->where_cont_excess[0] = '\0';
+        g->worst_cont_owner = g->worst_cont_owner_view = g->worst_cont_dominated = 0.0;
+        g->where_cont_owner[0] = g->where_cont_owner_view[0] = g->where_cont_dominated[0] = '\0';
     }
     s->threads = o && o->threads > 1 ? (o->threads < GS_MAX_THREADS ? o->threads : GS_MAX_THREADS) : 1;
     s->L = calloc((size_t)nlevels, sizeof *s->L);
@@ -390,6 +396,104 @@ static double gate_excess(double x, double y0, double y1, double r, double r0, d
     return fmax(fmax(up, dn), 0.0);
 }
 
+/* ---- own fit: lobes copied, swapped or shifted between neighbours ------------------------------
+ * A lobe fitted to footprint F shades F's reference R to the fitting error; a lobe that landed on a
+ * neighbouring entry (an exporter's indexing or tiling bug, a resumed run writing a tile one texel
+ * off) shades its own footprint's reference there and the entry's only as well as the two
+ * footprints' references agree.  So the check compares the entry's lobe with its neighbours'
+ * references, and the neighbours' lobes with its reference (mf_prefilter.h). */
+void mf_prefilter_gate_own_fit(int nlights, const double *S, const double *R, double albedo, int nn,
+                               const double *const *nS, const double *const *nR, const double *nalb,
+                               mf_prefilter_gate_own *out)
+{
+    out->owner = out->dominated = 0.0;
+    out->owner_at = out->dominated_at = -1;
+    const double ia = 1.0 / fmax(albedo, 1e-6);
+    double own = 0.0; /* |s - r|, the entry's own error */
+    for (int k = 0; k < nlights; ++k) {
+        double d = (S[k] - R[k]) * ia;
+        if (!isfinite(d))
+            return;
+        own = fmax(own, fabs(d));
+    }
+    for (int j = 0; j < nn; ++j) {
+        const double ja = 1.0 / fmax(nalb[j], 1e-6);
+        double to = 0.0, from = 0.0; /* |s - r_j|, |s_j - r| */
+        int ok = 1;
+        for (int k = 0; k < nlights; ++k) {
+            double a = S[k] * ia - nR[j][k] * ja, b = nS[j][k] * ja - R[k] * ia;
+            ok &= isfinite(a) && isfinite(b);
+            to = fmax(to, fabs(a)), from = fmax(from, fabs(b));
+        }
+        if (!ok)
+            continue;
+        if (own - to > out->owner)
+            out->owner = own - to, out->owner_at = j;
+        if (own - from > out->dominated)
+            out->dominated = own - from, out->dominated_at = j;
+    }
+}
+
+/* The own-fit check's hook into the streamed gate: entry e (row r, column col, view (a, b)) of level
+ * index li against its texel neighbours along x and y (tS, tR, albedos ta0, ta1; has_t) and its
+ * azimuth neighbours vp[0], vp[1] in the row's arrays S, R, A (periodic; np >= 2). */
+static void gs_own_fit(mf_prefilter_gate_stream *s, int li, int r, int col, int a, int b, size_t e, const double *Se,
+                       const double *Re, double alb, const double *tS[2][2], const double *tR[2][2],
+                       const double ta0[2], const double ta1[2], const int has_t[2], const size_t vp[2],
+                       const double *S, const double *R, const float *A)
+{
+    static const char *what[6] = {"lobe shades the reference of texel x - 1 better than its own",
+                                  "lobe shades the reference of texel x + 1 better than its own",
+                                  "lobe shades the reference of texel y - 1 better than its own",
+                                  "lobe shades the reference of texel y + 1 better than its own",
+                                  "lobe shades the reference of view phi - 1 better than its own",
+                                  "lobe shades the reference of view phi + 1 better than its own"};
+    static const char *dwhat[6] = {"texel x - 1's lobe shades the reference better than its own",
+                                   "texel x + 1's lobe shades the reference better than its own",
+                                   "texel y - 1's lobe shades the reference better than its own",
+                                   "texel y + 1's lobe shades the reference better than its own",
+                                   "view phi - 1's lobe shades the reference better than its own",
+                                   "view phi + 1's lobe shades the reference better than its own"};
+    mf_prefilter_gate *g = s->g;
+    const gs_level *L = &s->L[li];
+    const double *nS[6], *nR[6];
+    double na[6];
+    int slot[6], nn = 0;
+    for (int ax = 0; ax < 2; ++ax)
+        if (has_t[ax])
+            for (int q = 0; q < 2; ++q) {
+                nS[nn] = tS[ax][q], nR[nn] = tR[ax][q], na[nn] = q ? ta1[ax] : ta0[ax], slot[nn] = 2 * ax + q;
+                ++nn;
+            }
+    if (s->np >= 2)
+        for (int q = 0; q < 2; ++q) {
+            nS[nn] = S + GATE_NLIGHTS * vp[q], nR[nn] = R + GATE_NLIGHTS * vp[q], na[nn] = A[vp[q]], slot[nn] = 4 + q;
+            ++nn;
+        }
+    /* two groups: the texel neighbours (owner, gated) and the azimuth neighbours (owner_view) */
+    const int nt4 = 2 * (has_t[0] + has_t[1]), g0[2] = {0, nt4}, gn[2] = {nt4, nn - nt4};
+    for (int grp = 0; grp < 2; ++grp) {
+        if (gn[grp] < 1)
+            continue;
+        mf_prefilter_gate_own o;
+        mf_prefilter_gate_own_fit(GATE_NLIGHTS, Se, Re, alb, gn[grp], nS + g0[grp], nR + g0[grp], na + g0[grp], &o);
+        const int *sl = slot + g0[grp];
+        if (o.owner_at >= 0) {
+            if (grp == 0)
+                gs_worst(o.owner, &g->worst_cont_owner, &s->k_cont_owner, gs_key(li, e, 0, 0), g->where_cont_owner,
+                         sizeof g->where_cont_owner, what[sl[o.owner_at]], L->level, r, col, a, b);
+            else
+                gs_worst(o.owner, &g->worst_cont_owner_view, &s->k_cont_owner_view, gs_key(li, e, 0, 0),
+                         g->where_cont_owner_view, sizeof g->where_cont_owner_view, what[sl[o.owner_at]], L->level, r,
+                         col, a, b);
+        }
+        if (o.dominated_at >= 0)
+            gs_worst(o.dominated, &g->worst_cont_dominated, &s->k_cont_dominated, gs_key(li, e, 0, grp),
+                     g->where_cont_dominated, sizeof g->where_cont_dominated, dwhat[sl[o.dominated_at]], L->level, r,
+                     col, a, b);
+    }
+}
+
 /* The texel checks of row r of level index li (its rows r - 1 and r + 1, periodic for the
  * reference's, held), over the row's entries [i0, i1). */
 static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i0, size_t i1)
@@ -405,9 +509,9 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
         double alb = fmax(A[i], 1e-6);
         int gr = s->ref && cos(mf_prefilter_theta(&s->o, a)) < MF_PREFILTER_MULTISTART_COS;
         /* the texel neighbours along x and y (periodic: normal maps tile), once per entry: their S and
-         * R (GATE_NLIGHTS each), and the albedo of the one after; inner: not across the map's edge */
+         * R (GATE_NLIGHTS each) and albedos; inner: not across the map's edge */
         const double *tS[2][2] = {{NULL, NULL}, {NULL, NULL}}, *tR[2][2] = {{NULL, NULL}, {NULL, NULL}};
-        double ta1[2] = {0.0, 0.0};
+        double ta0[2] = {0.0, 0.0}, ta1[2] = {0.0, 0.0};
         int has_t[2], inner[2];
         for (int ax = 0; ax < 2; ++ax) {
             has_t[ax] = (ax ? L->h : L->w) >= 2;
@@ -421,11 +525,14 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
             tS[ax][0] = L->S[s0] + GATE_NLIGHTS * j0, tS[ax][1] = L->S[s1] + GATE_NLIGHTS * j1;
             if (s->ref)
                 tR[ax][0] = L->R[s0] + GATE_NLIGHTS * j0, tR[ax][1] = L->R[s1] + GATE_NLIGHTS * j1;
-            ta1[ax] = L->A[s1][j1];
+            ta0[ax] = L->A[s0][j0], ta1[ax] = L->A[s1][j1];
         }
         /* the view neighbours: theta (interior rows), phi (periodic; rows theta > 0) */
         size_t vq[2][2] = {{i - np, i + np}, {i - b + (b + np - 1) % np, i - b + (b + 1) % np}};
         int has_v[2] = {a > 0 && a + 1 < nt, np >= 3 && a > 0};
+        if (s->ref && isfinite(A[i]))
+            gs_own_fit(s, li, r, col, a, b, e, S + GATE_NLIGHTS * i, R + GATE_NLIGHTS * i, A[i], tS, tR, ta0, ta1,
+                       has_t, vq[1], S, R, A);
         for (int k = 0; k < GATE_NLIGHTS; ++k) {
             double x = S[GATE_NLIGHTS * i + k];
             /* a lone texel above or below both neighbours along x or y (not periodic) */
@@ -644,7 +751,8 @@ static void gs_part_init(gs_part *p, const mf_prefilter_gate_stream *s)
     p->loc.g = &p->res;
     p->loc.k_energy = p->loc.k_level = p->loc.k_view = p->loc.k_texel = UINT64_MAX;
     p->loc.k_cont_texel = p->loc.k_cont_view = p->loc.k_cont_grazing = p->loc.k_cont_cross = UINT64_MAX;
-    p->loc.k_cont_excess = UINT64_MAX;
+    p->loc.k_cont_excess = p->loc.k_cont_owner = p->loc.k_cont_owner_view = UINT64_MAX;
+    p->loc.k_cont_dominated = UINT64_MAX;
 }
 
 static void *gs_part_run(void *arg)
@@ -688,6 +796,9 @@ static void gs_merge(mf_prefilter_gate_stream *s, const gs_part *p)
     GS_MERGE(worst_cont_grazing, k_cont_grazing, where_cont_grazing);
     GS_MERGE(worst_cont_cross, k_cont_cross, where_cont_cross);
     GS_MERGE(worst_cont_excess, k_cont_excess, where_cont_excess);
+    GS_MERGE(worst_cont_owner, k_cont_owner, where_cont_owner);
+    GS_MERGE(worst_cont_owner_view, k_cont_owner_view, where_cont_owner_view);
+    GS_MERGE(worst_cont_dominated, k_cont_dominated, where_cont_dominated);
 #undef GS_MERGE
     gs_max(r->worst_jump_texel, &g->worst_jump_texel);
     gs_max(r->worst_jump_view, &g->worst_jump_view);
@@ -797,6 +908,10 @@ mf_status mf_prefilter_gate_stream_end(mf_prefilter_gate_stream *s)
         /* excess: gated for both tables (docs/prefilter.md, "Gating continuity across texels") */
         g->pass_cont_excess = g->worst_cont_excess <= g->max_cont_excess;
         g->pass = g->pass && g->pass_cont_excess;
+        /* own fit, texel and azimuth neighbours: gated for both tables (docs/prefilter.md, "Gating copied
+         * lobes (own fit)") */
+        g->pass_cont_owner = g->worst_cont_owner <= g->max_cont_owner && g->worst_cont_owner_view <= g->max_cont_owner;
+        g->pass = g->pass && g->pass_cont_owner;
     }
     mf_prefilter_gate_stream_free(s);
     return MF_OK;

@@ -365,6 +365,22 @@ typedef struct mf_prefilter_gate {
     double max_cont_excess, worst_cont_excess;
     int pass_cont_excess;
     char where_cont_excess[128];
+    /* (mf_prefilter_gate_run_ref; GATED, part of pass, for both tables) own fit: lobes copied, swapped
+     * or shifted between neighbouring entries, which excess cannot see (a copy ties its neighbour).
+     * Per entry, with s = S / albedo, r = R / albedo and r_j, s_j a neighbour's, |.| the largest over
+     * the gate's lights (mf_prefilter_gate_own_fit):
+     *   owner: the largest over the texel neighbours (x and y, periodic) of |s - r| - |s - r_j|, how
+     *     much better the lobe shades a neighbour's footprint than its own (a lobe copied from, or
+     *     swapped with, neighbour j shades r_j to j's own fitting error);
+     *   owner_view: the same over the azimuth neighbours (phi +- 1, periodic; the same lights);
+     *   dominated (reported): the largest, over both, of |s - r| - |s_j - r|, how much better a
+     *     neighbour's lobe shades this footprint than the entry's own lobe does.
+     * Every level is covered (the 1 x 1 top level by its azimuth neighbours); theta neighbours are
+     * not (their S and R are of other lights).  pass_cont_owner: owner and owner_view <=
+     * max_cont_owner (MF_PREFILTER_GATE_OWN_FIT) (docs/prefilter.md, "Gating copied lobes (own fit)"). */
+    double max_cont_owner, worst_cont_owner, worst_cont_owner_view, worst_cont_dominated;
+    int pass_cont_owner;
+    char where_cont_owner[128], where_cont_owner_view[128], where_cont_dominated[128];
 } mf_prefilter_gate;
 
 /* Sets the default bounds and clears the results. */
@@ -418,8 +434,34 @@ mf_status mf_prefilter_gate_run(const mf_prefilter_level *levels, int nlevels, m
 /* excess's gated bound: good runs of every map measured read at most 0.092 at the default views
  * (docs/prefilter.md, "Gating continuity across texels": false alarms and power) */
 #define MF_PREFILTER_GATE_CONT_EXCESS 0.2
+/* own fit's gated bound: good runs at the default views read at most 0.170 (texel neighbours, the
+ * 64 x 64 bump map; 0.134, 0.156 at 16 and 32: the tail grows with the map) and 0.161 (azimuth
+ * neighbours), 0.189 with the cheap fits of --samples 128, where a lobe cannot follow a dip of its
+ * footprint's BRDF and sits nearer a neighbour's.  0.3 leaves a factor 1.76 at the default settings
+ * and catches as many of the copies and swaps that change a light's shading by 0.4 of the albedo or
+ * more as 0.25 did (docs/prefilter.md, "Gating copied lobes (own fit)") */
+#define MF_PREFILTER_GATE_OWN_FIT 0.3
 mf_status mf_prefilter_gate_run_ref(const mf_prefilter_level *levels, int nlevels, const double *normals, int width,
                                     int height, const mf_prefilter_options *o, mf_prefilter_gate *g) MF_WARN_UNUSED;
+
+/* The own-fit check of one entry against its neighbours (the gate's owner and dominated measures; a
+ * separate function so that any traversal of the entries can call it).  S, R: the entry's lobe
+ * shading and reference of nlights lights, albedo its effective BRDF's albedo; nS[j], nR[j], nalb[j]
+ * the same of neighbour j (0 <= j < nn), shaded under the same lights (the same view elevation: a
+ * texel or azimuth neighbour).  With s = S / albedo, r = R / albedo, s_j = nS[j] / nalb[j],
+ * r_j = nR[j] / nalb[j] (albedos below 1e-6 taken as 1e-6) and |.| the largest over the lights:
+ *   owner = max_j |s - r| - |s - r_j|, owner_at its j;
+ *   dominated = max_j |s - r| - |s_j - r|, dominated_at its j.
+ * The largest positive value and the first j reaching it; 0 and -1 when none is positive, when the
+ * entry has a non-finite value (the gate's nan check counts it), and for the neighbours with one
+ * (skipped).  Any of the pointers may be NULL when nn is 0. */
+typedef struct mf_prefilter_gate_own {
+    double owner, dominated;
+    int owner_at, dominated_at;
+} mf_prefilter_gate_own;
+void mf_prefilter_gate_own_fit(int nlights, const double *S, const double *R, double albedo, int nn,
+                               const double *const *nS, const double *const *nR, const double *nalb,
+                               mf_prefilter_gate_own *out);
 
 /* The gate streamed row by row, for levels not held whole (`mfkit prefilter`'s assembly): the same
  * result as mf_prefilter_gate_run (normals NULL) or mf_prefilter_gate_run_ref (normals, width,
