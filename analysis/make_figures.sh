@@ -119,7 +119,7 @@ fi
 # `mfkit prefilter tests/data/normalmaps/vgroove_16.png --base ggx --views 8x16` (the default views, about
 # 18 s of CPU) behind all four: the thesis' scene renders (Nahmias 2022, Ch. 4.1.3; about 15 s of CPU, the
 # images stay in a scratch directory) and their SSIM (python3-skimage), mfkit prefilter-eval with its
-# default lights (about 29 s of CPU) and the renders against the light's size (about 45 s of CPU):
+# default lights (about 29 s of CPU) and the renders against the light's size (about 30 s of CPU):
 # analysis/prefilter_figures_data.sh.
 if [ -x "$bin/render_prefilter_scenes" ] && [ -x "$build/bin/mfkit" ]; then
     echo "== analysis/prefilter_figures_data.sh"

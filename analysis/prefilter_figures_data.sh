@@ -9,7 +9,7 @@
 #   prefilter_eval.csv           analysis/prefilter_eval_data.sh --prefilter PF (mfkit prefilter-eval, the
 #                                default lights; about 29 s of CPU)
 #   prefilter_scenes_lights.csv  analysis/prefilter_scenes_lights.sh --prefilter PF (4 light sizes; about
-#                                45 s of CPU)
+#                                30 s of CPU)
 # each under its provenance line (the command, mfkit version, fitter revision, seed, date), in DATA_DIR;
 # with --gzip as FILE.csv.gz (gzip -n -9), the form committed in notebooks_data/.  make_figures.sh runs it.
 # The four provenance lines carry one date: SOURCE_DATE_EPOCH if set, else the start of the run (exported

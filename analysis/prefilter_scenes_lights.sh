@@ -5,7 +5,7 @@
 # default views, the scene figure's run), then analysis/render_prefilter_scenes without images (--images 0,
 # --mc-samples 0: the per-texel LTC truth only) once per light half side H (default 0.25,0.5,1,1.5; 1 is
 # the renderer's default, 1.5 its largest: the grazing light must stay above the plane).  One CSV: the
-# renderer's columns with light_half_side first, under one provenance line, gzip -n -9.  About 12 s of CPU
+# renderer's columns with light_half_side first, under one provenance line, gzip -n -9.  About 8 s of CPU
 # per light size plus 18 s for the prefilter.
 # --prefilter PF reuses an output of the recorded prefilter command instead of running it (make_figures.sh,
 # through prefilter_figures_data.sh, passes the scene figure's run); its manifest must say so, else the
