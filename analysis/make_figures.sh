@@ -29,6 +29,7 @@ trap 'rm -rf "$work"' EXIT
 if [ $# -eq 3 ]; then
     data=$3
     mkdir -p "$data"
+    data=$(cd "$data" && pwd)
 else
     data=$work/data
     mkdir -p "$data"
@@ -114,26 +115,17 @@ if [ -x "$bin/study_ltc_texels" ] && [ -x "$build/bin/mfkit" ]; then
 elif [ -x "$bin/study_ltc_texels" ]; then
     skipped+=("ltc_texel_errors_<brdf>: $build/bin/mfkit not built")
 fi
-# The thesis' scene renders (Nahmias 2022, Ch. 4.1.3) of the demo map: mfkit prefilter --base ggx with the
-# default 8 x 16 views (about 27 s of CPU), then render_prefilter_scenes (about 15 s of CPU; its images stay in
-# the scratch directory) and the SSIM of its PNG images (prefilter_scenes_ssim.py, python3-skimage; about 1 s).
+# The prefilter figures of the demo map (issue 13; docs/prefilter.md, "Evaluation", "Scene renders"): ONE
+# `mfkit prefilter tests/data/normalmaps/vgroove_16.png --base ggx --views 8x16` (the default views, about
+# 18 s of CPU) behind all four: the thesis' scene renders (Nahmias 2022, Ch. 4.1.3; about 15 s of CPU, the
+# images stay in a scratch directory) and their SSIM (python3-skimage), mfkit prefilter-eval with its
+# default lights (about 29 s of CPU) and the renders against the light's size (about 30 s of CPU):
+# analysis/prefilter_figures_data.sh.
 if [ -x "$bin/render_prefilter_scenes" ] && [ -x "$build/bin/mfkit" ]; then
-    echo "== mfkit prefilter vgroove_16 --views 8x16, render_prefilter_scenes, prefilter_scenes_ssim.py"
-    (cd "$src" && "$build/bin/mfkit" prefilter tests/data/normalmaps/vgroove_16.png --base ggx --views 8x16 --threads 2 \
-        --out "$work/prefilter" >/dev/null &&
-        "$bin/render_prefilter_scenes" --prefilter "$work/prefilter" --out "$work/scenes" >/dev/null 2>&1)
-    ver=$("$build/bin/mfkit" --version | awk '{print $2}')
-    { echo "# command=mfkit prefilter tests/data/normalmaps/vgroove_16.png --base ggx --views 8x16 --threads 2 --out PF; render_prefilter_scenes --prefilter PF --out SC (analysis/make_figures.sh), mfkit=$ver, seed=1, date=$(date -u +%Y-%m-%dT%H:%M:%SZ)"
-      tail -n +2 "$work/scenes/prefilter_scenes.csv"; } >"$data/prefilter_scenes.csv"
-    /usr/bin/python3 "$src/analysis/prefilter_scenes_ssim.py" "$work/scenes" --csv "$work/ssim.csv" >/dev/null
-    { echo "# command=mfkit prefilter tests/data/normalmaps/vgroove_16.png --base ggx --views 8x16 --threads 2 --out PF; render_prefilter_scenes --prefilter PF --out SC; prefilter_scenes_ssim.py SC (analysis/make_figures.sh), mfkit=$ver, seed=1, date=$(date -u +%Y-%m-%dT%H:%M:%SZ)"
-      tail -n +2 "$work/ssim.csv"; } >"$data/prefilter_scenes_ssim.csv"
-    # the same renders' error against the light's size (about 65 s of CPU; figure prefilter_scenes_lights)
-    echo "== analysis/prefilter_scenes_lights.sh"
-    (cd "$src" && analysis/prefilter_scenes_lights.sh "$build" "$work/lights.csv.gz")
-    gzip -dc "$work/lights.csv.gz" >"$data/prefilter_scenes_lights.csv"
+    echo "== analysis/prefilter_figures_data.sh"
+    (cd "$src" && analysis/prefilter_figures_data.sh "$build" "$data")
 else
-    skipped+=("prefilter_scenes, prefilter_scenes_lights: $bin/render_prefilter_scenes or $build/bin/mfkit not built (needs Ceres and OpenImageIO)")
+    skipped+=("prefilter_scenes, prefilter_scenes_ssim, prefilter_eval, prefilter_scenes_lights: $bin/render_prefilter_scenes or $build/bin/mfkit not built (needs Ceres and OpenImageIO)")
 fi
 echo "== plot.py"
 MFKIT_FIGURE_GATES=$gates /usr/bin/python3 "$src/analysis/plot.py" "$data" "$out"

@@ -923,8 +923,9 @@ def plot_prefilter_scenes_lights(d, out_dir, made):
     whose mean level of detail is at least 1 (the prefiltered levels; nearer, every method shades level
     0 alike); right: the relative RMS error there (MSE grows with the light's power, the relative error
     does not)."""
-    methods = [("mfkit", "mfkit lobes", "C3"), ("naive", "naive (MIP normal)", "C0"),
-               ("toksvig", "Toksvig", "C1"), ("leadr", "LEADR", "C2")]
+    methods = [("mfkit", "mfkit lobes", "C3"), ("mfkit_taps", "mfkit lobes, split lookup", "C4"),
+               ("naive", "naive (MIP normal)", "C0"), ("toksvig", "Toksvig", "C1"), ("leadr", "LEADR", "C2")]
+    methods = [m for m in methods if np.any(d["method"] == m[0])]
     scenes = [s for s in ("normal", "grazing") if np.any(d["scene"] == s)]
     lights = np.unique(d["light_half_side"])
     fig, axes = new_figure(2, len(scenes), width=5.0, height=4.0)
