@@ -14,7 +14,12 @@
  * which the byte comparison sees, and the explicit check that level-1 places lie in columns 0-3 and
  * rows 0-1 sees too.  Higher levels get lobes from a second hash
  * (the level check and their own spikes).  One run carries NaN lobes (the NaN count is a sum over
- * the threads). */
+ * the threads).
+ *
+ * The gate across tiles (check_tiled_ref): the reference of the region levels computed per T x T
+ * region (T = 2, 4, 8) by mf_prefilter_gate_reference, as `mfkit prefilter`'s tile workers do, and
+ * given to the stream row by row (mf_prefilter_gate_stream_row_ref) on 1, 2 and 3 threads: the same
+ * bytes as run_ref computing it. */
 #include "mf_test.h"
 
 #include <math.h>
@@ -97,6 +102,69 @@ static int place(const char *where, int *c, int *r)
     return p && sscanf(p, "texel (%d, %d)", c, r) == 2;
 }
 
+/* The gate with the reference of the region levels computed per region tile, as `mfkit prefilter` does
+ * (mf_prefilter_gate_reference on each T x T block's own normals, clipped to the map as the CLI's
+ * tiling; read back row by row into mf_prefilter_gate_stream_row_ref; the levels above the regions'
+ * computed by the stream from their children), against run_ref's result g1: the same bytes.  The map
+ * repeats every 8 columns, so T = 2 and 4 put regions whose normals differ at offsets a misplaced
+ * sub-map would confuse. */
+static void check_tiled_ref(const mf_prefilter_level *lv, int nl, const double *n, int W, int H,
+                            const mf_prefilter_options *o, int T, const mf_prefilter_gate *g1, int lambert)
+{
+    const int nt = o->n_theta, np = o->n_phi, nv = nt * np;
+    int rw = W < T ? W : T, rh = H < T ? H : T, lr = 0;
+    while ((rw >> lr) > 1 || (rh >> lr) > 1) /* the region tiles' levels 1 .. lr */
+        ++lr;
+    if (lr > nl)
+        lr = nl;
+    double *R[16] = {NULL};
+    for (int l = 0; l < lr; ++l)
+        R[l] = calloc((size_t)MF_PREFILTER_GATE_NLIGHTS * lv[l].width * lv[l].height * nv, sizeof(double));
+    double *sub = malloc(sizeof(double) * 3 * (size_t)rw * rh);
+    mf_prefilter_level shp[16];
+    double *tr[16];
+    for (int l = 0; l < lr; ++l) {
+        int w = rw >> (l + 1), h = rh >> (l + 1);
+        shp[l] = (mf_prefilter_level){.level = l + 1, .width = w > 0 ? w : 1, .height = h > 0 ? h : 1, .n_theta = nt,
+                                      .n_phi = np};
+        tr[l] = malloc(sizeof(double) * MF_PREFILTER_GATE_NLIGHTS * (size_t)shp[l].width * shp[l].height * nv);
+    }
+    for (int y0 = 0; y0 < H; y0 += rh)
+        for (int x0 = 0; x0 < W; x0 += rw) {
+            for (int y = 0; y < rh; ++y)
+                memcpy(sub + 3 * (size_t)y * rw, n + 3 * ((size_t)(y0 + y) * W + x0), sizeof(double) * 3 * rw);
+            CHECK(mf_prefilter_gate_reference(shp, lr, sub, rw, rh, o, tr) == MF_OK);
+            for (int l = 0; l < lr; ++l) /* the tile's rows into the level's */
+                for (int y = 0; y < shp[l].height; ++y) {
+                    size_t seg = (size_t)MF_PREFILTER_GATE_NLIGHTS * shp[l].width * nv;
+                    int gy = (y0 >> (l + 1)) + y, gx = x0 >> (l + 1);
+                    memcpy(R[l] + (size_t)MF_PREFILTER_GATE_NLIGHTS * ((size_t)gy * lv[l].width + gx) * nv,
+                           tr[l] + seg * (size_t)y, sizeof(double) * seg);
+                }
+        }
+    mf_prefilter_gate g;
+    mf_prefilter_gate_bounds_default(&g);
+    mf_prefilter_gate_stream *s;
+    CHECK(mf_prefilter_gate_stream_begin(lv, nl, n, W, H, o, &g, &s) == MF_OK);
+    int li, r;
+    while (mf_prefilter_gate_stream_next(s, &li, &r)) {
+        size_t off = (size_t)r * lv[li].width * nv;
+        CHECK(mf_prefilter_gate_stream_row_ref(s, li, r, lv[li].m + 9 * off, lv[li].magnitude + off, lv[li].albedo + off,
+                                               li < lr ? R[li] + MF_PREFILTER_GATE_NLIGHTS * off : NULL) == MF_OK);
+    }
+    CHECK(mf_prefilter_gate_stream_end(s) == MF_OK);
+    CHECKF(memcmp(&g, g1, sizeof g) == 0,
+           "%s %dx%d, %d threads, the reference of region tiles %d x %d (levels 1-%d) given: the gate differs from run_ref "
+           "(cont texel %.17g / %.17g at %s / %s; cross %.17g / %.17g; excess %.17g / %.17g at %s / %s; ref error %.17g / "
+           "%.17g)",
+           lambert ? "lambert" : "ggx", W, H, o->threads, rw, rh, lr, g.worst_cont_texel, g1->worst_cont_texel,
+           g.where_cont_texel, g1->where_cont_texel, g.worst_cont_cross, g1->worst_cont_cross, g.worst_cont_excess,
+           g1->worst_cont_excess, g.where_cont_excess, g1->where_cont_excess, g.worst_ref_error, g1->worst_ref_error);
+    for (int l = 0; l < lr; ++l)
+        free(R[l]), free(tr[l]);
+    free(sub);
+}
+
 static void check_run(int W, int H, int nt, int np, int nan_lobes, int lambert)
 {
     double *n = malloc(sizeof(double) * 3 * (size_t)W * H);
@@ -142,6 +210,8 @@ static void check_run(int W, int H, int nt, int np, int nan_lobes, int lambert)
             /* excess (gated) at level 1, where the ties are: its place is checked above */
             CHECKF(nan_lobes || strstr(g.where_cont_excess, "level 1,"), "%s %dx%d: excess %g not at level 1: %s",
                    lambert ? "lambert" : "ggx", W, H, g.worst_cont_excess, g.where_cont_excess);
+            for (int T = 2; T <= 8; T *= 2) /* the region tiles' reference given, 1 thread */
+                check_tiled_ref(lv, nl, n, W, H, &o, T, &g1, lambert);
             continue;
         }
         CHECKF(memcmp(&g, &g1, sizeof g) == 0,
@@ -167,6 +237,9 @@ static void check_run(int W, int H, int nt, int np, int nan_lobes, int lambert)
         CHECK(mf_prefilter_gate_stream_end(s) == MF_OK);
         CHECKF(memcmp(&gs, &g1, sizeof gs) == 0, "%s %dx%d: streamed on %d threads differs from run_ref on 1",
                lambert ? "lambert" : "ggx", W, H, threads[t]);
+        if (t <= 2) /* 2 and 3 threads (1 below) */
+            for (int T = 2; T <= 8; T *= 2)
+                check_tiled_ref(lv, nl, n, W, H, &o, T, &g1, lambert);
     }
     mf_prefilter_levels_free(lv, nl);
     free(n);

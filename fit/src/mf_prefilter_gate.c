@@ -39,7 +39,7 @@ void mf_prefilter_gate_bounds_default(mf_prefilter_gate *g)
 /* The gate's lights, in the view-azimuth-aligned frame of view theta: quads of half-width
  * 0.05, 0.2, 0.8 (tangent-plane units) about the mirror direction (-sin theta, 0, cos theta) and
  * about the normal. */
-#define GATE_NLIGHTS 6
+#define GATE_NLIGHTS MF_PREFILTER_GATE_NLIGHTS
 
 static void gate_lights(double theta, mf_polygon *out)
 {
@@ -195,6 +195,46 @@ static void gate_ref_texel(const gate_iso *t, const double *n, double theta, dou
 static double gate_lone(double x, double y0, double y1)
 {
     return fmax(fmax(fmin(x - y0, x - y1), fmin(y0 - x, y1 - x)), 0.0);
+}
+
+/* The reference R of columns [c0, c1) of row `row` of level index li (GATE_NLIGHTS doubles per entry,
+ * R indexed as the whole row, C order): level 1 (li 0) from the level-0 normals of the cw x ch map
+ * `normals` (its rows 2 row and 2 row + 1), each level above as the mean of its children, crow[dy]
+ * being the child level's row 2 row + dy (NULL beyond its height ch; cw its width).  A footprint's
+ * reference is the mean over its texels (Nahmias 2022, Eq. 2.36), summed child by child in row order.
+ * The one definition of R: the streamed gate and the region tiles' (mf_prefilter_gate_reference) call
+ * it with the same operands, so a tile's R read back is the stream's, bit for bit. */
+static void gate_ref_cols(const gate_iso *iso, const gate_clipped *clipped, const mf_prefilter_options *o, int nt,
+                          int np, int li, int row, int c0, int c1, const double *normals, const double *const crow[2],
+                          int cw, int ch, double *R)
+{
+    const size_t nv = (size_t)nt * np;
+    memset(R + GATE_NLIGHTS * (size_t)c0 * nv, 0, sizeof(double) * GATE_NLIGHTS * (size_t)(c1 - c0) * nv);
+    for (int col = c0; col < c1; ++col) {
+        int nc = 0;
+        for (int dy = 0; dy < 2; ++dy)
+            for (int dx = 0; dx < 2; ++dx)
+                nc += 2 * row + dy < ch && 2 * col + dx < cw;
+        for (int dy = 0; dy < 2; ++dy)
+            for (int dx = 0; dx < 2; ++dx) {
+                int cr = 2 * row + dy, cc = 2 * col + dx;
+                if (cr >= ch || cc >= cw)
+                    continue;
+                for (int a = 0; a < nt; ++a)
+                    for (int b = 0; b < np; ++b) {
+                        size_t i = ((size_t)col * nt + a) * np + b;
+                        double *acc = R + GATE_NLIGHTS * i;
+                        if (li == 0) {
+                            gate_ref_texel(iso, normals + 3 * ((size_t)cr * cw + cc), mf_prefilter_theta(o, a),
+                                           mf_prefilter_phi(o, b), clipped + GATE_NLIGHTS * a, 1.0 / nc, acc);
+                        } else {
+                            const double *c = crow[dy] + GATE_NLIGHTS * (((size_t)cc * nt + a) * np + b);
+                            for (int k = 0; k < GATE_NLIGHTS; ++k)
+                                acc[k] += c[k] / nc;
+                        }
+                    }
+            }
+    }
 }
 
 /* ---- the streamed gate ------------------------------------------------------------------------- */
@@ -489,7 +529,7 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
 /* The checks of row `row` of level index level_index that need no other row of its level, over its
  * columns [c0, c1): m, magnitude, albedo are the whole row's arrays. */
 static void gs_row_cols(mf_prefilter_gate_stream *s, int level_index, int row, const float *m, const float *magnitude,
-                        const float *albedo, int c0, int c1)
+                        const float *albedo, const double *Rin, int c0, int c1)
 {
     mf_prefilter_gate *g = s->g;
     const gs_level *L = &s->L[level_index];
@@ -522,36 +562,17 @@ static void gs_row_cols(mf_prefilter_gate_stream *s, int level_index, int row, c
             bad |= !isfinite(S[GATE_NLIGHTS * i + k]);
         g->nan_entries += bad;
     }
-    /* the reference: level 1 from its texels, each level above as the mean of its children */
-    if (s->ref) {
-        memset(R + GATE_NLIGHTS * i0, 0, sizeof(double) * GATE_NLIGHTS * (i1 - i0));
+    /* the reference: given (the region tile's, read back: the same bits), or level 1 from its texels
+     * and each level above as the mean of its children */
+    if (s->ref && Rin) {
+        memcpy(R + GATE_NLIGHTS * i0, Rin + GATE_NLIGHTS * i0, sizeof(double) * GATE_NLIGHTS * (i1 - i0));
+    } else if (s->ref) {
         int cw = level_index ? s->L[level_index - 1].w : s->W, ch = level_index ? s->L[level_index - 1].h : s->H;
-        for (int col = c0; col < c1; ++col) {
-            int nc = 0;
-            for (int dy = 0; dy < 2; ++dy)
-                for (int dx = 0; dx < 2; ++dx)
-                    nc += 2 * row + dy < ch && 2 * col + dx < cw;
-            for (int dy = 0; dy < 2; ++dy)
-                for (int dx = 0; dx < 2; ++dx) {
-                    int cr = 2 * row + dy, cc = 2 * col + dx;
-                    if (cr >= ch || cc >= cw)
-                        continue;
-                    for (int a = 0; a < nt; ++a)
-                        for (int b = 0; b < np; ++b) {
-                            size_t i = ((size_t)col * nt + a) * np + b;
-                            double *acc = R + GATE_NLIGHTS * i;
-                            if (level_index == 0) {
-                                gate_ref_texel(s->iso, s->normals + 3 * ((size_t)cr * s->W + cc), mf_prefilter_theta(&s->o, a),
-                                               mf_prefilter_phi(&s->o, b), s->clipped + GATE_NLIGHTS * a, 1.0 / nc, acc);
-                            } else {
-                                const gs_level *C = &s->L[level_index - 1];
-                                const double *c = C->R[gs_slot(cr)] + GATE_NLIGHTS * (((size_t)cc * nt + a) * np + b);
-                                for (int k = 0; k < GATE_NLIGHTS; ++k)
-                                    acc[k] += c[k] / nc;
-                            }
-                        }
-                }
-        }
+        const double *crow[2] = {NULL, NULL};
+        for (int dy = 0; level_index && dy < 2; ++dy)
+            if (2 * row + dy < ch)
+                crow[dy] = s->L[level_index - 1].R[gs_slot(2 * row + dy)];
+        gate_ref_cols(s->iso, s->clipped, &s->o, nt, np, level_index, row, c0, c1, s->normals, crow, cw, ch, R);
     }
     /* the checks within the row: views, levels; against the reference: the error, its jumps and
      * spikes along the views */
@@ -633,6 +654,7 @@ typedef struct gs_part {
     int task; /* 0: gs_row_cols; 1: gs_texel_checks of rows[0 .. nrows) */
     int li, row, nrows, rows[3], c0, c1;
     const float *m, *magnitude, *albedo;
+    const double *Rin;
 } gs_part;
 
 static size_t gs_part_size(void) { return sizeof(gs_part); }
@@ -652,7 +674,7 @@ static void *gs_part_run(void *arg)
     gs_part *p = arg;
     const size_t nv = (size_t)p->loc.nv;
     if (p->task == 0)
-        gs_row_cols(&p->loc, p->li, p->row, p->m, p->magnitude, p->albedo, p->c0, p->c1);
+        gs_row_cols(&p->loc, p->li, p->row, p->m, p->magnitude, p->albedo, p->Rin, p->c0, p->c1);
     else
         for (int q = 0; q < p->nrows; ++q)
             gs_texel_checks(&p->loc, p->li, p->rows[q], (size_t)p->c0 * nv, (size_t)p->c1 * nv);
@@ -718,14 +740,14 @@ static void gs_parts_run(mf_prefilter_gate_stream *s, gs_part *parts, int n)
 /* Splits task (0: gs_row_cols of row; 1: gs_texel_checks of rows[0 .. nrows)) of level index li into
  * n column ranges and runs them (gs_parts_run). */
 static void gs_split(mf_prefilter_gate_stream *s, int n, int task, int li, int row, const float *m,
-                     const float *magnitude, const float *albedo, const int *rows, int nrows)
+                     const float *magnitude, const float *albedo, const double *Rin, const int *rows, int nrows)
 {
     const int w = s->L[li].w;
     for (int t = 0; t < n; ++t) {
         gs_part *p = &s->parts[t];
         gs_part_init(p, s);
         p->task = task, p->li = li, p->row = row, p->nrows = nrows;
-        p->m = m, p->magnitude = magnitude, p->albedo = albedo;
+        p->m = m, p->magnitude = magnitude, p->albedo = albedo, p->Rin = Rin;
         for (int q = 0; q < nrows; ++q)
             p->rows[q] = rows[q];
         p->c0 = (int)((long)w * t / n), p->c1 = (int)((long)w * (t + 1) / n);
@@ -736,6 +758,12 @@ static void gs_split(mf_prefilter_gate_stream *s, int n, int task, int li, int r
 mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_index, int row, const float *m,
                                        const float *magnitude, const float *albedo)
 {
+    return mf_prefilter_gate_stream_row_ref(s, level_index, row, m, magnitude, albedo, NULL);
+}
+
+mf_status mf_prefilter_gate_stream_row_ref(mf_prefilter_gate_stream *s, int level_index, int row, const float *m,
+                                           const float *magnitude, const float *albedo, const double *ref)
+{
     int want_l, want_r;
     if (!s || !m || !magnitude || !mf_prefilter_gate_stream_next(s, &want_l, &want_r) || level_index != want_l ||
         row != want_r)
@@ -744,9 +772,9 @@ mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_in
     /* one part per thread, at least one column each; one thread works on the stream itself */
     const int n = s->threads < L->w ? s->threads : L->w;
     if (n == 1)
-        gs_row_cols(s, level_index, row, m, magnitude, albedo, 0, L->w);
+        gs_row_cols(s, level_index, row, m, magnitude, albedo, ref, 0, L->w);
     else
-        gs_split(s, n, 0, level_index, row, m, magnitude, albedo, NULL, 0);
+        gs_split(s, n, 0, level_index, row, m, magnitude, albedo, ref, NULL, 0);
     L->fed++;
     /* the texel checks of the row above (its neighbours now held); at the level's end, the last row
      * and row 0 (periodic neighbours) */
@@ -762,7 +790,7 @@ mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_in
         for (int q = 0; q < nrows; ++q)
             gs_texel_checks(s, level_index, rows[q], 0, L->rowlen);
     else if (nrows)
-        gs_split(s, n, 1, level_index, row, NULL, NULL, NULL, rows, nrows);
+        gs_split(s, n, 1, level_index, row, NULL, NULL, NULL, NULL, rows, nrows);
     return MF_OK;
 }
 
@@ -838,4 +866,88 @@ mf_status mf_prefilter_gate_run_ref(const mf_prefilter_level *levels, int nlevel
     if (!levels || nlevels < 1 || !g || !normals || !o || width < 1 || height < 1)
         return MF_ERR_DOMAIN;
     return gate_levels(levels, nlevels, normals, width, height, o, g);
+}
+
+/* ---- the reference of a region tile, computed where the tile is fitted ------------------------ */
+
+typedef struct {
+    const gate_iso *iso;
+    const gate_clipped *clipped;
+    const mf_prefilter_options *o;
+    const double *normals;
+    int nt, np, width, height, w1, r0, r1;
+    double *R1;
+} gr_part;
+
+static void *gr_part_run(void *arg) /* level 1's rows [r0, r1): each row from its own texels */
+{
+    const gr_part *p = arg;
+    const double *const none[2] = {NULL, NULL};
+    for (int row = p->r0; row < p->r1; ++row)
+        gate_ref_cols(p->iso, p->clipped, p->o, p->nt, p->np, 0, row, 0, p->w1, p->normals, none, p->width, p->height,
+                      p->R1 + GATE_NLIGHTS * (size_t)row * p->w1 * p->nt * p->np);
+    return NULL;
+}
+
+mf_status mf_prefilter_gate_reference(const mf_prefilter_level *shapes, int nlevels, const double *normals, int width,
+                                      int height, const mf_prefilter_options *o, double *const *R)
+{
+    if (!shapes || nlevels < 1 || nlevels > 64 || !normals || !o || width < 1 || height < 1 || !R)
+        return MF_ERR_DOMAIN;
+    const int nt = o->n_theta, np = o->n_phi;
+    if (nt < 2 || np < 1)
+        return MF_ERR_DOMAIN;
+    for (int l = 0; l < nlevels; ++l) {
+        int k = l + 1, w = width >> k, h = height >> k;
+        if (!R[l] || shapes[l].level != k || shapes[l].width != (w > 0 ? w : 1) || shapes[l].height != (h > 0 ? h : 1) ||
+            shapes[l].n_theta != nt || shapes[l].n_phi != np)
+            return MF_ERR_DOMAIN;
+    }
+    mf_polygon *lights = malloc(sizeof *lights * GATE_NLIGHTS * (size_t)nt);
+    gate_clipped *clipped = malloc(sizeof *clipped * GATE_NLIGHTS * (size_t)nt);
+    gate_iso *iso = malloc(sizeof *iso);
+    mf_status st = lights && clipped && iso ? MF_OK : MF_ERR_ALLOC;
+    for (int a = 0; st == MF_OK && a < nt; ++a) /* as mf_prefilter_gate_stream_begin */
+        gate_lights(a / (double)(nt - 1) * MF_PREFILTER_THETA_MAX, lights + GATE_NLIGHTS * a);
+    for (int q = 0; st == MF_OK && q < GATE_NLIGHTS * nt; ++q)
+        clipped[q].n = clip_upper(&lights[q], clipped[q].v);
+    if (st == MF_OK)
+        st = gate_iso_fit(o, iso);
+    if (st == MF_OK) {
+        /* level 1 (nearly all the work: 4 texels x GATE_NLIGHTS polygon integrals per entry), its rows
+         * split over o->threads (each row is computed by the same code whatever thread runs it) */
+        const int h1 = shapes[0].height;
+        int n = o->threads > 1 ? (o->threads < GS_MAX_THREADS ? o->threads : GS_MAX_THREADS) : 1;
+        n = n < h1 ? n : h1;
+        gr_part parts[GS_MAX_THREADS];
+        pthread_t tid[GS_MAX_THREADS];
+        int started[GS_MAX_THREADS] = {0};
+        for (int t = 0; t < n; ++t)
+            parts[t] = (gr_part){iso, clipped, o, normals, nt, np, width, height, shapes[0].width,
+                                 (int)((long)h1 * t / n), (int)((long)h1 * (t + 1) / n), R[0]};
+        for (int t = 1; t < n; ++t)
+            started[t] = pthread_create(&tid[t], NULL, gr_part_run, &parts[t]) == 0;
+        gr_part_run(&parts[0]);
+        for (int t = 1; t < n; ++t) {
+            if (started[t])
+                pthread_join(tid[t], NULL);
+            else
+                gr_part_run(&parts[t]);
+        }
+        /* the levels above: the mean of their children */
+        for (int l = 1; l < nlevels; ++l) {
+            const mf_prefilter_level *C = &shapes[l - 1];
+            const size_t crl = GATE_NLIGHTS * (size_t)C->width * nt * np, rl = GATE_NLIGHTS * (size_t)shapes[l].width * nt * np;
+            for (int row = 0; row < shapes[l].height; ++row) {
+                const double *crow[2] = {NULL, NULL};
+                for (int dy = 0; dy < 2; ++dy)
+                    if (2 * row + dy < C->height)
+                        crow[dy] = R[l - 1] + crl * (size_t)(2 * row + dy);
+                gate_ref_cols(iso, clipped, o, nt, np, l, row, 0, shapes[l].width, normals, crow, C->width, C->height,
+                              R[l] + rl * (size_t)row);
+            }
+        }
+    }
+    free(lights), free(clipped), free(iso);
+    return st;
 }

@@ -445,8 +445,27 @@ mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int n
 int mf_prefilter_gate_stream_next(const mf_prefilter_gate_stream *s, int *level_index, int *row);
 mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_index, int row, const float *m,
                                        const float *magnitude, const float *albedo) MF_WARN_UNUSED;
+/* As mf_prefilter_gate_stream_row, with the row's reference R given (MF_PREFILTER_GATE_NLIGHTS doubles
+ * per lobe, as mf_prefilter_gate_reference computes it; NULL: the stream computes it).  A stream with
+ * normals only; the result is the same bytes as computing it.  `mfkit prefilter` reads the region
+ * tiles' R from their files (docs/prefilter.md, "The gate across ranks"). */
+mf_status mf_prefilter_gate_stream_row_ref(mf_prefilter_gate_stream *s, int level_index, int row, const float *m,
+                                           const float *magnitude, const float *albedo,
+                                           const double *ref) MF_WARN_UNUSED;
 mf_status mf_prefilter_gate_stream_end(mf_prefilter_gate_stream *s) MF_WARN_UNUSED;
 void mf_prefilter_gate_stream_free(mf_prefilter_gate_stream *s);
+
+/* The gate's reference R where a region is fitted: for levels 1 .. nlevels of the width x height
+ * map `normals` (shapes: level l + 1 at index l, its width, height max(width >> (l + 1), 1) ..., n_theta
+ * and n_phi as o's; their arrays are not read), R[l] (the caller's, MF_PREFILTER_GATE_NLIGHTS doubles
+ * per lobe in the level's C order) gets each lobe's reference shading of the gate's lights, the
+ * values the streamed gate computes for the same entries of a map holding this region as a tile
+ * (every footprint inside it: a region tile of `mfkit prefilter`), bit for bit.  Level 1's rows are
+ * split over o->threads (the same bits for any count).  MF_ERR_DOMAIN, MF_ERR_ALLOC, or the reference
+ * fit's status. */
+#define MF_PREFILTER_GATE_NLIGHTS 6
+mf_status mf_prefilter_gate_reference(const mf_prefilter_level *shapes, int nlevels, const double *normals, int width,
+                                      int height, const mf_prefilter_options *o, double *const *R) MF_WARN_UNUSED;
 
 /* The view of table index (i_theta, i_phi). */
 double mf_prefilter_theta(const mf_prefilter_options *o, int i);
