@@ -127,20 +127,32 @@ static void check_tiled_ref(const mf_prefilter_level *lv, int nl, const double *
         int w = rw >> (l + 1), h = rh >> (l + 1);
         shp[l] = (mf_prefilter_level){.level = l + 1, .width = w > 0 ? w : 1, .height = h > 0 ? h : 1, .n_theta = nt,
                                       .n_phi = np};
-        tr[l] = malloc(sizeof(double) * MF_PREFILTER_GATE_NLIGHTS * (size_t)shp[l].width * shp[l].height * nv);
+        size_t ne = (size_t)shp[l].width * shp[l].height * nv;
+        tr[l] = malloc(sizeof(double) * MF_PREFILTER_GATE_NLIGHTS * ne);
+        shp[l].m = malloc(sizeof(float) * 9 * ne);
+        shp[l].magnitude = malloc(sizeof(float) * ne);
+        shp[l].albedo = malloc(sizeof(float) * ne);
     }
+    int ntiles = (W / rw) * (H / rh), nparts = 0;
+    mf_prefilter_gate_part *parts = malloc(sizeof *parts * (size_t)ntiles);
     for (int y0 = 0; y0 < H; y0 += rh)
         for (int x0 = 0; x0 < W; x0 += rw) {
             for (int y = 0; y < rh; ++y)
                 memcpy(sub + 3 * (size_t)y * rw, n + 3 * ((size_t)(y0 + y) * W + x0), sizeof(double) * 3 * rw);
             CHECK(mf_prefilter_gate_reference(shp, lr, sub, rw, rh, o, tr) == MF_OK);
-            for (int l = 0; l < lr; ++l) /* the tile's rows into the level's */
+            for (int l = 0; l < lr; ++l) /* the tile's rows into the level's; the level's lobes into the tile's */
                 for (int y = 0; y < shp[l].height; ++y) {
-                    size_t seg = (size_t)MF_PREFILTER_GATE_NLIGHTS * shp[l].width * nv;
-                    int gy = (y0 >> (l + 1)) + y, gx = x0 >> (l + 1);
-                    memcpy(R[l] + (size_t)MF_PREFILTER_GATE_NLIGHTS * ((size_t)gy * lv[l].width + gx) * nv,
-                           tr[l] + seg * (size_t)y, sizeof(double) * seg);
+                    size_t seg = (size_t)shp[l].width * nv;
+                    int gy = y0 / rh * shp[l].height + y, gx = x0 / rw * shp[l].width;
+                    size_t go = ((size_t)gy * lv[l].width + gx) * nv, to = seg * (size_t)y;
+                    memcpy(R[l] + MF_PREFILTER_GATE_NLIGHTS * go, tr[l] + MF_PREFILTER_GATE_NLIGHTS * to,
+                           sizeof(double) * MF_PREFILTER_GATE_NLIGHTS * seg);
+                    memcpy(shp[l].m + 9 * to, lv[l].m + 9 * go, sizeof(float) * 9 * seg);
+                    memcpy(shp[l].magnitude + to, lv[l].magnitude + go, sizeof(float) * seg);
+                    memcpy(shp[l].albedo + to, lv[l].albedo + go, sizeof(float) * seg);
                 }
+            /* the tile's part of the gate, where it is fitted */
+            CHECK(mf_prefilter_gate_region(shp, lr, tr, W, H, x0, y0, rw, rh, o, &parts[nparts++]) == MF_OK);
         }
     mf_prefilter_gate g;
     mf_prefilter_gate_bounds_default(&g);
@@ -160,9 +172,33 @@ static void check_tiled_ref(const mf_prefilter_level *lv, int nl, const double *
            lambert ? "lambert" : "ggx", W, H, o->threads, rw, rh, lr, g.worst_cont_texel, g1->worst_cont_texel,
            g.where_cont_texel, g1->where_cont_texel, g.worst_cont_cross, g1->worst_cont_cross, g.worst_cont_excess,
            g1->worst_cont_excess, g.where_cont_excess, g1->where_cont_excess, g.worst_ref_error, g1->worst_ref_error);
+    /* the gate across tiles: the tiles' parts merged (in reverse order: the merge does not depend on
+     * it), rank 0 running the seams and the levels above */
+    mf_prefilter_gate_bounds_default(&g);
+    CHECK(mf_prefilter_gate_stream_begin(lv, nl, n, W, H, o, &g, &s) == MF_OK);
+    CHECK(mf_prefilter_gate_stream_regions(s, rw, rh, lr) == MF_OK);
+    for (int q = nparts - 1; q >= 0; --q)
+        CHECK(mf_prefilter_gate_stream_merge(s, &parts[q]) == MF_OK);
+    while (mf_prefilter_gate_stream_next(s, &li, &r)) {
+        size_t off = (size_t)r * lv[li].width * nv;
+        CHECK(mf_prefilter_gate_stream_row_ref(s, li, r, lv[li].m + 9 * off, lv[li].magnitude + off, lv[li].albedo + off,
+                                               li < lr ? R[li] + MF_PREFILTER_GATE_NLIGHTS * off : NULL) == MF_OK);
+    }
+    CHECK(mf_prefilter_gate_stream_end(s) == MF_OK);
+    CHECKF(memcmp(&g, g1, sizeof g) == 0,
+           "%s %dx%d, %d threads, %d region tiles %d x %d (levels 1-%d) gated where fitted, rank 0 the seams: the gate "
+           "differs from run_ref (energy %.17g / %.17g at %s / %s; level %.17g / %.17g at %s / %s; view %s / %s; texel %s / "
+           "%s; cont texel %.17g / %.17g at %s / %s; cross %.17g / %.17g at %s / %s; excess %.17g / %.17g at %s / %s; "
+           "jump texel %.17g / %.17g; nan %ld / %ld)",
+           lambert ? "lambert" : "ggx", W, H, o->threads, nparts, rw, rh, lr, g.worst_energy, g1->worst_energy,
+           g.where_energy, g1->where_energy, g.worst_level, g1->worst_level, g.where_level, g1->where_level, g.where_view,
+           g1->where_view, g.where_texel, g1->where_texel, g.worst_cont_texel, g1->worst_cont_texel, g.where_cont_texel,
+           g1->where_cont_texel, g.worst_cont_cross, g1->worst_cont_cross, g.where_cont_cross, g1->where_cont_cross,
+           g.worst_cont_excess, g1->worst_cont_excess, g.where_cont_excess, g1->where_cont_excess, g.worst_jump_texel,
+           g1->worst_jump_texel, g.nan_entries, g1->nan_entries);
     for (int l = 0; l < lr; ++l)
-        free(R[l]), free(tr[l]);
-    free(sub);
+        free(R[l]), free(tr[l]), free(shp[l].m), free(shp[l].magnitude), free(shp[l].albedo);
+    free(sub), free(parts);
 }
 
 static void check_run(int W, int H, int nt, int np, int nan_lobes, int lambert)

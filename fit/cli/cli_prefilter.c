@@ -184,7 +184,8 @@ typedef struct { int level, w, h, nx, ny, tw, th, rec; long base; } pf_plan;
 typedef struct {
     int32_t level, w, h, not_converged;
     int64_t iterations, lobes, off_m, off_mag, off_alb;
-    int64_t off_ref; /* a region tile's gate reference R (MF_PREFILTER_GATE_NLIGHTS doubles per lobe); 0: none */
+    int64_t off_ref;  /* a region tile's gate reference R (MF_PREFILTER_GATE_NLIGHTS doubles per lobe); 0: none */
+    int64_t off_part; /* a region tile's part of the gate (mf_prefilter_gate_part); 0: none */
     double worst_residual, worst_albedo_err;
 } pf_rec;
 
@@ -303,7 +304,7 @@ static int pf_read_base(const char *dir, size_t nv, pf_base *ab)
 }
 
 /* Fits tile t and writes its file atomically.  Returns a CLI exit code (0 ok), message printed. */
-static int pf_run_tile(const double *normals, int W, const mf_prefilter_options *o, const pf_tile *t,
+static int pf_run_tile(const double *normals, int W, int H, const mf_prefilter_options *o, const pf_tile *t,
                        const pf_base *ab, const char *path, const char *input)
 {
     char msg[1024];
@@ -331,6 +332,7 @@ static int pf_run_tile(const double *normals, int W, const mf_prefilter_options 
     /* a region tile: the gate's reference R of its levels, computed here from its own normals (rank 0
      * reads it back instead of computing it: docs/prefilter.md, "The gate across ranks") */
     double *ref[16] = {NULL};
+    mf_prefilter_gate_part part;
     if (st == MF_OK && t->first == 1) {
         for (int i = 0; i < nrec && st == MF_OK; ++i) {
             const mf_prefilter_level *L = &lv[i];
@@ -339,6 +341,9 @@ static int pf_run_tile(const double *normals, int W, const mf_prefilter_options 
         }
         if (st == MF_OK && mf_prefilter_gate_reference(lv, nrec, sub, t->w, t->h, o, ref) != MF_OK)
             st = MF_ERR_INTERNAL, snprintf(msg, sizeof msg, "the gate's reference could not be computed");
+        /* and its part of the gate: every check but its border's texel checks (rank 0's seams) */
+        if (st == MF_OK && mf_prefilter_gate_region(lv, nrec, ref, W, H, t->x0, t->y0, t->w, t->h, o, &part) != MF_OK)
+            st = MF_ERR_INTERNAL, snprintf(msg, sizeof msg, "the gate could not run on the tile");
     }
     free(sub);
     if (st != MF_OK) {
@@ -355,7 +360,7 @@ static int pf_run_tile(const double *normals, int W, const mf_prefilter_options 
         const mf_prefilter_level *L = &lv[t->first - 1 + i];
         size_t n = (size_t)L->width * L->height * nv;
         rec[i] = (pf_rec){L->level, L->width, L->height, L->not_converged, L->iterations, L->lobes, off,
-                          off + (int64_t)(9 * n * sizeof(float)), off + (int64_t)(10 * n * sizeof(float)), 0,
+                          off + (int64_t)(9 * n * sizeof(float)), off + (int64_t)(10 * n * sizeof(float)), 0, 0,
                           L->worst_residual, L->worst_albedo_err};
         off = rec[i].off_alb + (int64_t)(n * sizeof(float));
         if (ref[i]) {
@@ -363,6 +368,8 @@ static int pf_run_tile(const double *normals, int W, const mf_prefilter_options 
             off += (int64_t)(MF_PREFILTER_GATE_NLIGHTS * n * sizeof(double));
         }
     }
+    for (int i = 0; i < nrec && ref[0]; ++i) /* the part after the levels */
+        rec[i].off_part = off;
     mf_io_atomic a;
     int ok = mf_io_atomic_begin(&a, path, msg, sizeof msg) == MF_OK;
     if (ok) {
@@ -377,6 +384,8 @@ static int pf_run_tile(const double *normals, int W, const mf_prefilter_options 
             if (ok && ref[i])
                 ok = fwrite(ref[i], sizeof(double), MF_PREFILTER_GATE_NLIGHTS * n, a.file) == MF_PREFILTER_GATE_NLIGHTS * n;
         }
+        if (ok && ref[0])
+            ok = fwrite(&part, sizeof part, 1, a.file) == 1;
         if (!ok) {
             snprintf(msg, sizeof msg, "%.900s: write failed", path);
             mf_io_atomic_abort(&a);
@@ -393,7 +402,7 @@ static int pf_run_tile(const double *normals, int W, const mf_prefilter_options 
 /* The tiles of this rank still to fit, shared by `workers` threads. */
 typedef struct {
     const double *normals;
-    int W;
+    int W, H;
     mf_prefilter_options o; /* o.threads: per tile */
     const pf_tile *tiles;
     const pf_base *ab; /* the albedo base; with blocks = 1, the queue's items are its blocks */
@@ -466,7 +475,7 @@ static void *pf_worker(void *arg)
         else
             tile_path(path, sizeof path, q->dir, k);
         int r = q->blocks ? pf_run_block(q->normals, q->W, &q->o, q->ab, k, path, q->input)
-                          : pf_run_tile(q->normals, q->W, &q->o, &q->tiles[k], q->ab, path, q->input);
+                          : pf_run_tile(q->normals, q->W, q->H, &q->o, &q->tiles[k], q->ab, path, q->input);
         if (r) {
             pthread_mutex_lock(&q->lock);
             if (!q->rc)
@@ -841,6 +850,14 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
     mf_prefilter_gate_bounds_default(&g);
     if (ok && mf_prefilter_gate_stream_begin(gl, nl, A->normals, A->W, A->H, o, &g, &gs) != MF_OK)
         ok = 0, snprintf(msg, sizeof msg, "the gate could not run (out of memory, or its reference fit failed)");
+    /* the region tiles gated themselves but for their borders (their parts, merged below as their
+     * level-1 band opens): the stream runs the seams and the levels above */
+    int nreg = 0;
+    while (nreg < nl && A->plans[nreg].base == 0)
+        ++nreg;
+    if (ok && nreg > 0 &&
+        mf_prefilter_gate_stream_regions(gs, A->W < A->T ? A->W : A->T, A->H < A->T ? A->H : A->T, nreg) != MF_OK)
+        ok = 0, snprintf(msg, sizeof msg, "the gate could not run (region tiles)");
     int lvi, r;
     while (ok && mf_prefilter_gate_stream_next(gs, &lvi, &r)) {
         const pf_plan *P = &A->plans[lvi];
@@ -860,8 +877,15 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
                 long k = P->base + (long)gy * P->nx + gx;
                 ok = pf_open_tile(dir, k, P->rec, &tf[gx], &recs[gx], msg, sizeof msg);
                 if (ok && (recs[gx].level != P->level || recs[gx].w != P->tw || recs[gx].h != P->th ||
-                           (V->rr != NULL) != (recs[gx].off_ref > 0)))
+                           (V->rr != NULL) != (recs[gx].off_ref > 0) || (V->rr != NULL) != (recs[gx].off_part > 0)))
                     ok = 0, snprintf(msg, sizeof msg, "%s/" PF_WORK ": tile %ld does not hold level %d", dir, k, P->level);
+                if (ok && V->rr && lvi == 0) { /* a region tile's first band: its part of the gate */
+                    mf_prefilter_gate_part part;
+                    ok = fseek(tf[gx], (long)recs[gx].off_part, SEEK_SET) == 0 && fread(&part, sizeof part, 1, tf[gx]) == 1 &&
+                         mf_prefilter_gate_stream_merge(gs, &part) == MF_OK;
+                    if (!ok)
+                        snprintf(msg, sizeof msg, "%s/" PF_WORK ": tile %ld truncated", dir, k);
+                }
                 if (ok) {
                     S->lobes += recs[gx].lobes, S->iterations += recs[gx].iterations;
                     S->not_converged += recs[gx].not_converged;
@@ -1500,7 +1524,7 @@ static int pf_table(const cli_val *v, const char *input, const char *dir, int la
         else
             q.todo[q.ntodo++] = ntiles - 1 - i;
     }
-    q.normals = normals, q.W = W, q.tiles = tiles, q.ab = &ab, q.dir = dir, q.input = input;
+    q.normals = normals, q.W = W, q.H = H, q.tiles = tiles, q.ab = &ab, q.dir = dir, q.input = input;
     q.max_tiles = max_tiles;
     /* several tiles at once when there are enough (a footprint tile is one fit job: threads inside it
      * would idle), else the threads inside the tiles; the bits depend on neither */

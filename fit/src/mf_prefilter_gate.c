@@ -257,6 +257,11 @@ typedef struct {
     size_t rowlen; /* entries per row: w * n_theta * n_phi */
     double *S[GS_SLOTS], *R[GS_SLOTS];
     float *A[GS_SLOTS];
+    /* the gate across tiles: the map's level (gw x gh, growlen entries a row) and this stream's first
+     * texel in it (gox, goy; 0 but in a region tile's part), for the keys and places; tw x th: a region
+     * tile's texels at this level (rank 0's gs_ring) */
+    int gw, gh, gox, goy, tw, th;
+    size_t growlen;
 } gs_level;
 
 struct mf_prefilter_gate_stream {
@@ -272,11 +277,30 @@ struct mf_prefilter_gate_stream {
     uint64_t k_energy, k_level, k_view, k_texel, k_cont_texel, k_cont_view, k_cont_grazing, k_cont_cross, k_cont_excess;
     int threads;           /* o->threads (1 without o), at most GS_MAX_THREADS */
     struct gs_part *parts; /* threads of them, reused for every row */
+    /* the gate across tiles (docs/prefilter.md, "The gate across ranks"), mode:
+     *   0 the whole gate;
+     *   1 a region tile's part (mf_prefilter_gate_region): the stream holds the tile's levels, R given;
+     *     every check of every entry but the texel checks of the tile's border entries (ring 1), unless
+     *     the tile is the whole map;
+     *   2 rank 0 with the region tiles' parts (mf_prefilter_gate_stream_regions): at the region levels
+     *     (index < nreg) R given, S computed for the two outer rings of each tile only, and only the
+     *     texel checks of ring 1 run; the tiles' parts come in by mf_prefilter_gate_stream_merge */
+    int mode, nreg, whole;
 };
 
 static size_t gs_part_size(void);
 
 static int gs_slot(int r) { return r < 2 ? r : 2 + r % 3; }
+
+/* The ring of a region tile that (row, col) of level L lies in: 1 its border, 2 the texels next to it,
+ * 0 inside (tiles of tw x th texels at this level, from texel (0, 0)). */
+static int gs_ring(const gs_level *L, int row, int col)
+{
+    int x = col % L->tw, y = row % L->th;
+    int d = x < L->tw - 1 - x ? x : L->tw - 1 - x, dy = y < L->th - 1 - y ? y : L->th - 1 - y;
+    d = d < dy ? d : dy;
+    return d == 0 ? 1 : d == 1 ? 2 : 0;
+}
 
 /* The key of (level index, entry, light, check): the order of a pass over levels, entries, lights
  * and the checks of one light (0 theta, 1 phi, 2 texels along x, 3 along y, 4 level). */
@@ -311,29 +335,31 @@ void mf_prefilter_gate_stream_free(mf_prefilter_gate_stream *s)
     free(s->L), free(s->lights), free(s->clipped), free(s->iso), free(s->parts), free(s);
 }
 
-mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int nlevels, const double *normals,
-                                         int width, int height, const mf_prefilter_options *o, mf_prefilter_gate *g,
-                                         mf_prefilter_gate_stream **out)
+/* mf_prefilter_gate_stream_begin's work; ref: with the reference (normals, or R given with every row);
+ * iso: fit the reference's base lobes (not needed when every row's R is given). */
+static mf_status gs_begin(const mf_prefilter_level *shapes, int nlevels, const double *normals, int ref, int iso,
+                          int width, int height, const mf_prefilter_options *o, mf_prefilter_gate *g,
+                          mf_prefilter_gate_stream **out)
 {
     if (out)
         *out = NULL;
-    if (!shapes || nlevels < 1 || nlevels > 64 || !g || !out || (normals && (!o || width < 1 || height < 1)))
+    if (!shapes || nlevels < 1 || nlevels > 64 || !g || !out || (ref && (!o || width < 1 || height < 1)))
         return MF_ERR_DOMAIN;
     int nt = shapes[0].n_theta, np = shapes[0].n_phi;
-    if (nt < 2 || np < 1 || (normals && (o->n_theta != nt || o->n_phi != np)))
+    if (nt < 2 || np < 1 || (ref && (o->n_theta != nt || o->n_phi != np)))
         return MF_ERR_DOMAIN;
     for (int l = 0; l < nlevels; ++l) {
         const mf_prefilter_level *lv = &shapes[l];
         if (lv->n_theta != nt || lv->n_phi != np || lv->width < 1 || lv->height < 1)
             return MF_ERR_DOMAIN;
         int k = l + 1, w = width >> k, h = height >> k;
-        if (normals && (lv->level != k || lv->width != (w > 0 ? w : 1) || lv->height != (h > 0 ? h : 1)))
+        if (ref && (lv->level != k || lv->width != (w > 0 ? w : 1) || lv->height != (h > 0 ? h : 1)))
             return MF_ERR_DOMAIN;
     }
     mf_prefilter_gate_stream *s = calloc(1, sizeof *s);
     if (!s)
         return MF_ERR_ALLOC;
-    s->g = g, s->nl = nlevels, s->nt = nt, s->np = np, s->nv = nt * np, s->ref = normals != NULL;
+    s->g = g, s->nl = nlevels, s->nt = nt, s->np = np, s->nv = nt * np, s->ref = ref;
     s->normals = normals, s->W = width, s->H = height;
     if (o)
         s->o = *o;
@@ -371,6 +397,7 @@ mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int n
         L->level = lv->level, L->w = lv->width, L->h = lv->height;
         L->twice = l > 0 && shapes[l - 1].width == 2 * lv->width && shapes[l - 1].height == 2 * lv->height;
         L->rowlen = (size_t)lv->width * s->nv;
+        L->gw = L->tw = L->w, L->gh = L->th = L->h, L->growlen = L->rowlen; /* the whole map (mode 0) */
         int used[GS_SLOTS] = {0}; /* a level of fewer than GS_SLOTS rows uses fewer slots */
         for (int r = 0; r < lv->height && r < GS_SLOTS; ++r)
             used[gs_slot(r)] = 1;
@@ -385,7 +412,7 @@ mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int n
                 st = MF_ERR_ALLOC;
         }
     }
-    if (st == MF_OK && s->ref) {
+    if (st == MF_OK && s->ref && iso) {
         s->iso = malloc(sizeof *s->iso);
         st = s->iso ? gate_iso_fit(o, s->iso) : MF_ERR_ALLOC;
     }
@@ -394,6 +421,31 @@ mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int n
         return st;
     }
     *out = s;
+    return MF_OK;
+}
+
+mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int nlevels, const double *normals,
+                                         int width, int height, const mf_prefilter_options *o, mf_prefilter_gate *g,
+                                         mf_prefilter_gate_stream **out)
+{
+    return gs_begin(shapes, nlevels, normals, normals != NULL, 1, width, height, o, g, out);
+}
+
+mf_status mf_prefilter_gate_stream_regions(mf_prefilter_gate_stream *s, int rw, int rh, int nreg)
+{
+    if (!s || !s->ref || s->mode != 0 || nreg < 1 || nreg > s->nl || rw < 1 || rh < 1 || s->W % rw || s->H % rh)
+        return MF_ERR_DOMAIN;
+    for (int l = 0; l < s->nl; ++l)
+        if (s->L[l].fed)
+            return MF_ERR_DOMAIN;
+    for (int l = 0; l < nreg; ++l) {
+        gs_level *L = &s->L[l];
+        int k = l + 1;
+        L->tw = rw >> k > 0 ? rw >> k : 1, L->th = rh >> k > 0 ? rh >> k : 1;
+        if (L->w % L->tw || L->h % L->th)
+            return MF_ERR_DOMAIN;
+    }
+    s->mode = 2, s->nreg = nreg, s->whole = rw == s->W && rh == s->H;
     return MF_OK;
 }
 
@@ -439,9 +491,19 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
     const int nt = s->nt, np = s->np, nv = s->nv;
     const double *S = L->S[gs_slot(r)], *R = L->R[gs_slot(r)];
     const float *A = L->A[gs_slot(r)];
+    const int gr_ = L->goy + r; /* the row in the map's level */
+    const int region = s->mode == 2 && li < s->nreg;
+    if (region && s->whole)
+        return; /* the one region tile checked every entry */
     for (size_t i = i0; i < i1; ++i) {
-        int col = (int)(i / nv), a = (int)(i / np % nt), b = (int)(i % np);
-        size_t e = (size_t)r * L->rowlen + i;
+        int col = (int)(i / nv), a = (int)(i / np % nt), b = (int)(i % np), gcol = L->gox + col;
+        /* a region tile checks its inner entries, rank 0 the tiles' borders (their neighbours in the
+         * next tile) */
+        if (s->mode == 1 && !s->whole && (r == 0 || r == L->h - 1 || col == 0 || col == L->w - 1))
+            continue;
+        if (region && gs_ring(L, r, col) != 1)
+            continue;
+        size_t e = (size_t)gr_ * L->growlen + (size_t)L->gox * nv + i;
         double alb = fmax(A[i], 1e-6);
         int gr = s->ref && cos(mf_prefilter_theta(&s->o, a)) < MF_PREFILTER_MULTISTART_COS;
         /* the texel neighbours along x and y (periodic: normal maps tile), once per entry: their S and
@@ -450,8 +512,8 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
         double ta1[2] = {0.0, 0.0};
         int has_t[2], inner[2];
         for (int ax = 0; ax < 2; ++ax) {
-            has_t[ax] = (ax ? L->h : L->w) >= 2;
-            inner[ax] = ax ? r > 0 && r + 1 < L->h : col > 0 && col + 1 < L->w;
+            has_t[ax] = (ax ? L->gh : L->gw) >= 2;
+            inner[ax] = ax ? gr_ > 0 && gr_ + 1 < L->gh : gcol > 0 && gcol + 1 < L->gw;
             if (!has_t[ax])
                 continue;
             int r1 = (r + (ax == 1)) % L->h, c1 = (col + (ax == 0)) % L->w;
@@ -475,7 +537,7 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
                 double y0 = tS[ax][0][k], y1 = tS[ax][1][k];
                 double up = fmin(x - y0, x - y1), dn = fmin(y0 - x, y1 - x);
                 gs_worst(fmax(fmax(up, dn), 0.0) / alb, &g->worst_texel_spike, &s->k_texel, gs_key(li, e, k, 2 + ax),
-                         g->where_texel, sizeof g->where_texel, "texel spike", L->level, r, col, a, b);
+                         g->where_texel, sizeof g->where_texel, "texel spike", L->level, gr_, gcol, a, b);
             }
             if (!s->ref)
                 continue;
@@ -506,9 +568,9 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
             if (isfinite(lt)) {
                 gs_worst(fmin(xt, xv), &g->worst_cont_excess, &s->k_cont_excess, gs_key(li, e, k, 0),
                          g->where_cont_excess, sizeof g->where_cont_excess,
-                         "lobe extreme beyond the reference's along every axis", L->level, r, col, a, b);
+                         "lobe extreme beyond the reference's along every axis", L->level, gr_, gcol, a, b);
                 gs_worst(fmin(lt, lv), &g->worst_cont_cross, &s->k_cont_cross, gs_key(li, e, k, 0), g->where_cont_cross,
-                         sizeof g->where_cont_cross, "error extreme along every axis", L->level, r, col, a, b);
+                         sizeof g->where_cont_cross, "error extreme along every axis", L->level, gr_, gcol, a, b);
                 gs_max(lt, &g->worst_cont_cross_texel);
             }
             /* the error's lone texel (periodic neighbours: normal maps tile) */
@@ -520,7 +582,7 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
                 gs_worst(gate_lone(ex, te[ax][0], te[ax][1]) / alb, gr ? &g->worst_cont_grazing : &g->worst_cont_texel,
                          gr ? &s->k_cont_grazing : &s->k_cont_texel, gs_key(li, e, k, 2 + ax),
                          gr ? g->where_cont_grazing : g->where_cont_texel, sizeof g->where_cont_texel,
-                         "texel error spike", L->level, r, col, a, b);
+                         "texel error spike", L->level, gr_, gcol, a, b);
             }
         }
     }
@@ -537,11 +599,21 @@ static void gs_row_cols(mf_prefilter_gate_stream *s, int level_index, int row, c
     double *S = L->S[sl], *R = L->R[sl];
     float *A = L->A[sl];
     const size_t i0 = (size_t)c0 * nv, i1 = (size_t)c1 * nv;
+    const int grow = L->goy + row; /* the row in the map's level */
+    /* rank 0 at a region level: the tiles ran these checks; it needs S of their two outer rings (the
+     * texel checks of ring 1), of every entry at the top region level (the level check above) */
+    const int region = s->mode == 2 && level_index < s->nreg, top = level_index == s->nreg - 1;
     /* energy, nan, the lobes' shading */
     for (size_t i = i0; i < i1; ++i) {
-        int col = (int)(i / nv), a = (int)(i / np % nt), b = (int)(i % np);
-        size_t e = (size_t)row * L->rowlen + i;
+        int col = (int)(i / nv), a = (int)(i / np % nt), b = (int)(i % np), gcol = L->gox + col;
+        size_t e = (size_t)grow * L->growlen + (size_t)L->gox * nv + i;
         const float *mi = m + 9 * i;
+        if (region) {
+            A[i] = albedo ? albedo[i] : magnitude[i];
+            if (top || (!s->whole && gs_ring(L, row, col)))
+                gate_shade(mi, magnitude[i], s->lights + GATE_NLIGHTS * a, S + GATE_NLIGHTS * i);
+            continue;
+        }
         float mag = magnitude[i];
         int bad = !isfinite(mag) || !(mag >= 0.0f);
         for (int q = 0; q < 9; ++q)
@@ -554,8 +626,8 @@ static void gs_row_cols(mf_prefilter_gate_stream *s, int level_index, int row, c
             double frac = 0.5 * (1.0 + mi[8] / sqrt(n2));
             double alb = albedo ? albedo[i] : mag;
             gs_worst(alb > 0.0 ? fabs(mag * frac / alb - 1.0) : fabs(mag * frac), &g->worst_energy, &s->k_energy,
-                     gs_key(level_index, e, 0, 0), g->where_energy, sizeof g->where_energy, "energy", L->level, row, col,
-                     a, b);
+                     gs_key(level_index, e, 0, 0), g->where_energy, sizeof g->where_energy, "energy", L->level, grow,
+                     gcol, a, b);
         }
         gate_shade(mi, mag, s->lights + GATE_NLIGHTS * a, S + GATE_NLIGHTS * i);
         for (int k = 0; k < GATE_NLIGHTS; ++k)
@@ -574,11 +646,13 @@ static void gs_row_cols(mf_prefilter_gate_stream *s, int level_index, int row, c
                 crow[dy] = s->L[level_index - 1].R[gs_slot(2 * row + dy)];
         gate_ref_cols(s->iso, s->clipped, &s->o, nt, np, level_index, row, c0, c1, s->normals, crow, cw, ch, R);
     }
+    if (region)
+        return;
     /* the checks within the row: views, levels; against the reference: the error, its jumps and
      * spikes along the views */
     for (size_t i = i0; i < i1; ++i) {
-        int col = (int)(i / nv), a = (int)(i / np % nt), b = (int)(i % np);
-        size_t e = (size_t)row * L->rowlen + i;
+        int col = (int)(i / nv), a = (int)(i / np % nt), b = (int)(i % np), gcol = L->gox + col;
+        size_t e = (size_t)grow * L->growlen + (size_t)L->gox * nv + i;
         double alb = fmax(A[i], 1e-6);
         int gr = s->ref && cos(mf_prefilter_theta(&s->o, a)) < MF_PREFILTER_MULTISTART_COS;
         size_t vm = i - b + (b + np - 1) % np, vp = i - b + (b + 1) % np; /* phi neighbours (periodic) */
@@ -588,12 +662,12 @@ static void gs_row_cols(mf_prefilter_gate_stream *s, int level_index, int row, c
             if (a > 0 && a + 1 < nt) {
                 double d = fabs(2.0 * x - S[GATE_NLIGHTS * (i - np) + k] - S[GATE_NLIGHTS * (i + np) + k]);
                 gs_worst(0.5 * d / alb, &g->worst_view_spike, &s->k_view, gs_key(level_index, e, k, 0), g->where_view,
-                         sizeof g->where_view, "theta spike", L->level, row, col, a, b);
+                         sizeof g->where_view, "theta spike", L->level, grow, gcol, a, b);
             }
             if (np >= 3 && a > 0) {
                 double d = fabs(2.0 * x - S[GATE_NLIGHTS * vm + k] - S[GATE_NLIGHTS * vp + k]);
                 gs_worst(0.5 * d / alb, &g->worst_view_spike, &s->k_view, gs_key(level_index, e, k, 1), g->where_view,
-                         sizeof g->where_view, "phi spike", L->level, row, col, a, b);
+                         sizeof g->where_view, "phi spike", L->level, grow, gcol, a, b);
             }
             /* levels: the effective BRDF of a footprint is the mean of its four children's (equal
              * areas), so the parent's shading is compared with the mean of the children's */
@@ -604,7 +678,7 @@ static void gs_row_cols(mf_prefilter_gate_stream *s, int level_index, int row, c
                     for (int dx = 0; dx < 2; ++dx)
                         mc += C->S[gs_slot(2 * row + dy)][GATE_NLIGHTS * ((((size_t)2 * col + dx) * nt + a) * np + b) + k];
                 gs_worst(fabs(x - 0.25 * mc) / alb, &g->worst_level, &s->k_level, gs_key(level_index, e, k, 4),
-                         g->where_level, sizeof g->where_level, "parent vs children", L->level, row, col, a, b);
+                         g->where_level, sizeof g->where_level, "parent vs children", L->level, grow, gcol, a, b);
             }
             if (!s->ref)
                 continue;
@@ -630,10 +704,10 @@ static void gs_row_cols(mf_prefilter_gate_stream *s, int level_index, int row, c
             char *pv = gr ? g->where_cont_grazing : g->where_cont_view;
             if (has[0] && has[1])
                 gs_worst(gate_lone(ex, en[0], en[1]) / alb, wv, kv, gs_key(level_index, e, k, 0), pv,
-                         sizeof g->where_cont_view, "theta error spike", L->level, row, col, a, b);
+                         sizeof g->where_cont_view, "theta error spike", L->level, grow, gcol, a, b);
             if (np >= 3 && a > 0)
                 gs_worst(gate_lone(ex, en[2], en[3]) / alb, wv, kv, gs_key(level_index, e, k, 1), pv,
-                         sizeof g->where_cont_view, "phi error spike", L->level, row, col, a, b);
+                         sizeof g->where_cont_view, "phi error spike", L->level, grow, gcol, a, b);
         }
     }
 }
@@ -695,21 +769,30 @@ static void gs_merge_worst(double v, uint64_t key, const char *where, double *wo
  * figure and the NaN count (a measure added to the gate must be added here too; one thread runs on
  * the stream itself, so test_prefilter_gate_threads sees a measure missing here as a difference
  * between 1 and 2 threads). */
+static void gs_merge_res(mf_prefilter_gate_stream *s, const mf_prefilter_gate *r, const uint64_t *key);
+
 static void gs_merge(mf_prefilter_gate_stream *s, const gs_part *p)
 {
-    mf_prefilter_gate *g = s->g;
-    const mf_prefilter_gate *r = &p->res;
     const mf_prefilter_gate_stream *l = &p->loc;
-#define GS_MERGE(field, key, where) gs_merge_worst(r->field, l->key, r->where, &g->field, &s->key, g->where, sizeof g->where)
-    GS_MERGE(worst_energy, k_energy, where_energy);
-    GS_MERGE(worst_level, k_level, where_level);
-    GS_MERGE(worst_view_spike, k_view, where_view);
-    GS_MERGE(worst_texel_spike, k_texel, where_texel);
-    GS_MERGE(worst_cont_texel, k_cont_texel, where_cont_texel);
-    GS_MERGE(worst_cont_view, k_cont_view, where_cont_view);
-    GS_MERGE(worst_cont_grazing, k_cont_grazing, where_cont_grazing);
-    GS_MERGE(worst_cont_cross, k_cont_cross, where_cont_cross);
-    GS_MERGE(worst_cont_excess, k_cont_excess, where_cont_excess);
+    const uint64_t key[9] = {l->k_energy,     l->k_level,     l->k_view,        l->k_texel,        l->k_cont_texel,
+                             l->k_cont_view,  l->k_cont_grazing, l->k_cont_cross, l->k_cont_excess};
+    gs_merge_res(s, &p->res, key);
+}
+
+/* Merges results r with the keys of their worsts (in mf_prefilter_gate_part's order) into the stream's. */
+static void gs_merge_res(mf_prefilter_gate_stream *s, const mf_prefilter_gate *r, const uint64_t *key)
+{
+    mf_prefilter_gate *g = s->g;
+#define GS_MERGE(field, q, skey, where) gs_merge_worst(r->field, key[q], r->where, &g->field, &s->skey, g->where, sizeof g->where)
+    GS_MERGE(worst_energy, 0, k_energy, where_energy);
+    GS_MERGE(worst_level, 1, k_level, where_level);
+    GS_MERGE(worst_view_spike, 2, k_view, where_view);
+    GS_MERGE(worst_texel_spike, 3, k_texel, where_texel);
+    GS_MERGE(worst_cont_texel, 4, k_cont_texel, where_cont_texel);
+    GS_MERGE(worst_cont_view, 5, k_cont_view, where_cont_view);
+    GS_MERGE(worst_cont_grazing, 6, k_cont_grazing, where_cont_grazing);
+    GS_MERGE(worst_cont_cross, 7, k_cont_cross, where_cont_cross);
+    GS_MERGE(worst_cont_excess, 8, k_cont_excess, where_cont_excess);
 #undef GS_MERGE
     gs_max(r->worst_jump_texel, &g->worst_jump_texel);
     gs_max(r->worst_jump_view, &g->worst_jump_view);
@@ -768,6 +851,8 @@ mf_status mf_prefilter_gate_stream_row_ref(mf_prefilter_gate_stream *s, int leve
     if (!s || !m || !magnitude || !mf_prefilter_gate_stream_next(s, &want_l, &want_r) || level_index != want_l ||
         row != want_r)
         return MF_ERR_DOMAIN;
+    if (s->ref && !ref && (s->mode == 1 || (s->mode == 2 && level_index < s->nreg)))
+        return MF_ERR_DOMAIN; /* the region levels' R comes with their rows */
     gs_level *L = &s->L[level_index];
     /* one part per thread, at least one column each; one thread works on the stream itself */
     const int n = s->threads < L->w ? s->threads : L->w;
@@ -949,5 +1034,59 @@ mf_status mf_prefilter_gate_reference(const mf_prefilter_level *shapes, int nlev
         }
     }
     free(lights), free(clipped), free(iso);
+    return st;
+}
+
+/* ---- the gate across tiles: a region tile's part, rank 0's merge -------------------------------- */
+
+mf_status mf_prefilter_gate_stream_merge(mf_prefilter_gate_stream *s, const mf_prefilter_gate_part *p)
+{
+    if (!s || !p || s->mode != 2)
+        return MF_ERR_DOMAIN;
+    gs_merge_res(s, &p->res, p->keys);
+    return MF_OK;
+}
+
+mf_status mf_prefilter_gate_region(const mf_prefilter_level *levels, int nlevels, double *const *R, int map_w,
+                                   int map_h, int x0, int y0, int rw, int rh, const mf_prefilter_options *o,
+                                   mf_prefilter_gate_part *part)
+{
+    if (!levels || !R || !o || !part || rw < 1 || rh < 1 || map_w < rw || map_h < rh || map_w % rw || map_h % rh ||
+        x0 < 0 || y0 < 0 || x0 % rw || y0 % rh || x0 >= map_w || y0 >= map_h)
+        return MF_ERR_DOMAIN;
+    for (int l = 0; l < nlevels; ++l)
+        if (!R[l] || !levels[l].m || !levels[l].magnitude)
+            return MF_ERR_DOMAIN;
+    memset(part, 0, sizeof *part);
+    mf_prefilter_gate_bounds_default(&part->res);
+    mf_prefilter_gate_stream *s;
+    mf_status st = gs_begin(levels, nlevels, NULL, 1, 0, rw, rh, o, &part->res, &s);
+    if (st != MF_OK)
+        return st;
+    s->mode = 1, s->whole = rw == map_w && rh == map_h;
+    for (int l = 0; l < nlevels; ++l) { /* the map's level and the tile's place in it */
+        gs_level *L = &s->L[l];
+        int k = l + 1;
+        L->gw = map_w >> k > 0 ? map_w >> k : 1, L->gh = map_h >> k > 0 ? map_h >> k : 1;
+        L->gox = x0 / rw * L->w, L->goy = y0 / rh * L->h;
+        L->growlen = (size_t)L->gw * s->nv;
+        if (L->gox + L->w > L->gw || L->goy + L->h > L->gh) {
+            mf_prefilter_gate_stream_free(s);
+            return MF_ERR_DOMAIN;
+        }
+    }
+    int l, r;
+    while (st == MF_OK && mf_prefilter_gate_stream_next(s, &l, &r)) {
+        const mf_prefilter_level *lv = &levels[l];
+        size_t off = (size_t)r * lv->width * lv->n_theta * lv->n_phi;
+        st = mf_prefilter_gate_stream_row_ref(s, l, r, lv->m + 9 * off, lv->magnitude + off,
+                                              lv->albedo ? lv->albedo + off : NULL, R[l] + GATE_NLIGHTS * off);
+    }
+    if (st == MF_OK) {
+        const uint64_t key[9] = {s->k_energy,    s->k_level,        s->k_view,       s->k_texel,     s->k_cont_texel,
+                                 s->k_cont_view, s->k_cont_grazing, s->k_cont_cross, s->k_cont_excess};
+        memcpy(part->keys, key, sizeof key);
+    }
+    mf_prefilter_gate_stream_free(s);
     return st;
 }

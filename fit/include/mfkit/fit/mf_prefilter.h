@@ -467,6 +467,29 @@ void mf_prefilter_gate_stream_free(mf_prefilter_gate_stream *s);
 mf_status mf_prefilter_gate_reference(const mf_prefilter_level *shapes, int nlevels, const double *normals, int width,
                                       int height, const mf_prefilter_options *o, double *const *R) MF_WARN_UNUSED;
 
+/* The gate across tiles (docs/prefilter.md, "The gate across ranks").  A region tile's part of the
+ * gate: every check of its entries, but the texel checks of its border entries (their neighbours lie
+ * in the next tile), with the keys of its worsts (global: the map's levels and places).
+ * mf_prefilter_gate_region computes it where the tile is fitted: levels 1 .. nlevels of the rw x rh
+ * region at level-0 texel (x0, y0) of a map_w x map_h map (levels and R as mf_prefilter_gate_reference
+ * takes them, with their m, magnitude and albedo).  Rank 0 then runs mf_prefilter_gate_stream_regions
+ * (rw, rh, nreg: the region tiles' size and levels) right after begin, feeds the region levels' rows
+ * with their R (mf_prefilter_gate_stream_row_ref) and every tile's part once
+ * (mf_prefilter_gate_stream_merge, any order): it computes S only for the two outer rings of each tile
+ * and runs the texel checks of the borders (the seams) and everything at the levels above.  The result
+ * is the same bytes as the whole gate's (the worsts merged by the gate's rule: the larger value, on a
+ * tie the smaller key). */
+typedef struct {
+    mf_prefilter_gate res; /* the part's worsts, places, reported maxima and NaN count */
+    uint64_t keys[9];      /* the worsts' keys: energy, level, view, texel, cont_texel, cont_view,
+                              cont_grazing, cont_cross, cont_excess */
+} mf_prefilter_gate_part;
+mf_status mf_prefilter_gate_region(const mf_prefilter_level *levels, int nlevels, double *const *R, int map_w,
+                                   int map_h, int x0, int y0, int rw, int rh, const mf_prefilter_options *o,
+                                   mf_prefilter_gate_part *part) MF_WARN_UNUSED;
+mf_status mf_prefilter_gate_stream_regions(mf_prefilter_gate_stream *s, int rw, int rh, int nreg) MF_WARN_UNUSED;
+mf_status mf_prefilter_gate_stream_merge(mf_prefilter_gate_stream *s, const mf_prefilter_gate_part *p) MF_WARN_UNUSED;
+
 /* The view of table index (i_theta, i_phi). */
 double mf_prefilter_theta(const mf_prefilter_options *o, int i);
 double mf_prefilter_phi(const mf_prefilter_options *o, int j);
