@@ -848,16 +848,14 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
     /* the library's gate, with the reference (mf_prefilter_gate_run_ref's result, streamed) */
     mf_prefilter_gate g;
     mf_prefilter_gate_bounds_default(&g);
-    if (ok && mf_prefilter_gate_stream_begin(gl, nl, A->normals, A->W, A->H, o, &g, &gs) != MF_OK)
-        ok = 0, snprintf(msg, sizeof msg, "the gate could not run (out of memory, or its reference fit failed)");
     /* the region tiles gated themselves but for their borders (their parts, merged below as their
      * level-1 band opens): the stream runs the seams and the levels above */
     int nreg = 0;
     while (nreg < nl && A->plans[nreg].base == 0)
         ++nreg;
-    if (ok && nreg > 0 &&
-        mf_prefilter_gate_stream_regions(gs, A->W < A->T ? A->W : A->T, A->H < A->T ? A->H : A->T, nreg) != MF_OK)
-        ok = 0, snprintf(msg, sizeof msg, "the gate could not run (region tiles)");
+    if (ok && mf_prefilter_gate_stream_begin_regions(gl, nl, A->normals, A->W, A->H, A->W < A->T ? A->W : A->T,
+                                                     A->H < A->T ? A->H : A->T, nreg, o, &g, &gs) != MF_OK)
+        ok = 0, snprintf(msg, sizeof msg, "the gate could not run (out of memory, or no region tiles)");
     int lvi, r;
     while (ok && mf_prefilter_gate_stream_next(gs, &lvi, &r)) {
         const pf_plan *P = &A->plans[lvi];

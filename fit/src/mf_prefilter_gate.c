@@ -282,7 +282,7 @@ struct mf_prefilter_gate_stream {
      *   1 a region tile's part (mf_prefilter_gate_region): the stream holds the tile's levels, R given;
      *     every check of every entry but the texel checks of the tile's border entries (ring 1), unless
      *     the tile is the whole map;
-     *   2 rank 0 with the region tiles' parts (mf_prefilter_gate_stream_regions): at the region levels
+     *   2 rank 0 with the region tiles' parts (mf_prefilter_gate_stream_begin_regions): at the region levels
      *     (index < nreg) R given, S computed for the two outer rings of each tile only, and only the
      *     texel checks of ring 1 run; the tiles' parts come in by mf_prefilter_gate_stream_merge */
     int mode, nreg, whole;
@@ -431,21 +431,33 @@ mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int n
     return gs_begin(shapes, nlevels, normals, normals != NULL, 1, width, height, o, g, out);
 }
 
-mf_status mf_prefilter_gate_stream_regions(mf_prefilter_gate_stream *s, int rw, int rh, int nreg)
+mf_status mf_prefilter_gate_stream_begin_regions(const mf_prefilter_level *shapes, int nlevels, const double *normals,
+                                                 int width, int height, int rw, int rh, int nreg,
+                                                 const mf_prefilter_options *o, mf_prefilter_gate *g,
+                                                 mf_prefilter_gate_stream **out)
 {
-    if (!s || !s->ref || s->mode != 0 || nreg < 1 || nreg > s->nl || rw < 1 || rh < 1 || s->W % rw || s->H % rh)
+    if (out)
+        *out = NULL;
+    if (!normals || nreg < 1 || nreg > nlevels || rw < 1 || rh < 1 || width < 1 || height < 1 || width % rw ||
+        height % rh)
         return MF_ERR_DOMAIN;
-    for (int l = 0; l < s->nl; ++l)
-        if (s->L[l].fed)
-            return MF_ERR_DOMAIN;
+    /* level 1 is a region level, so every level-1 R is given and the levels above take the mean of
+     * their children's: the reference's base lobes are not needed */
+    mf_prefilter_gate_stream *s;
+    mf_status st = gs_begin(shapes, nlevels, normals, 1, 0, width, height, o, g, &s);
+    if (st != MF_OK)
+        return st;
     for (int l = 0; l < nreg; ++l) {
         gs_level *L = &s->L[l];
         int k = l + 1;
         L->tw = rw >> k > 0 ? rw >> k : 1, L->th = rh >> k > 0 ? rh >> k : 1;
-        if (L->w % L->tw || L->h % L->th)
+        if (L->w % L->tw || L->h % L->th) {
+            mf_prefilter_gate_stream_free(s);
             return MF_ERR_DOMAIN;
+        }
     }
-    s->mode = 2, s->nreg = nreg, s->whole = rw == s->W && rh == s->H;
+    s->mode = 2, s->nreg = nreg, s->whole = rw == width && rh == height;
+    *out = s;
     return MF_OK;
 }
 

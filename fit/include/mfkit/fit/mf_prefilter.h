@@ -472,8 +472,9 @@ mf_status mf_prefilter_gate_reference(const mf_prefilter_level *shapes, int nlev
  * in the next tile), with the keys of its worsts (global: the map's levels and places).
  * mf_prefilter_gate_region computes it where the tile is fitted: levels 1 .. nlevels of the rw x rh
  * region at level-0 texel (x0, y0) of a map_w x map_h map (levels and R as mf_prefilter_gate_reference
- * takes them, with their m, magnitude and albedo).  Rank 0 then runs mf_prefilter_gate_stream_regions
- * (rw, rh, nreg: the region tiles' size and levels) right after begin, feeds the region levels' rows
+ * takes them, with their m, magnitude and albedo).  Rank 0 then begins its stream with
+ * mf_prefilter_gate_stream_begin_regions (begin's arguments, and rw x rh, nreg: the region tiles' size
+ * and levels; it needs no reference fit, as every level-1 R is given), feeds the region levels' rows
  * with their R (mf_prefilter_gate_stream_row_ref) and every tile's part once
  * (mf_prefilter_gate_stream_merge, any order): it computes S only for the two outer rings of each tile
  * and runs the texel checks of the borders (the seams) and everything at the levels above.  The result
@@ -487,7 +488,10 @@ typedef struct {
 mf_status mf_prefilter_gate_region(const mf_prefilter_level *levels, int nlevels, double *const *R, int map_w,
                                    int map_h, int x0, int y0, int rw, int rh, const mf_prefilter_options *o,
                                    mf_prefilter_gate_part *part) MF_WARN_UNUSED;
-mf_status mf_prefilter_gate_stream_regions(mf_prefilter_gate_stream *s, int rw, int rh, int nreg) MF_WARN_UNUSED;
+mf_status mf_prefilter_gate_stream_begin_regions(const mf_prefilter_level *shapes, int nlevels, const double *normals,
+                                                 int width, int height, int rw, int rh, int nreg,
+                                                 const mf_prefilter_options *o, mf_prefilter_gate *g,
+                                                 mf_prefilter_gate_stream **out) MF_WARN_UNUSED;
 mf_status mf_prefilter_gate_stream_merge(mf_prefilter_gate_stream *s, const mf_prefilter_gate_part *p) MF_WARN_UNUSED;
 
 /* The view of table index (i_theta, i_phi). */
