@@ -1428,7 +1428,9 @@ static int pf_table(const cli_val *v, const char *input, const char *dir, int la
         rc = CLI_EXIT_IO, cli_error(k_cmd, "out of memory");
         goto done;
     }
-    /* the work directory and its run record (rank 0 checks it, the others wait) */
+    /* the work directory and its run record (rank 0 checks it, the others wait); gate_part: the size of a
+     * region tile's part of the gate in its file, so a gate with another set of checks refuses the
+     * checkpoint instead of misreading it */
     char wd[4096], runp[4400];
     snprintf(wd, sizeof wd, "%s/" PF_WORK, dir);
     snprintf(runp, sizeof runp, "%s/run.txt", wd);
@@ -1436,9 +1438,9 @@ static int pf_table(const cli_val *v, const char *input, const char *dir, int la
         mf_buf key = {0};
         uint64_t h = fnv1a(1469598103934665603ull, normals, sizeof(double) * 3 * (size_t)W * H);
         mf_buf_printf(&key,
-                      "mfkit prefilter work 3\nrevision %d\nmap %d x %d fnv1a64 %016llx\nbase %s\nkeep_albedo %d\n"
-                      "alpha %.17g\nviews %d x %d\nsamples %d\nmax_iterations %d\nseed %llu\ntile %d\n",
-                      MF_PREFILTER_REVISION, W, H, (unsigned long long)h, lambert ? "lambert" : "ggx", o.keep_albedo, o.alpha, o.n_theta, o.n_phi, o.samples,
+                      "mfkit prefilter work 3\ngate_part %zu\nrevision %d\nmap %d x %d fnv1a64 %016llx\nbase %s\n"
+                      "keep_albedo %d\nalpha %.17g\nviews %d x %d\nsamples %d\nmax_iterations %d\nseed %llu\ntile %d\n",
+                      sizeof(mf_prefilter_gate_part), MF_PREFILTER_REVISION, W, H, (unsigned long long)h, lambert ? "lambert" : "ggx", o.keep_albedo, o.alpha, o.n_theta, o.n_phi, o.samples,
                       o.max_iterations, (unsigned long long)o.seed, T);
         unsigned char *old = NULL;
         size_t oldlen = 0;
