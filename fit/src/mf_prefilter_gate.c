@@ -503,7 +503,7 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
     const int nt = s->nt, np = s->np, nv = s->nv;
     const double *S = L->S[gs_slot(r)], *R = L->R[gs_slot(r)];
     const float *A = L->A[gs_slot(r)];
-    const int gr_ = L->goy + r; /* the row in the map's level */
+    const int grow = L->goy + r; /* the row in the map's level */
     const int region = s->mode == 2 && li < s->nreg;
     if (region && s->whole)
         return; /* the one region tile checked every entry */
@@ -515,7 +515,7 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
             continue;
         if (region && gs_ring(L, r, col) != 1)
             continue;
-        size_t e = (size_t)gr_ * L->growlen + (size_t)L->gox * nv + i;
+        size_t e = (size_t)grow * L->growlen + (size_t)L->gox * nv + i;
         double alb = fmax(A[i], 1e-6);
         int gr = s->ref && cos(mf_prefilter_theta(&s->o, a)) < MF_PREFILTER_MULTISTART_COS;
         /* the texel neighbours along x and y (periodic: normal maps tile), once per entry: their S and
@@ -525,7 +525,7 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
         int has_t[2], inner[2];
         for (int ax = 0; ax < 2; ++ax) {
             has_t[ax] = (ax ? L->gh : L->gw) >= 2;
-            inner[ax] = ax ? gr_ > 0 && gr_ + 1 < L->gh : gcol > 0 && gcol + 1 < L->gw;
+            inner[ax] = ax ? grow > 0 && grow + 1 < L->gh : gcol > 0 && gcol + 1 < L->gw;
             if (!has_t[ax])
                 continue;
             int r1 = (r + (ax == 1)) % L->h, c1 = (col + (ax == 0)) % L->w;
@@ -549,7 +549,7 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
                 double y0 = tS[ax][0][k], y1 = tS[ax][1][k];
                 double up = fmin(x - y0, x - y1), dn = fmin(y0 - x, y1 - x);
                 gs_worst(fmax(fmax(up, dn), 0.0) / alb, &g->worst_texel_spike, &s->k_texel, gs_key(li, e, k, 2 + ax),
-                         g->where_texel, sizeof g->where_texel, "texel spike", L->level, gr_, gcol, a, b);
+                         g->where_texel, sizeof g->where_texel, "texel spike", L->level, grow, gcol, a, b);
             }
             if (!s->ref)
                 continue;
@@ -580,9 +580,9 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
             if (isfinite(lt)) {
                 gs_worst(fmin(xt, xv), &g->worst_cont_excess, &s->k_cont_excess, gs_key(li, e, k, 0),
                          g->where_cont_excess, sizeof g->where_cont_excess,
-                         "lobe extreme beyond the reference's along every axis", L->level, gr_, gcol, a, b);
+                         "lobe extreme beyond the reference's along every axis", L->level, grow, gcol, a, b);
                 gs_worst(fmin(lt, lv), &g->worst_cont_cross, &s->k_cont_cross, gs_key(li, e, k, 0), g->where_cont_cross,
-                         sizeof g->where_cont_cross, "error extreme along every axis", L->level, gr_, gcol, a, b);
+                         sizeof g->where_cont_cross, "error extreme along every axis", L->level, grow, gcol, a, b);
                 gs_max(lt, &g->worst_cont_cross_texel);
             }
             /* the error's lone texel (periodic neighbours: normal maps tile) */
@@ -594,7 +594,7 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
                 gs_worst(gate_lone(ex, te[ax][0], te[ax][1]) / alb, gr ? &g->worst_cont_grazing : &g->worst_cont_texel,
                          gr ? &s->k_cont_grazing : &s->k_cont_texel, gs_key(li, e, k, 2 + ax),
                          gr ? g->where_cont_grazing : g->where_cont_texel, sizeof g->where_cont_texel,
-                         "texel error spike", L->level, gr_, gcol, a, b);
+                         "texel error spike", L->level, grow, gcol, a, b);
             }
         }
     }
