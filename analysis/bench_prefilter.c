@@ -4,7 +4,7 @@
  * a test (issue 13, "Speed and scale").
  *
  *   build-dir/analysis/bench_prefilter [--size N] [--views T P] [--threads K] [--base ggx|lambert]
- *                                      [--samples S] [--levels L]
+ *                                      [--samples S] [--levels L] [--gate-tile]
  *
  * The map: a deterministic synthetic height field on an N x N torus (N a power of two, default 32):
  * the sum of 24 Gaussian bumps and dents (centres, radii 0.03 N .. 0.15 N and heights from a fixed
@@ -20,6 +20,12 @@
  * comparisons across thread counts and code changes).  Where the time goes: run it under a
  * sampling profiler (docs/prefilter.md, "Measured: speed, memory and quality"; each revision's
  * profiles: docs/prefilter_log.md).
+ *
+ * --gate-tile: after the fits, the gate's cost on one thread (process CPU), the map taken as one
+ * region tile of a map twice as wide and tall (`mfkit prefilter`'s tile workers: docs/prefilter.md,
+ * "The gate across ranks"): the tile's reference (mf_prefilter_gate_reference) and its part of the
+ * gate (mf_prefilter_gate_region: all but its border's texel checks), against the whole gate over
+ * the same levels (mf_prefilter_gate_run_ref, what rank 0 ran for every lobe before), per lobe.
  */
 #define _POSIX_C_SOURCE 200809L
 #include "mfkit/mfkit.h"
@@ -168,7 +174,7 @@ static int check_albedo(const double *nrm, int size, const mf_prefilter_options 
 
 int main(int argc, char **argv)
 {
-    int size = 32, top_levels = 0, albedo_check = 0;
+    int size = 32, top_levels = 0, albedo_check = 0, gate_tile = 0;
     mf_prefilter_options o;
     mf_prefilter_options_default(&o);
     o.threads = 2;
@@ -186,6 +192,8 @@ int main(int argc, char **argv)
             albedo_check = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--levels") && i + 1 < argc)
             top_levels = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--gate-tile"))
+            gate_tile = 1;
         else if (!strcmp(argv[i], "--base") && i + 1 < argc) {
             ++i;
             if (!strcmp(argv[i], "lambert"))
@@ -196,7 +204,7 @@ int main(int argc, char **argv)
             }
         } else {
             fprintf(stderr, "usage: bench_prefilter [--size N] [--views T P] [--threads K] [--base ggx|lambert] "
-                            "[--samples S] [--levels L]\n");
+                            "[--samples S] [--levels L] [--gate-tile]\n");
             return 2;
         }
     }
@@ -262,6 +270,33 @@ int main(int argc, char **argv)
     printf("wall %.2f s, cpu %.2f s (user+sys), per stored lobe: wall %.3f ms, cpu %.3f ms; peak RSS %.1f MB\n", wall,
            cpu, 1e3 * wall / (double)stored, 1e3 * cpu / (double)stored, peak_rss_kb() / 1024.0);
     printf("checksum %016llx\n", (unsigned long long)hsh);
+    if (gate_tile && first == 1) {
+        mf_prefilter_options g1 = o;
+        g1.threads = 1;
+        double *R[16] = {NULL};
+        int ok = nl <= 16;
+        for (int l = 0; ok && l < nl; ++l)
+            ok = (R[l] = malloc(sizeof(double) * MF_PREFILTER_GATE_NLIGHTS * (size_t)lv[l].width * lv[l].height *
+                                o.n_theta * o.n_phi)) != NULL;
+        double c1 = cpu_seconds();
+        ok = ok && mf_prefilter_gate_reference(lv, nl, nrm, size, size, &g1, R) == MF_OK;
+        double c2 = cpu_seconds();
+        mf_prefilter_gate_part part;
+        ok = ok && mf_prefilter_gate_region(lv, nl, R, 2 * size, 2 * size, 0, 0, size, size, &g1, &part) == MF_OK;
+        double c3 = cpu_seconds();
+        mf_prefilter_gate whole;
+        mf_prefilter_gate_bounds_default(&whole);
+        ok = ok && mf_prefilter_gate_run_ref(lv, nl, nrm, size, size, &g1, &whole) == MF_OK;
+        double c4 = cpu_seconds();
+        if (!ok)
+            fprintf(stderr, "bench_prefilter: the gate failed to run\n");
+        else
+            printf("gate on one tile (1 thread, CPU per stored lobe): reference %.2f us, the tile's part %.2f us, "
+                   "together %.2f us; the whole gate over the same levels %.2f us\n",
+                   1e6 * (c2 - c1) / stored, 1e6 * (c3 - c2) / stored, 1e6 * (c3 - c1) / stored, 1e6 * (c4 - c3) / stored);
+        for (int l = 0; l < nl; ++l)
+            free(R[l]);
+    }
     mf_prefilter_levels_free(lv, nl);
     free(nrm);
     return 0;

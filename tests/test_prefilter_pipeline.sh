@@ -11,6 +11,11 @@
 #     by --max-tiles;
 #   - threads: on the shipped 16 x 16 bump map with 3 x 4 views (128 samples, about 2 s of CPU a run), --threads 1, 2 and 3 write the same
 #     bits, the manifest (the gate's figures and places) included;
+#   - the gate across tiles and ranks (region tiles carry the gate's reference, read back by the
+#     assembly): on the bump map, --tile 4 and --tile 16 give the same files and the same gate record
+#     (values, places, pass/fail); under MPIEXEC the same record on 1 process, 2 ranks with --tile 4
+#     and 16, and a stopped 2-rank run finished by one process; a checkpoint of the previous work
+#     format is refused in one line;
 #   - --base both (the default: specular table in DIR, diffuse in DIR/diffuse): stopped by --max-tiles
 #     in either table and rerun, it writes the same bits as an uninterrupted run, and the specular
 #     checkpoint stays until the diffuse table is written.
@@ -18,6 +23,14 @@ mfkit="$1"; src="$2"; mpiexec="${3:-}"
 source "$(dirname "$0")/cli_test_lib.sh"
 map="$src/tests/data/normalmaps/vgroove_16.png"
 args=(prefilter "$map" --base ggx --views 2x1 --samples 256)
+
+gate_rec() { # the manifest's gate record (from its "gate" key to the end): the gate's values, places, pass/fail
+  sed -n '/^  "gate": {/,$p' "$1/prefilter.json"
+}
+same_gate() { # same_gate DIR1 DIR2: both manifests hold a gate record with places, and the same one
+  local a; a=$(gate_rec "$1")
+  [ -n "$a" ] && [ "$(printf '%s' "$a" | grep -c 'at level [0-9]*, texel')" -ge 4 ] && [ "$a" = "$(gate_rec "$2")" ]
+}
 
 same() { # same DIR1 DIR2 [with-manifest]: every output file of DIR1 equal to DIR2's
   local a="$1" b="$2" f n=0
@@ -88,6 +101,18 @@ ok '[ $nw -eq 12 ]' "the manifest holds the gate's 12 places, own fit's three in
 ok 'same "$tmp/th1" "$tmp/th2" manifest && same "$tmp/th1" "$tmp/th3" manifest' "--threads 1, 2, 3: the same bits, manifest included"
 ok 'diff <(grep "^mfkit prefilter: \(gate\|reported\)" "$tmp/th1.log") <(grep "^mfkit prefilter: \(gate\|reported\)" "$tmp/th3.log")' \
    "--threads 1 and 3 print the same gate figures"
+# the gate across tiles: the region tiles' reference R is computed where they are fitted and read back
+# by the assembly (docs/prefilter.md, "The gate across ranks"): --tile 4 (levels 1-2 from 16 region
+# tiles, 3-4 computed from their children) and --tile 16 (one region tile, levels 1-4) give the same gate
+bump4=(prefilter "$src/tests/data/normalmaps/bump_16.png" --base ggx --views 3x4 --samples 128 --tile 4)
+"$mfkit" "${bump4[@]}" --threads 2 --out "$tmp/bt4" 2>"$tmp/bt4.log"; rc=$?
+ok '[ $rc -eq 0 ] && grep -q "in 21 tiles" "$tmp/bt4.log" && same "$tmp/th1" "$tmp/bt4" && same_gate "$tmp/th1" "$tmp/bt4"' \
+   "bump map, --tile 4 against --tile 16: the same files and the same gate record, places included (rc=$rc): $(diff <(gate_rec "$tmp/th1") <(gate_rec "$tmp/bt4") | head -c 600)"
+# a checkpoint of the previous work format (its tiles hold no reference) is refused in one line
+"$mfkit" "${bump4[@]}" --max-tiles 2 --out "$tmp/old" 2>/dev/null
+sed -i '1s/work [0-9]*/work 2/' "$tmp/old/.prefilter-work/run.txt"
+expect_error "a checkpoint of the previous work format is refused" 2 "checkpoint of a run with another" \
+   "${bump4[@]}" --out "$tmp/old"
 
 else
   mpi=("$mpiexec" -n 2); [ "$(id -u)" -eq 0 ] && mpi+=(--allow-run-as-root)
@@ -99,6 +124,21 @@ else
   ok '[ $rc -eq 75 ] && grep -q "after 6 of 21 tiles" "$tmp/mr.log"' "2 ranks x 3 tiles stop with exit 75 (rc=$rc): $(tail -3 "$tmp/mr.log")"
   "$mfkit" "${args[@]}" --tile 4 --out "$tmp/mr" 2>"$tmp/mr2.log"; rc=$?
   ok '[ $rc -eq 0 ] && same "$tmp/t4" "$tmp/mr" manifest' "one process finishes a 2-rank checkpoint: the same bits (rc=$rc)"
+  # the gate across ranks and tilings: the bump map (nonzero worsts with places) on 1 process and on
+  # 2 ranks with --tile 4 (the region tiles' reference from both ranks' files) and --tile 16, and a
+  # 2-rank run stopped after 3 tiles each and finished by one process: the same gate record
+  bump=(prefilter "$src/tests/data/normalmaps/bump_16.png" --base ggx --views 3x4 --samples 128)
+  "$mfkit" "${bump[@]}" --tile 4 --out "$tmp/g1" 2>"$tmp/g1.log"; rc1=$?
+  "${mpi[@]}" "$mfkit" "${bump[@]}" --tile 4 --out "$tmp/g2" >"$tmp/g2.log" 2>&1; rc2=$?
+  "${mpi[@]}" "$mfkit" "${bump[@]}" --tile 16 --out "$tmp/g3" >"$tmp/g3.log" 2>&1; rc3=$?
+  "${mpi[@]}" "$mfkit" "${bump[@]}" --tile 4 --max-tiles 3 --out "$tmp/g4" >"$tmp/g4.log" 2>&1; rc4=$?
+  "$mfkit" "${bump[@]}" --tile 4 --out "$tmp/g4" 2>"$tmp/g4b.log"; rc5=$?
+  ok '[ $rc1 -eq 0 ] && [ $rc2 -eq 0 ] && [ $rc3 -eq 0 ] && [ $rc4 -eq 75 ] && [ $rc5 -eq 0 ]' \
+     "bump map: 1 process, 2 ranks with --tile 4 and 16, a stopped 2-rank run resumed (rc $rc1 $rc2 $rc3 $rc4 $rc5): $(tail -2 "$tmp/g2.log")"
+  ok 'same "$tmp/g1" "$tmp/g2" manifest && same "$tmp/g1" "$tmp/g4" manifest && same "$tmp/g1" "$tmp/g3"' \
+     "bump map: 2 ranks and the resumed run write 1 process's bits (manifest included), --tile 16 the same files"
+  ok 'same_gate "$tmp/g1" "$tmp/g2" && same_gate "$tmp/g1" "$tmp/g3" && same_gate "$tmp/g1" "$tmp/g4"' \
+     "bump map: the same gate record, places included, on 1 process, 2 ranks, 2 tilings and resumed: $(diff <(gate_rec "$tmp/g1") <(gate_rec "$tmp/g3") | head -c 600)"
   "${mpi[@]}" "$mfkit" "${args[@]}" --tile 3 --out "$tmp/mbad" >"$tmp/mb.log" 2>&1
   ok '[ "$(grep -c "mfkit prefilter: --tile" "$tmp/mb.log")" -eq 1 ] && [ ! -e "$tmp/mbad" ]' \
      "2 ranks: a usage error is reported once, nothing written: $(head -c 600 "$tmp/mb.log")"

@@ -14,8 +14,10 @@
  *           from its blocks' (the mean of the children's, in the library's fixed order), so it
  *           holds no level-0 albedos.  Done in the first slice, whatever --max-tiles.
  *   work    each finished tile is written atomically to DIR/.prefilter-work/tile_<k>.bin, the
- *           checkpoint: a rerun of the same command (same map, options and fitter revision,
- *           recorded in run.txt there) skips the tiles present.  SIGINT/SIGTERM and --max-tiles
+ *           checkpoint: a rerun of the same command (same map, options, fitter revision and work
+ *           format, recorded in run.txt there) skips the tiles present.  A region tile's file also
+ *           holds the gate's reference R of its lobes (mf_prefilter_gate_reference, computed by the
+ *           worker that fitted it from the tile's own normals).  SIGINT/SIGTERM and --max-tiles
  *           stop between tiles and keep the checkpoint.
  *   ranks   under mpirun (built with MFKIT_WITH_MPI) rank r of K fits every K-th tile from the
  *           r-th, largest footprints first (and every K-th albedo block before them, then a
@@ -31,7 +33,9 @@
  * Gate: rank 0 streams the levels row by row from the tiles into the output files and the gate
  * (mf_prefilter_gate_stream_*: mf_prefilter_gate_run_ref's result, holding a few rows per level,
  * each row's columns split over --threads, the same result on any count) before committing; its
- * result goes into prefilter.json.
+ * result goes into prefilter.json.  The region levels' reference rows come from the tile files
+ * (mf_prefilter_gate_stream_row_ref: the same bits), so rank 0 no longer computes level 1's
+ * reference, the gate's largest part.
  * Tables: --base both (the default) runs the pipeline twice, the specular GGX table into DIR, then the
  * diffuse Lambert table into DIR/diffuse; the specular checkpoint is kept until the diffuse table is
  * written, so a rerun after a stop in either table resumes it.
@@ -148,7 +152,7 @@ int cli_prefilter(int argc, char **argv)
 
 enum { PF_EXIT_INCOMPLETE = 75 };
 #define PF_WORK ".prefilter-work"
-#define PF_TILE_MAGIC "MFPFTIL2"
+#define PF_TILE_MAGIC "MFPFTIL3" /* 3: region tiles carry the gate's reference R */
 
 /* set by the handler; an int is written atomically on every platform mfkit builds on */
 static volatile int g_pf_cancel = 0;
@@ -180,6 +184,8 @@ typedef struct { int level, w, h, nx, ny, tw, th, rec; long base; } pf_plan;
 typedef struct {
     int32_t level, w, h, not_converged;
     int64_t iterations, lobes, off_m, off_mag, off_alb;
+    int64_t off_ref;  /* a region tile's gate reference R (MF_PREFILTER_GATE_NLIGHTS doubles per lobe); 0: none */
+    int64_t off_part; /* a region tile's part of the gate (mf_prefilter_gate_part); 0: none */
     double worst_residual, worst_albedo_err;
 } pf_rec;
 
@@ -298,7 +304,7 @@ static int pf_read_base(const char *dir, size_t nv, pf_base *ab)
 }
 
 /* Fits tile t and writes its file atomically.  Returns a CLI exit code (0 ok), message printed. */
-static int pf_run_tile(const double *normals, int W, const mf_prefilter_options *o, const pf_tile *t,
+static int pf_run_tile(const double *normals, int W, int H, const mf_prefilter_options *o, const pf_tile *t,
                        const pf_base *ab, const char *path, const char *input)
 {
     char msg[1024];
@@ -321,23 +327,49 @@ static int pf_run_tile(const double *normals, int W, const mf_prefilter_options 
     mf_prefilter_level *lv = NULL;
     int nl = 0;
     mf_status st = mf_prefilter_run_tile(sub, t->w, t->h, o, t->first, base, use ? ab->lr : 0, &lv, &nl, msg, sizeof msg);
-    free(sub), free(base);
+    free(base);
+    int nrec = t->last - t->first + 1;
+    /* a region tile: the gate's reference R of its levels, computed here from its own normals (rank 0
+     * reads it back instead of computing it: docs/prefilter.md, "The gate across ranks") */
+    double *ref[16] = {NULL};
+    mf_prefilter_gate_part part;
+    if (st == MF_OK && t->first == 1) {
+        for (int i = 0; i < nrec && st == MF_OK; ++i) {
+            const mf_prefilter_level *L = &lv[i];
+            ref[i] = malloc(sizeof(double) * MF_PREFILTER_GATE_NLIGHTS * (size_t)L->width * L->height * nv);
+            st = ref[i] ? MF_OK : MF_ERR_ALLOC;
+        }
+        if (st == MF_OK && mf_prefilter_gate_reference(lv, nrec, sub, t->w, t->h, o, ref) != MF_OK)
+            st = MF_ERR_INTERNAL, snprintf(msg, sizeof msg, "the gate's reference could not be computed");
+        /* and its part of the gate: every check but its border's texel checks (rank 0's seams) */
+        if (st == MF_OK && mf_prefilter_gate_region(lv, nrec, ref, W, H, t->x0, t->y0, t->w, t->h, o, &part) != MF_OK)
+            st = MF_ERR_INTERNAL, snprintf(msg, sizeof msg, "the gate could not run on the tile");
+    }
+    free(sub);
     if (st != MF_OK) {
+        for (int i = 0; i < nrec; ++i)
+            free(ref[i]);
+        mf_prefilter_levels_free(lv, nl);
         int rc = cli_error(k_cmd, "%s: tile at texel (%d, %d), %d x %d: %s", input, t->x0, t->y0, t->w, t->h,
                            msg[0] ? msg : mf_status_str(st));
         return st == MF_ERR_DOMAIN ? rc : st == MF_ERR_ALLOC ? CLI_EXIT_IO : CLI_EXIT_FIT;
     }
-    int nrec = t->last - t->first + 1;
     pf_rec rec[16];
     int64_t off = 8 + 4 + (int64_t)sizeof(pf_rec) * nrec;
     for (int i = 0; i < nrec; ++i) {
         const mf_prefilter_level *L = &lv[t->first - 1 + i];
         size_t n = (size_t)L->width * L->height * nv;
         rec[i] = (pf_rec){L->level, L->width, L->height, L->not_converged, L->iterations, L->lobes, off,
-                          off + (int64_t)(9 * n * sizeof(float)), off + (int64_t)(10 * n * sizeof(float)),
+                          off + (int64_t)(9 * n * sizeof(float)), off + (int64_t)(10 * n * sizeof(float)), 0, 0,
                           L->worst_residual, L->worst_albedo_err};
         off = rec[i].off_alb + (int64_t)(n * sizeof(float));
+        if (ref[i]) {
+            rec[i].off_ref = off;
+            off += (int64_t)(MF_PREFILTER_GATE_NLIGHTS * n * sizeof(double));
+        }
     }
+    for (int i = 0; i < nrec && ref[0]; ++i) /* the part after the levels */
+        rec[i].off_part = off;
     mf_io_atomic a;
     int ok = mf_io_atomic_begin(&a, path, msg, sizeof msg) == MF_OK;
     if (ok) {
@@ -349,7 +381,11 @@ static int pf_run_tile(const double *normals, int W, const mf_prefilter_options 
             size_t n = (size_t)L->width * L->height * nv;
             ok = fwrite(L->m, sizeof(float), 9 * n, a.file) == 9 * n && fwrite(L->magnitude, sizeof(float), n, a.file) == n &&
                  fwrite(L->albedo, sizeof(float), n, a.file) == n;
+            if (ok && ref[i])
+                ok = fwrite(ref[i], sizeof(double), MF_PREFILTER_GATE_NLIGHTS * n, a.file) == MF_PREFILTER_GATE_NLIGHTS * n;
         }
+        if (ok && ref[0])
+            ok = fwrite(&part, sizeof part, 1, a.file) == 1;
         if (!ok) {
             snprintf(msg, sizeof msg, "%.900s: write failed", path);
             mf_io_atomic_abort(&a);
@@ -358,13 +394,15 @@ static int pf_run_tile(const double *normals, int W, const mf_prefilter_options 
         }
     }
     mf_prefilter_levels_free(lv, nl);
+    for (int i = 0; i < nrec; ++i)
+        free(ref[i]);
     return ok ? 0 : cli_error(k_cmd, "%s", msg) * 0 + CLI_EXIT_IO;
 }
 
 /* The tiles of this rank still to fit, shared by `workers` threads. */
 typedef struct {
     const double *normals;
-    int W;
+    int W, H;
     mf_prefilter_options o; /* o.threads: per tile */
     const pf_tile *tiles;
     const pf_base *ab; /* the albedo base; with blocks = 1, the queue's items are its blocks */
@@ -437,7 +475,7 @@ static void *pf_worker(void *arg)
         else
             tile_path(path, sizeof path, q->dir, k);
         int r = q->blocks ? pf_run_block(q->normals, q->W, &q->o, q->ab, k, path, q->input)
-                          : pf_run_tile(q->normals, q->W, &q->o, &q->tiles[k], q->ab, path, q->input);
+                          : pf_run_tile(q->normals, q->W, q->H, &q->o, &q->tiles[k], q->ab, path, q->input);
         if (r) {
             pthread_mutex_lock(&q->lock);
             if (!q->rc)
@@ -731,6 +769,7 @@ typedef struct {
     FILE **tf;        /* the open tiles of the current band */
     pf_rec *recs;
     float *rm, *ra, *rb; /* one row: matrices, magnitudes, albedos */
+    double *rr;          /* a region level's row of the gate's reference R, from its tiles (NULL: the gate computes it) */
 } pf_lvasm;
 
 /* Streams the levels from the tile files row by row, in the gate's order (level l's row r right after
@@ -797,7 +836,9 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
         V->rb = malloc(sizeof(float) * row);
         V->tf = calloc((size_t)P->nx, sizeof *V->tf);
         V->recs = malloc(sizeof(pf_rec) * (size_t)P->nx);
-        if (!V->rm || !V->ra || !V->rb || !V->tf || !V->recs) {
+        if (P->base == 0) /* region tiles (numbered from 0) carry R; footprint tiles do not */
+            V->rr = malloc(sizeof(double) * MF_PREFILTER_GATE_NLIGHTS * row);
+        if (!V->rm || !V->ra || !V->rb || !V->tf || !V->recs || (P->base == 0 && !V->rr)) {
             ok = 0, snprintf(msg, sizeof msg, "out of memory");
             break;
         }
@@ -807,8 +848,14 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
     /* the library's gate, with the reference (mf_prefilter_gate_run_ref's result, streamed) */
     mf_prefilter_gate g;
     mf_prefilter_gate_bounds_default(&g);
-    if (ok && mf_prefilter_gate_stream_begin(gl, nl, A->normals, A->W, A->H, o, &g, &gs) != MF_OK)
-        ok = 0, snprintf(msg, sizeof msg, "the gate could not run (out of memory, or its reference fit failed)");
+    /* the region tiles gated themselves but for their borders (their parts, merged below as their
+     * level-1 band opens): the stream runs the seams and the levels above */
+    int nreg = 0;
+    while (nreg < nl && A->plans[nreg].base == 0)
+        ++nreg;
+    if (ok && mf_prefilter_gate_stream_begin_regions(gl, nl, A->normals, A->W, A->H, A->W < A->T ? A->W : A->T,
+                                                     A->H < A->T ? A->H : A->T, nreg, o, &g, &gs) != MF_OK)
+        ok = 0, snprintf(msg, sizeof msg, "the gate could not run (out of memory, or no region tiles)");
     int lvi, r;
     while (ok && mf_prefilter_gate_stream_next(gs, &lvi, &r)) {
         const pf_plan *P = &A->plans[lvi];
@@ -827,8 +874,16 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
             for (int gx = 0; gx < P->nx && ok; ++gx) {
                 long k = P->base + (long)gy * P->nx + gx;
                 ok = pf_open_tile(dir, k, P->rec, &tf[gx], &recs[gx], msg, sizeof msg);
-                if (ok && (recs[gx].level != P->level || recs[gx].w != P->tw || recs[gx].h != P->th))
+                if (ok && (recs[gx].level != P->level || recs[gx].w != P->tw || recs[gx].h != P->th ||
+                           (V->rr != NULL) != (recs[gx].off_ref > 0) || (V->rr != NULL) != (recs[gx].off_part > 0)))
                     ok = 0, snprintf(msg, sizeof msg, "%s/" PF_WORK ": tile %ld does not hold level %d", dir, k, P->level);
+                if (ok && V->rr && lvi == 0) { /* a region tile's first band: its part of the gate */
+                    mf_prefilter_gate_part part;
+                    ok = fseek(tf[gx], (long)recs[gx].off_part, SEEK_SET) == 0 && fread(&part, sizeof part, 1, tf[gx]) == 1 &&
+                         mf_prefilter_gate_stream_merge(gs, &part) == MF_OK;
+                    if (!ok)
+                        snprintf(msg, sizeof msg, "%s/" PF_WORK ": tile %ld truncated", dir, k);
+                }
                 if (ok) {
                     S->lobes += recs[gx].lobes, S->iterations += recs[gx].iterations;
                     S->not_converged += recs[gx].not_converged;
@@ -846,13 +901,17 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
                  fread(ra + gx * seg, sizeof(float), seg, f) == seg &&
                  fseek(f, (long)(recs[gx].off_alb + (int64_t)(rr * seg * sizeof(float))), SEEK_SET) == 0 &&
                  fread(rb + gx * seg, sizeof(float), seg, f) == seg;
+            const size_t nref = MF_PREFILTER_GATE_NLIGHTS * seg;
+            if (ok && V->rr)
+                ok = fseek(f, (long)(recs[gx].off_ref + (int64_t)(rr * nref * sizeof(double))), SEEK_SET) == 0 &&
+                     fread(V->rr + gx * nref, sizeof(double), nref, f) == nref;
             if (!ok)
                 snprintf(msg, sizeof msg, "%s/" PF_WORK ": tile %ld truncated", dir, P->base + (long)gy * P->nx + gx);
         }
         if (!ok)
             break;
         /* the row to the gate, counts, then to the files */
-        if (mf_prefilter_gate_stream_row(gs, lvi, r, rm, ra, rb) != MF_OK) {
+        if (mf_prefilter_gate_stream_row_ref(gs, lvi, r, rm, ra, rb, V->rr) != MF_OK) {
             ok = 0, snprintf(msg, sizeof msg, "the gate could not run (rows out of order)");
             break;
         }
@@ -913,7 +972,7 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
         for (int gx = 0; LA[l].tf && gx < A->plans[l].nx; ++gx)
             if (LA[l].tf[gx])
                 fclose(LA[l].tf[gx]);
-        free(LA[l].tf), free(LA[l].recs), free(LA[l].rm), free(LA[l].ra), free(LA[l].rb);
+        free(LA[l].tf), free(LA[l].recs), free(LA[l].rm), free(LA[l].ra), free(LA[l].rb), free(LA[l].rr);
     }
     free(LA);
     /* the snippets and the manifest */
@@ -1391,7 +1450,9 @@ static int pf_table(const cli_val *v, const char *input, const char *dir, int la
         rc = CLI_EXIT_IO, cli_error(k_cmd, "out of memory");
         goto done;
     }
-    /* the work directory and its run record (rank 0 checks it, the others wait) */
+    /* the work directory and its run record (rank 0 checks it, the others wait); gate_part: the size of a
+     * region tile's part of the gate in its file, so a gate with another set of checks refuses the
+     * checkpoint instead of misreading it */
     char wd[4096], runp[4400];
     snprintf(wd, sizeof wd, "%s/" PF_WORK, dir);
     snprintf(runp, sizeof runp, "%s/run.txt", wd);
@@ -1399,9 +1460,9 @@ static int pf_table(const cli_val *v, const char *input, const char *dir, int la
         mf_buf key = {0};
         uint64_t h = fnv1a(1469598103934665603ull, normals, sizeof(double) * 3 * (size_t)W * H);
         mf_buf_printf(&key,
-                      "mfkit prefilter work 2\nrevision %d\nmap %d x %d fnv1a64 %016llx\nbase %s\nkeep_albedo %d\n"
-                      "alpha %.17g\nviews %d x %d\nsamples %d\nmax_iterations %d\nseed %llu\ntile %d\n",
-                      MF_PREFILTER_REVISION, W, H, (unsigned long long)h, lambert ? "lambert" : "ggx", o.keep_albedo, o.alpha, o.n_theta, o.n_phi, o.samples,
+                      "mfkit prefilter work 3\ngate_part %zu\nrevision %d\nmap %d x %d fnv1a64 %016llx\nbase %s\n"
+                      "keep_albedo %d\nalpha %.17g\nviews %d x %d\nsamples %d\nmax_iterations %d\nseed %llu\ntile %d\n",
+                      sizeof(mf_prefilter_gate_part), MF_PREFILTER_REVISION, W, H, (unsigned long long)h, lambert ? "lambert" : "ggx", o.keep_albedo, o.alpha, o.n_theta, o.n_phi, o.samples,
                       o.max_iterations, (unsigned long long)o.seed, T);
         unsigned char *old = NULL;
         size_t oldlen = 0;
@@ -1410,8 +1471,8 @@ static int pf_table(const cli_val *v, const char *input, const char *dir, int la
             rc = CLI_EXIT_IO, cli_error(k_cmd, "--out %s: %s", dir, msg);
         } else if (mf_io_read_file(runp, runp, &old, &oldlen, &missing, msg, sizeof msg) == MF_OK) {
             if (oldlen != key.len || memcmp(old, key.data, key.len))
-                rc = cli_error(k_cmd, "%s: the checkpoint of a run with another map, options or fitter revision; "
-                                      "remove it to start over", wd);
+                rc = cli_error(k_cmd, "%s: the checkpoint of a run with another map, options, fitter revision "
+                                      "or checkpoint format; remove it to start over", wd);
         } else if (!missing) {
             rc = CLI_EXIT_IO, cli_error(k_cmd, "%s", msg);
         } else if (mf_io_write_buf_atomic(runp, &key, msg, sizeof msg) != MF_OK) {
@@ -1485,7 +1546,7 @@ static int pf_table(const cli_val *v, const char *input, const char *dir, int la
         else
             q.todo[q.ntodo++] = ntiles - 1 - i;
     }
-    q.normals = normals, q.W = W, q.tiles = tiles, q.ab = &ab, q.dir = dir, q.input = input;
+    q.normals = normals, q.W = W, q.H = H, q.tiles = tiles, q.ab = &ab, q.dir = dir, q.input = input;
     q.max_tiles = max_tiles;
     /* several tiles at once when there are enough (a footprint tile is one fit job: threads inside it
      * would idle), else the threads inside the tiles; the bits depend on neither */

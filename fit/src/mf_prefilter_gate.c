@@ -41,7 +41,7 @@ void mf_prefilter_gate_bounds_default(mf_prefilter_gate *g)
 /* The gate's lights, in the view-azimuth-aligned frame of view theta: quads of half-width
  * 0.05, 0.2, 0.8 (tangent-plane units) about the mirror direction (-sin theta, 0, cos theta) and
  * about the normal. */
-#define GATE_NLIGHTS 6
+#define GATE_NLIGHTS MF_PREFILTER_GATE_NLIGHTS
 
 static void gate_lights(double theta, mf_polygon *out)
 {
@@ -199,6 +199,46 @@ static double gate_lone(double x, double y0, double y1)
     return fmax(fmax(fmin(x - y0, x - y1), fmin(y0 - x, y1 - x)), 0.0);
 }
 
+/* The reference R of columns [c0, c1) of row `row` of level index li (GATE_NLIGHTS doubles per entry,
+ * R indexed as the whole row, C order): level 1 (li 0) from the level-0 normals of the cw x ch map
+ * `normals` (its rows 2 row and 2 row + 1), each level above as the mean of its children, crow[dy]
+ * being the child level's row 2 row + dy (NULL beyond its height ch; cw its width).  A footprint's
+ * reference is the mean over its texels (Nahmias 2022, Eq. 2.36), summed child by child in row order.
+ * The one definition of R: the streamed gate and the region tiles' (mf_prefilter_gate_reference) call
+ * it with the same operands, so a tile's R read back is the stream's, bit for bit. */
+static void gate_ref_cols(const gate_iso *iso, const gate_clipped *clipped, const mf_prefilter_options *o, int nt,
+                          int np, int li, int row, int c0, int c1, const double *normals, const double *const crow[2],
+                          int cw, int ch, double *R)
+{
+    const size_t nv = (size_t)nt * np;
+    memset(R + GATE_NLIGHTS * (size_t)c0 * nv, 0, sizeof(double) * GATE_NLIGHTS * (size_t)(c1 - c0) * nv);
+    for (int col = c0; col < c1; ++col) {
+        int nc = 0;
+        for (int dy = 0; dy < 2; ++dy)
+            for (int dx = 0; dx < 2; ++dx)
+                nc += 2 * row + dy < ch && 2 * col + dx < cw;
+        for (int dy = 0; dy < 2; ++dy)
+            for (int dx = 0; dx < 2; ++dx) {
+                int cr = 2 * row + dy, cc = 2 * col + dx;
+                if (cr >= ch || cc >= cw)
+                    continue;
+                for (int a = 0; a < nt; ++a)
+                    for (int b = 0; b < np; ++b) {
+                        size_t i = ((size_t)col * nt + a) * np + b;
+                        double *acc = R + GATE_NLIGHTS * i;
+                        if (li == 0) {
+                            gate_ref_texel(iso, normals + 3 * ((size_t)cr * cw + cc), mf_prefilter_theta(o, a),
+                                           mf_prefilter_phi(o, b), clipped + GATE_NLIGHTS * a, 1.0 / nc, acc);
+                        } else {
+                            const double *c = crow[dy] + GATE_NLIGHTS * (((size_t)cc * nt + a) * np + b);
+                            for (int k = 0; k < GATE_NLIGHTS; ++k)
+                                acc[k] += c[k] / nc;
+                        }
+                    }
+            }
+    }
+}
+
 /* ---- the streamed gate ------------------------------------------------------------------------- */
 
 /* The gate sees each level row by row, in an order where the rows a row's checks need are still
@@ -219,6 +259,11 @@ typedef struct {
     size_t rowlen; /* entries per row: w * n_theta * n_phi */
     double *S[GS_SLOTS], *R[GS_SLOTS];
     float *A[GS_SLOTS];
+    /* the gate across tiles: the map's level (gw x gh, growlen entries a row) and this stream's first
+     * texel in it (gox, goy; 0 but in a region tile's part), for the keys and places; tw x th: a region
+     * tile's texels at this level (rank 0's gs_ring) */
+    int gw, gh, gox, goy, tw, th;
+    size_t growlen;
 } gs_level;
 
 struct mf_prefilter_gate_stream {
@@ -235,11 +280,30 @@ struct mf_prefilter_gate_stream {
     uint64_t k_cont_owner, k_cont_owner_view, k_cont_dominated;
     int threads;           /* o->threads (1 without o), at most GS_MAX_THREADS */
     struct gs_part *parts; /* threads of them, reused for every row */
+    /* the gate across tiles (docs/prefilter.md, "The gate across ranks"), mode:
+     *   0 the whole gate;
+     *   1 a region tile's part (mf_prefilter_gate_region): the stream holds the tile's levels, R given;
+     *     every check of every entry but the texel checks of the tile's border entries (ring 1), unless
+     *     the tile is the whole map;
+     *   2 rank 0 with the region tiles' parts (mf_prefilter_gate_stream_begin_regions): at the region levels
+     *     (index < nreg) R given, S computed for the two outer rings of each tile only, and only the
+     *     texel checks of ring 1 run; the tiles' parts come in by mf_prefilter_gate_stream_merge */
+    int mode, nreg, whole;
 };
 
 static size_t gs_part_size(void);
 
 static int gs_slot(int r) { return r < 2 ? r : 2 + r % 3; }
+
+/* The ring of a region tile that (row, col) of level L lies in: 1 its border, 2 the texels next to it,
+ * 0 inside (tiles of tw x th texels at this level, from texel (0, 0)). */
+static int gs_ring(const gs_level *L, int row, int col)
+{
+    int x = col % L->tw, y = row % L->th;
+    int d = x < L->tw - 1 - x ? x : L->tw - 1 - x, dy = y < L->th - 1 - y ? y : L->th - 1 - y;
+    d = d < dy ? d : dy;
+    return d == 0 ? 1 : d == 1 ? 2 : 0;
+}
 
 /* The key of (level index, entry, light, check): the order of a pass over levels, entries, lights
  * and the checks of one light (0 theta, 1 phi, 2 texels along x, 3 along y, 4 level). */
@@ -274,29 +338,31 @@ void mf_prefilter_gate_stream_free(mf_prefilter_gate_stream *s)
     free(s->L), free(s->lights), free(s->clipped), free(s->iso), free(s->parts), free(s);
 }
 
-mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int nlevels, const double *normals,
-                                         int width, int height, const mf_prefilter_options *o, mf_prefilter_gate *g,
-                                         mf_prefilter_gate_stream **out)
+/* mf_prefilter_gate_stream_begin's work; ref: with the reference (normals, or R given with every row);
+ * iso: fit the reference's base lobes (not needed when every row's R is given). */
+static mf_status gs_begin(const mf_prefilter_level *shapes, int nlevels, const double *normals, int ref, int iso,
+                          int width, int height, const mf_prefilter_options *o, mf_prefilter_gate *g,
+                          mf_prefilter_gate_stream **out)
 {
     if (out)
         *out = NULL;
-    if (!shapes || nlevels < 1 || nlevels > 64 || !g || !out || (normals && (!o || width < 1 || height < 1)))
+    if (!shapes || nlevels < 1 || nlevels > 64 || !g || !out || (ref && (!o || width < 1 || height < 1)))
         return MF_ERR_DOMAIN;
     int nt = shapes[0].n_theta, np = shapes[0].n_phi;
-    if (nt < 2 || np < 1 || (normals && (o->n_theta != nt || o->n_phi != np)))
+    if (nt < 2 || np < 1 || (ref && (o->n_theta != nt || o->n_phi != np)))
         return MF_ERR_DOMAIN;
     for (int l = 0; l < nlevels; ++l) {
         const mf_prefilter_level *lv = &shapes[l];
         if (lv->n_theta != nt || lv->n_phi != np || lv->width < 1 || lv->height < 1)
             return MF_ERR_DOMAIN;
         int k = l + 1, w = width >> k, h = height >> k;
-        if (normals && (lv->level != k || lv->width != (w > 0 ? w : 1) || lv->height != (h > 0 ? h : 1)))
+        if (ref && (lv->level != k || lv->width != (w > 0 ? w : 1) || lv->height != (h > 0 ? h : 1)))
             return MF_ERR_DOMAIN;
     }
     mf_prefilter_gate_stream *s = calloc(1, sizeof *s);
     if (!s)
         return MF_ERR_ALLOC;
-    s->g = g, s->nl = nlevels, s->nt = nt, s->np = np, s->nv = nt * np, s->ref = normals != NULL;
+    s->g = g, s->nl = nlevels, s->nt = nt, s->np = np, s->nv = nt * np, s->ref = ref;
     s->normals = normals, s->W = width, s->H = height;
     if (o)
         s->o = *o;
@@ -337,6 +403,7 @@ mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int n
         L->level = lv->level, L->w = lv->width, L->h = lv->height;
         L->twice = l > 0 && shapes[l - 1].width == 2 * lv->width && shapes[l - 1].height == 2 * lv->height;
         L->rowlen = (size_t)lv->width * s->nv;
+        L->gw = L->tw = L->w, L->gh = L->th = L->h, L->growlen = L->rowlen; /* the whole map (mode 0) */
         int used[GS_SLOTS] = {0}; /* a level of fewer than GS_SLOTS rows uses fewer slots */
         for (int r = 0; r < lv->height && r < GS_SLOTS; ++r)
             used[gs_slot(r)] = 1;
@@ -351,7 +418,7 @@ mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int n
                 st = MF_ERR_ALLOC;
         }
     }
-    if (st == MF_OK && s->ref) {
+    if (st == MF_OK && s->ref && iso) {
         s->iso = malloc(sizeof *s->iso);
         st = s->iso ? gate_iso_fit(o, s->iso) : MF_ERR_ALLOC;
     }
@@ -359,6 +426,43 @@ mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int n
         mf_prefilter_gate_stream_free(s);
         return st;
     }
+    *out = s;
+    return MF_OK;
+}
+
+mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int nlevels, const double *normals,
+                                         int width, int height, const mf_prefilter_options *o, mf_prefilter_gate *g,
+                                         mf_prefilter_gate_stream **out)
+{
+    return gs_begin(shapes, nlevels, normals, normals != NULL, 1, width, height, o, g, out);
+}
+
+mf_status mf_prefilter_gate_stream_begin_regions(const mf_prefilter_level *shapes, int nlevels, const double *normals,
+                                                 int width, int height, int rw, int rh, int nreg,
+                                                 const mf_prefilter_options *o, mf_prefilter_gate *g,
+                                                 mf_prefilter_gate_stream **out)
+{
+    if (out)
+        *out = NULL;
+    if (!normals || nreg < 1 || nreg > nlevels || rw < 1 || rh < 1 || width < 1 || height < 1 || width % rw ||
+        height % rh)
+        return MF_ERR_DOMAIN;
+    /* level 1 is a region level, so every level-1 R is given and the levels above take the mean of
+     * their children's: the reference's base lobes are not needed */
+    mf_prefilter_gate_stream *s;
+    mf_status st = gs_begin(shapes, nlevels, normals, 1, 0, width, height, o, g, &s);
+    if (st != MF_OK)
+        return st;
+    for (int l = 0; l < nreg; ++l) {
+        gs_level *L = &s->L[l];
+        int k = l + 1;
+        L->tw = rw >> k > 0 ? rw >> k : 1, L->th = rh >> k > 0 ? rh >> k : 1;
+        if (L->w % L->tw || L->h % L->th) {
+            mf_prefilter_gate_stream_free(s);
+            return MF_ERR_DOMAIN;
+        }
+    }
+    s->mode = 2, s->nreg = nreg, s->whole = rw == width && rh == height;
     *out = s;
     return MF_OK;
 }
@@ -503,9 +607,19 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
     const int nt = s->nt, np = s->np, nv = s->nv;
     const double *S = L->S[gs_slot(r)], *R = L->R[gs_slot(r)];
     const float *A = L->A[gs_slot(r)];
+    const int grow = L->goy + r; /* the row in the map's level */
+    const int region = s->mode == 2 && li < s->nreg;
+    if (region && s->whole)
+        return; /* the one region tile checked every entry */
     for (size_t i = i0; i < i1; ++i) {
-        int col = (int)(i / nv), a = (int)(i / np % nt), b = (int)(i % np);
-        size_t e = (size_t)r * L->rowlen + i;
+        int col = (int)(i / nv), a = (int)(i / np % nt), b = (int)(i % np), gcol = L->gox + col;
+        /* a region tile checks its inner entries, rank 0 the tiles' borders (their neighbours in the
+         * next tile) */
+        if (s->mode == 1 && !s->whole && (r == 0 || r == L->h - 1 || col == 0 || col == L->w - 1))
+            continue;
+        if (region && gs_ring(L, r, col) != 1)
+            continue;
+        size_t e = (size_t)grow * L->growlen + (size_t)L->gox * nv + i;
         double alb = fmax(A[i], 1e-6);
         int gr = s->ref && cos(mf_prefilter_theta(&s->o, a)) < MF_PREFILTER_MULTISTART_COS;
         /* the texel neighbours along x and y (periodic: normal maps tile), once per entry: their S and
@@ -514,8 +628,8 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
         double ta0[2] = {0.0, 0.0}, ta1[2] = {0.0, 0.0};
         int has_t[2], inner[2];
         for (int ax = 0; ax < 2; ++ax) {
-            has_t[ax] = (ax ? L->h : L->w) >= 2;
-            inner[ax] = ax ? r > 0 && r + 1 < L->h : col > 0 && col + 1 < L->w;
+            has_t[ax] = (ax ? L->gh : L->gw) >= 2;
+            inner[ax] = ax ? grow > 0 && grow + 1 < L->gh : gcol > 0 && gcol + 1 < L->gw;
             if (!has_t[ax])
                 continue;
             int r1 = (r + (ax == 1)) % L->h, c1 = (col + (ax == 0)) % L->w;
@@ -542,7 +656,7 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
                 double y0 = tS[ax][0][k], y1 = tS[ax][1][k];
                 double up = fmin(x - y0, x - y1), dn = fmin(y0 - x, y1 - x);
                 gs_worst(fmax(fmax(up, dn), 0.0) / alb, &g->worst_texel_spike, &s->k_texel, gs_key(li, e, k, 2 + ax),
-                         g->where_texel, sizeof g->where_texel, "texel spike", L->level, r, col, a, b);
+                         g->where_texel, sizeof g->where_texel, "texel spike", L->level, grow, gcol, a, b);
             }
             if (!s->ref)
                 continue;
@@ -573,9 +687,9 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
             if (isfinite(lt)) {
                 gs_worst(fmin(xt, xv), &g->worst_cont_excess, &s->k_cont_excess, gs_key(li, e, k, 0),
                          g->where_cont_excess, sizeof g->where_cont_excess,
-                         "lobe extreme beyond the reference's along every axis", L->level, r, col, a, b);
+                         "lobe extreme beyond the reference's along every axis", L->level, grow, gcol, a, b);
                 gs_worst(fmin(lt, lv), &g->worst_cont_cross, &s->k_cont_cross, gs_key(li, e, k, 0), g->where_cont_cross,
-                         sizeof g->where_cont_cross, "error extreme along every axis", L->level, r, col, a, b);
+                         sizeof g->where_cont_cross, "error extreme along every axis", L->level, grow, gcol, a, b);
                 gs_max(lt, &g->worst_cont_cross_texel);
             }
             /* the error's lone texel (periodic neighbours: normal maps tile) */
@@ -587,7 +701,7 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
                 gs_worst(gate_lone(ex, te[ax][0], te[ax][1]) / alb, gr ? &g->worst_cont_grazing : &g->worst_cont_texel,
                          gr ? &s->k_cont_grazing : &s->k_cont_texel, gs_key(li, e, k, 2 + ax),
                          gr ? g->where_cont_grazing : g->where_cont_texel, sizeof g->where_cont_texel,
-                         "texel error spike", L->level, r, col, a, b);
+                         "texel error spike", L->level, grow, gcol, a, b);
             }
         }
     }
@@ -596,7 +710,7 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
 /* The checks of row `row` of level index level_index that need no other row of its level, over its
  * columns [c0, c1): m, magnitude, albedo are the whole row's arrays. */
 static void gs_row_cols(mf_prefilter_gate_stream *s, int level_index, int row, const float *m, const float *magnitude,
-                        const float *albedo, int c0, int c1)
+                        const float *albedo, const double *Rin, int c0, int c1)
 {
     mf_prefilter_gate *g = s->g;
     const gs_level *L = &s->L[level_index];
@@ -604,11 +718,21 @@ static void gs_row_cols(mf_prefilter_gate_stream *s, int level_index, int row, c
     double *S = L->S[sl], *R = L->R[sl];
     float *A = L->A[sl];
     const size_t i0 = (size_t)c0 * nv, i1 = (size_t)c1 * nv;
+    const int grow = L->goy + row; /* the row in the map's level */
+    /* rank 0 at a region level: the tiles ran these checks; it needs S of their two outer rings (the
+     * texel checks of ring 1), of every entry at the top region level (the level check above) */
+    const int region = s->mode == 2 && level_index < s->nreg, top = level_index == s->nreg - 1;
     /* energy, nan, the lobes' shading */
     for (size_t i = i0; i < i1; ++i) {
-        int col = (int)(i / nv), a = (int)(i / np % nt), b = (int)(i % np);
-        size_t e = (size_t)row * L->rowlen + i;
+        int col = (int)(i / nv), a = (int)(i / np % nt), b = (int)(i % np), gcol = L->gox + col;
+        size_t e = (size_t)grow * L->growlen + (size_t)L->gox * nv + i;
         const float *mi = m + 9 * i;
+        if (region) {
+            A[i] = albedo ? albedo[i] : magnitude[i];
+            if (top || (!s->whole && gs_ring(L, row, col)))
+                gate_shade(mi, magnitude[i], s->lights + GATE_NLIGHTS * a, S + GATE_NLIGHTS * i);
+            continue;
+        }
         float mag = magnitude[i];
         int bad = !isfinite(mag) || !(mag >= 0.0f);
         for (int q = 0; q < 9; ++q)
@@ -621,50 +745,33 @@ static void gs_row_cols(mf_prefilter_gate_stream *s, int level_index, int row, c
             double frac = 0.5 * (1.0 + mi[8] / sqrt(n2));
             double alb = albedo ? albedo[i] : mag;
             gs_worst(alb > 0.0 ? fabs(mag * frac / alb - 1.0) : fabs(mag * frac), &g->worst_energy, &s->k_energy,
-                     gs_key(level_index, e, 0, 0), g->where_energy, sizeof g->where_energy, "energy", L->level, row, col,
-                     a, b);
+                     gs_key(level_index, e, 0, 0), g->where_energy, sizeof g->where_energy, "energy", L->level, grow,
+                     gcol, a, b);
         }
         gate_shade(mi, mag, s->lights + GATE_NLIGHTS * a, S + GATE_NLIGHTS * i);
         for (int k = 0; k < GATE_NLIGHTS; ++k)
             bad |= !isfinite(S[GATE_NLIGHTS * i + k]);
         g->nan_entries += bad;
     }
-    /* the reference: level 1 from its texels, each level above as the mean of its children */
-    if (s->ref) {
-        memset(R + GATE_NLIGHTS * i0, 0, sizeof(double) * GATE_NLIGHTS * (i1 - i0));
+    /* the reference: given (the region tile's, read back: the same bits), or level 1 from its texels
+     * and each level above as the mean of its children */
+    if (s->ref && Rin) {
+        memcpy(R + GATE_NLIGHTS * i0, Rin + GATE_NLIGHTS * i0, sizeof(double) * GATE_NLIGHTS * (i1 - i0));
+    } else if (s->ref) {
         int cw = level_index ? s->L[level_index - 1].w : s->W, ch = level_index ? s->L[level_index - 1].h : s->H;
-        for (int col = c0; col < c1; ++col) {
-            int nc = 0;
-            for (int dy = 0; dy < 2; ++dy)
-                for (int dx = 0; dx < 2; ++dx)
-                    nc += 2 * row + dy < ch && 2 * col + dx < cw;
-            for (int dy = 0; dy < 2; ++dy)
-                for (int dx = 0; dx < 2; ++dx) {
-                    int cr = 2 * row + dy, cc = 2 * col + dx;
-                    if (cr >= ch || cc >= cw)
-                        continue;
-                    for (int a = 0; a < nt; ++a)
-                        for (int b = 0; b < np; ++b) {
-                            size_t i = ((size_t)col * nt + a) * np + b;
-                            double *acc = R + GATE_NLIGHTS * i;
-                            if (level_index == 0) {
-                                gate_ref_texel(s->iso, s->normals + 3 * ((size_t)cr * s->W + cc), mf_prefilter_theta(&s->o, a),
-                                               mf_prefilter_phi(&s->o, b), s->clipped + GATE_NLIGHTS * a, 1.0 / nc, acc);
-                            } else {
-                                const gs_level *C = &s->L[level_index - 1];
-                                const double *c = C->R[gs_slot(cr)] + GATE_NLIGHTS * (((size_t)cc * nt + a) * np + b);
-                                for (int k = 0; k < GATE_NLIGHTS; ++k)
-                                    acc[k] += c[k] / nc;
-                            }
-                        }
-                }
-        }
+        const double *crow[2] = {NULL, NULL};
+        for (int dy = 0; level_index && dy < 2; ++dy)
+            if (2 * row + dy < ch)
+                crow[dy] = s->L[level_index - 1].R[gs_slot(2 * row + dy)];
+        gate_ref_cols(s->iso, s->clipped, &s->o, nt, np, level_index, row, c0, c1, s->normals, crow, cw, ch, R);
     }
+    if (region)
+        return;
     /* the checks within the row: views, levels; against the reference: the error, its jumps and
      * spikes along the views */
     for (size_t i = i0; i < i1; ++i) {
-        int col = (int)(i / nv), a = (int)(i / np % nt), b = (int)(i % np);
-        size_t e = (size_t)row * L->rowlen + i;
+        int col = (int)(i / nv), a = (int)(i / np % nt), b = (int)(i % np), gcol = L->gox + col;
+        size_t e = (size_t)grow * L->growlen + (size_t)L->gox * nv + i;
         double alb = fmax(A[i], 1e-6);
         int gr = s->ref && cos(mf_prefilter_theta(&s->o, a)) < MF_PREFILTER_MULTISTART_COS;
         size_t vm = i - b + (b + np - 1) % np, vp = i - b + (b + 1) % np; /* phi neighbours (periodic) */
@@ -674,12 +781,12 @@ static void gs_row_cols(mf_prefilter_gate_stream *s, int level_index, int row, c
             if (a > 0 && a + 1 < nt) {
                 double d = fabs(2.0 * x - S[GATE_NLIGHTS * (i - np) + k] - S[GATE_NLIGHTS * (i + np) + k]);
                 gs_worst(0.5 * d / alb, &g->worst_view_spike, &s->k_view, gs_key(level_index, e, k, 0), g->where_view,
-                         sizeof g->where_view, "theta spike", L->level, row, col, a, b);
+                         sizeof g->where_view, "theta spike", L->level, grow, gcol, a, b);
             }
             if (np >= 3 && a > 0) {
                 double d = fabs(2.0 * x - S[GATE_NLIGHTS * vm + k] - S[GATE_NLIGHTS * vp + k]);
                 gs_worst(0.5 * d / alb, &g->worst_view_spike, &s->k_view, gs_key(level_index, e, k, 1), g->where_view,
-                         sizeof g->where_view, "phi spike", L->level, row, col, a, b);
+                         sizeof g->where_view, "phi spike", L->level, grow, gcol, a, b);
             }
             /* levels: the effective BRDF of a footprint is the mean of its four children's (equal
              * areas), so the parent's shading is compared with the mean of the children's */
@@ -690,7 +797,7 @@ static void gs_row_cols(mf_prefilter_gate_stream *s, int level_index, int row, c
                     for (int dx = 0; dx < 2; ++dx)
                         mc += C->S[gs_slot(2 * row + dy)][GATE_NLIGHTS * ((((size_t)2 * col + dx) * nt + a) * np + b) + k];
                 gs_worst(fabs(x - 0.25 * mc) / alb, &g->worst_level, &s->k_level, gs_key(level_index, e, k, 4),
-                         g->where_level, sizeof g->where_level, "parent vs children", L->level, row, col, a, b);
+                         g->where_level, sizeof g->where_level, "parent vs children", L->level, grow, gcol, a, b);
             }
             if (!s->ref)
                 continue;
@@ -716,10 +823,10 @@ static void gs_row_cols(mf_prefilter_gate_stream *s, int level_index, int row, c
             char *pv = gr ? g->where_cont_grazing : g->where_cont_view;
             if (has[0] && has[1])
                 gs_worst(gate_lone(ex, en[0], en[1]) / alb, wv, kv, gs_key(level_index, e, k, 0), pv,
-                         sizeof g->where_cont_view, "theta error spike", L->level, row, col, a, b);
+                         sizeof g->where_cont_view, "theta error spike", L->level, grow, gcol, a, b);
             if (np >= 3 && a > 0)
                 gs_worst(gate_lone(ex, en[2], en[3]) / alb, wv, kv, gs_key(level_index, e, k, 1), pv,
-                         sizeof g->where_cont_view, "phi error spike", L->level, row, col, a, b);
+                         sizeof g->where_cont_view, "phi error spike", L->level, grow, gcol, a, b);
         }
     }
 }
@@ -740,6 +847,7 @@ typedef struct gs_part {
     int task; /* 0: gs_row_cols; 1: gs_texel_checks of rows[0 .. nrows) */
     int li, row, nrows, rows[3], c0, c1;
     const float *m, *magnitude, *albedo;
+    const double *Rin;
 } gs_part;
 
 static size_t gs_part_size(void) { return sizeof(gs_part); }
@@ -760,7 +868,7 @@ static void *gs_part_run(void *arg)
     gs_part *p = arg;
     const size_t nv = (size_t)p->loc.nv;
     if (p->task == 0)
-        gs_row_cols(&p->loc, p->li, p->row, p->m, p->magnitude, p->albedo, p->c0, p->c1);
+        gs_row_cols(&p->loc, p->li, p->row, p->m, p->magnitude, p->albedo, p->Rin, p->c0, p->c1);
     else
         for (int q = 0; q < p->nrows; ++q)
             gs_texel_checks(&p->loc, p->li, p->rows[q], (size_t)p->c0 * nv, (size_t)p->c1 * nv);
@@ -781,24 +889,34 @@ static void gs_merge_worst(double v, uint64_t key, const char *where, double *wo
  * figure and the NaN count (a measure added to the gate must be added here too; one thread runs on
  * the stream itself, so test_prefilter_gate_threads sees a measure missing here as a difference
  * between 1 and 2 threads). */
+static void gs_merge_res(mf_prefilter_gate_stream *s, const mf_prefilter_gate *r, const uint64_t *key);
+
 static void gs_merge(mf_prefilter_gate_stream *s, const gs_part *p)
 {
-    mf_prefilter_gate *g = s->g;
-    const mf_prefilter_gate *r = &p->res;
     const mf_prefilter_gate_stream *l = &p->loc;
-#define GS_MERGE(field, key, where) gs_merge_worst(r->field, l->key, r->where, &g->field, &s->key, g->where, sizeof g->where)
-    GS_MERGE(worst_energy, k_energy, where_energy);
-    GS_MERGE(worst_level, k_level, where_level);
-    GS_MERGE(worst_view_spike, k_view, where_view);
-    GS_MERGE(worst_texel_spike, k_texel, where_texel);
-    GS_MERGE(worst_cont_texel, k_cont_texel, where_cont_texel);
-    GS_MERGE(worst_cont_view, k_cont_view, where_cont_view);
-    GS_MERGE(worst_cont_grazing, k_cont_grazing, where_cont_grazing);
-    GS_MERGE(worst_cont_cross, k_cont_cross, where_cont_cross);
-    GS_MERGE(worst_cont_excess, k_cont_excess, where_cont_excess);
-    GS_MERGE(worst_cont_owner, k_cont_owner, where_cont_owner);
-    GS_MERGE(worst_cont_owner_view, k_cont_owner_view, where_cont_owner_view);
-    GS_MERGE(worst_cont_dominated, k_cont_dominated, where_cont_dominated);
+    const uint64_t key[12] = {l->k_energy,     l->k_level,        l->k_view,       l->k_texel,
+                              l->k_cont_texel, l->k_cont_view,    l->k_cont_grazing, l->k_cont_cross,
+                              l->k_cont_excess, l->k_cont_owner, l->k_cont_owner_view, l->k_cont_dominated};
+    gs_merge_res(s, &p->res, key);
+}
+
+/* Merges results r with the keys of their worsts (in mf_prefilter_gate_part's order) into the stream's. */
+static void gs_merge_res(mf_prefilter_gate_stream *s, const mf_prefilter_gate *r, const uint64_t *key)
+{
+    mf_prefilter_gate *g = s->g;
+#define GS_MERGE(field, q, skey, where) gs_merge_worst(r->field, key[q], r->where, &g->field, &s->skey, g->where, sizeof g->where)
+    GS_MERGE(worst_energy, 0, k_energy, where_energy);
+    GS_MERGE(worst_level, 1, k_level, where_level);
+    GS_MERGE(worst_view_spike, 2, k_view, where_view);
+    GS_MERGE(worst_texel_spike, 3, k_texel, where_texel);
+    GS_MERGE(worst_cont_texel, 4, k_cont_texel, where_cont_texel);
+    GS_MERGE(worst_cont_view, 5, k_cont_view, where_cont_view);
+    GS_MERGE(worst_cont_grazing, 6, k_cont_grazing, where_cont_grazing);
+    GS_MERGE(worst_cont_cross, 7, k_cont_cross, where_cont_cross);
+    GS_MERGE(worst_cont_excess, 8, k_cont_excess, where_cont_excess);
+    GS_MERGE(worst_cont_owner, 9, k_cont_owner, where_cont_owner);
+    GS_MERGE(worst_cont_owner_view, 10, k_cont_owner_view, where_cont_owner_view);
+    GS_MERGE(worst_cont_dominated, 11, k_cont_dominated, where_cont_dominated);
 #undef GS_MERGE
     gs_max(r->worst_jump_texel, &g->worst_jump_texel);
     gs_max(r->worst_jump_view, &g->worst_jump_view);
@@ -829,14 +947,14 @@ static void gs_parts_run(mf_prefilter_gate_stream *s, gs_part *parts, int n)
 /* Splits task (0: gs_row_cols of row; 1: gs_texel_checks of rows[0 .. nrows)) of level index li into
  * n column ranges and runs them (gs_parts_run). */
 static void gs_split(mf_prefilter_gate_stream *s, int n, int task, int li, int row, const float *m,
-                     const float *magnitude, const float *albedo, const int *rows, int nrows)
+                     const float *magnitude, const float *albedo, const double *Rin, const int *rows, int nrows)
 {
     const int w = s->L[li].w;
     for (int t = 0; t < n; ++t) {
         gs_part *p = &s->parts[t];
         gs_part_init(p, s);
         p->task = task, p->li = li, p->row = row, p->nrows = nrows;
-        p->m = m, p->magnitude = magnitude, p->albedo = albedo;
+        p->m = m, p->magnitude = magnitude, p->albedo = albedo, p->Rin = Rin;
         for (int q = 0; q < nrows; ++q)
             p->rows[q] = rows[q];
         p->c0 = (int)((long)w * t / n), p->c1 = (int)((long)w * (t + 1) / n);
@@ -847,17 +965,25 @@ static void gs_split(mf_prefilter_gate_stream *s, int n, int task, int li, int r
 mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_index, int row, const float *m,
                                        const float *magnitude, const float *albedo)
 {
+    return mf_prefilter_gate_stream_row_ref(s, level_index, row, m, magnitude, albedo, NULL);
+}
+
+mf_status mf_prefilter_gate_stream_row_ref(mf_prefilter_gate_stream *s, int level_index, int row, const float *m,
+                                           const float *magnitude, const float *albedo, const double *ref)
+{
     int want_l, want_r;
     if (!s || !m || !magnitude || !mf_prefilter_gate_stream_next(s, &want_l, &want_r) || level_index != want_l ||
         row != want_r)
         return MF_ERR_DOMAIN;
+    if (s->ref && !ref && (s->mode == 1 || (s->mode == 2 && level_index < s->nreg)))
+        return MF_ERR_DOMAIN; /* the region levels' R comes with their rows */
     gs_level *L = &s->L[level_index];
     /* one part per thread, at least one column each; one thread works on the stream itself */
     const int n = s->threads < L->w ? s->threads : L->w;
     if (n == 1)
-        gs_row_cols(s, level_index, row, m, magnitude, albedo, 0, L->w);
+        gs_row_cols(s, level_index, row, m, magnitude, albedo, ref, 0, L->w);
     else
-        gs_split(s, n, 0, level_index, row, m, magnitude, albedo, NULL, 0);
+        gs_split(s, n, 0, level_index, row, m, magnitude, albedo, ref, NULL, 0);
     L->fed++;
     /* the texel checks of the row above (its neighbours now held); at the level's end, the last row
      * and row 0 (periodic neighbours) */
@@ -873,7 +999,7 @@ mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_in
         for (int q = 0; q < nrows; ++q)
             gs_texel_checks(s, level_index, rows[q], 0, L->rowlen);
     else if (nrows)
-        gs_split(s, n, 1, level_index, row, NULL, NULL, NULL, rows, nrows);
+        gs_split(s, n, 1, level_index, row, NULL, NULL, NULL, NULL, rows, nrows);
     return MF_OK;
 }
 
@@ -953,4 +1079,143 @@ mf_status mf_prefilter_gate_run_ref(const mf_prefilter_level *levels, int nlevel
     if (!levels || nlevels < 1 || !g || !normals || !o || width < 1 || height < 1)
         return MF_ERR_DOMAIN;
     return gate_levels(levels, nlevels, normals, width, height, o, g);
+}
+
+/* ---- the reference of a region tile, computed where the tile is fitted ------------------------ */
+
+typedef struct {
+    const gate_iso *iso;
+    const gate_clipped *clipped;
+    const mf_prefilter_options *o;
+    const double *normals;
+    int nt, np, width, height, w1, r0, r1;
+    double *R1;
+} gr_part;
+
+static void *gr_part_run(void *arg) /* level 1's rows [r0, r1): each row from its own texels */
+{
+    const gr_part *p = arg;
+    const double *const none[2] = {NULL, NULL};
+    for (int row = p->r0; row < p->r1; ++row)
+        gate_ref_cols(p->iso, p->clipped, p->o, p->nt, p->np, 0, row, 0, p->w1, p->normals, none, p->width, p->height,
+                      p->R1 + GATE_NLIGHTS * (size_t)row * p->w1 * p->nt * p->np);
+    return NULL;
+}
+
+mf_status mf_prefilter_gate_reference(const mf_prefilter_level *shapes, int nlevels, const double *normals, int width,
+                                      int height, const mf_prefilter_options *o, double *const *R)
+{
+    if (!shapes || nlevels < 1 || nlevels > 64 || !normals || !o || width < 1 || height < 1 || !R)
+        return MF_ERR_DOMAIN;
+    const int nt = o->n_theta, np = o->n_phi;
+    if (nt < 2 || np < 1)
+        return MF_ERR_DOMAIN;
+    for (int l = 0; l < nlevels; ++l) {
+        int k = l + 1, w = width >> k, h = height >> k;
+        if (!R[l] || shapes[l].level != k || shapes[l].width != (w > 0 ? w : 1) || shapes[l].height != (h > 0 ? h : 1) ||
+            shapes[l].n_theta != nt || shapes[l].n_phi != np)
+            return MF_ERR_DOMAIN;
+    }
+    mf_polygon *lights = malloc(sizeof *lights * GATE_NLIGHTS * (size_t)nt);
+    gate_clipped *clipped = malloc(sizeof *clipped * GATE_NLIGHTS * (size_t)nt);
+    gate_iso *iso = malloc(sizeof *iso);
+    mf_status st = lights && clipped && iso ? MF_OK : MF_ERR_ALLOC;
+    for (int a = 0; st == MF_OK && a < nt; ++a) /* as mf_prefilter_gate_stream_begin */
+        gate_lights(a / (double)(nt - 1) * MF_PREFILTER_THETA_MAX, lights + GATE_NLIGHTS * a);
+    for (int q = 0; st == MF_OK && q < GATE_NLIGHTS * nt; ++q)
+        clipped[q].n = clip_upper(&lights[q], clipped[q].v);
+    if (st == MF_OK)
+        st = gate_iso_fit(o, iso);
+    if (st == MF_OK) {
+        /* level 1 (nearly all the work: 4 texels x GATE_NLIGHTS polygon integrals per entry), its rows
+         * split over o->threads (each row is computed by the same code whatever thread runs it) */
+        const int h1 = shapes[0].height;
+        int n = o->threads > 1 ? (o->threads < GS_MAX_THREADS ? o->threads : GS_MAX_THREADS) : 1;
+        n = n < h1 ? n : h1;
+        gr_part parts[GS_MAX_THREADS];
+        pthread_t tid[GS_MAX_THREADS];
+        int started[GS_MAX_THREADS] = {0};
+        for (int t = 0; t < n; ++t)
+            parts[t] = (gr_part){iso, clipped, o, normals, nt, np, width, height, shapes[0].width,
+                                 (int)((long)h1 * t / n), (int)((long)h1 * (t + 1) / n), R[0]};
+        for (int t = 1; t < n; ++t)
+            started[t] = pthread_create(&tid[t], NULL, gr_part_run, &parts[t]) == 0;
+        gr_part_run(&parts[0]);
+        for (int t = 1; t < n; ++t) {
+            if (started[t])
+                pthread_join(tid[t], NULL);
+            else
+                gr_part_run(&parts[t]);
+        }
+        /* the levels above: the mean of their children */
+        for (int l = 1; l < nlevels; ++l) {
+            const mf_prefilter_level *C = &shapes[l - 1];
+            const size_t crl = GATE_NLIGHTS * (size_t)C->width * nt * np, rl = GATE_NLIGHTS * (size_t)shapes[l].width * nt * np;
+            for (int row = 0; row < shapes[l].height; ++row) {
+                const double *crow[2] = {NULL, NULL};
+                for (int dy = 0; dy < 2; ++dy)
+                    if (2 * row + dy < C->height)
+                        crow[dy] = R[l - 1] + crl * (size_t)(2 * row + dy);
+                gate_ref_cols(iso, clipped, o, nt, np, l, row, 0, shapes[l].width, normals, crow, C->width, C->height,
+                              R[l] + rl * (size_t)row);
+            }
+        }
+    }
+    free(lights), free(clipped), free(iso);
+    return st;
+}
+
+/* ---- the gate across tiles: a region tile's part, rank 0's merge -------------------------------- */
+
+mf_status mf_prefilter_gate_stream_merge(mf_prefilter_gate_stream *s, const mf_prefilter_gate_part *p)
+{
+    if (!s || !p || s->mode != 2)
+        return MF_ERR_DOMAIN;
+    gs_merge_res(s, &p->res, p->keys);
+    return MF_OK;
+}
+
+mf_status mf_prefilter_gate_region(const mf_prefilter_level *levels, int nlevels, double *const *R, int map_w,
+                                   int map_h, int x0, int y0, int rw, int rh, const mf_prefilter_options *o,
+                                   mf_prefilter_gate_part *part)
+{
+    if (!levels || !R || !o || !part || rw < 1 || rh < 1 || map_w < rw || map_h < rh || map_w % rw || map_h % rh ||
+        x0 < 0 || y0 < 0 || x0 % rw || y0 % rh || x0 >= map_w || y0 >= map_h)
+        return MF_ERR_DOMAIN;
+    for (int l = 0; l < nlevels; ++l)
+        if (!R[l] || !levels[l].m || !levels[l].magnitude)
+            return MF_ERR_DOMAIN;
+    memset(part, 0, sizeof *part);
+    mf_prefilter_gate_bounds_default(&part->res);
+    mf_prefilter_gate_stream *s;
+    mf_status st = gs_begin(levels, nlevels, NULL, 1, 0, rw, rh, o, &part->res, &s);
+    if (st != MF_OK)
+        return st;
+    s->mode = 1, s->whole = rw == map_w && rh == map_h;
+    for (int l = 0; l < nlevels; ++l) { /* the map's level and the tile's place in it */
+        gs_level *L = &s->L[l];
+        int k = l + 1;
+        L->gw = map_w >> k > 0 ? map_w >> k : 1, L->gh = map_h >> k > 0 ? map_h >> k : 1;
+        L->gox = x0 / rw * L->w, L->goy = y0 / rh * L->h;
+        L->growlen = (size_t)L->gw * s->nv;
+        if (L->gox + L->w > L->gw || L->goy + L->h > L->gh) {
+            mf_prefilter_gate_stream_free(s);
+            return MF_ERR_DOMAIN;
+        }
+    }
+    int l, r;
+    while (st == MF_OK && mf_prefilter_gate_stream_next(s, &l, &r)) {
+        const mf_prefilter_level *lv = &levels[l];
+        size_t off = (size_t)r * lv->width * lv->n_theta * lv->n_phi;
+        st = mf_prefilter_gate_stream_row_ref(s, l, r, lv->m + 9 * off, lv->magnitude + off,
+                                              lv->albedo ? lv->albedo + off : NULL, R[l] + GATE_NLIGHTS * off);
+    }
+    if (st == MF_OK) {
+        const uint64_t key[12] = {s->k_energy,       s->k_level,      s->k_view,          s->k_texel,
+                                  s->k_cont_texel,   s->k_cont_view,  s->k_cont_grazing,  s->k_cont_cross,
+                                  s->k_cont_excess,  s->k_cont_owner, s->k_cont_owner_view, s->k_cont_dominated};
+        memcpy(part->keys, key, sizeof key);
+    }
+    mf_prefilter_gate_stream_free(s);
+    return st;
 }

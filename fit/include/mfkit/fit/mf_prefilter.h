@@ -487,8 +487,55 @@ mf_status mf_prefilter_gate_stream_begin(const mf_prefilter_level *shapes, int n
 int mf_prefilter_gate_stream_next(const mf_prefilter_gate_stream *s, int *level_index, int *row);
 mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_index, int row, const float *m,
                                        const float *magnitude, const float *albedo) MF_WARN_UNUSED;
+/* As mf_prefilter_gate_stream_row, with the row's reference R given (MF_PREFILTER_GATE_NLIGHTS doubles
+ * per lobe, as mf_prefilter_gate_reference computes it; NULL: the stream computes it).  A stream with
+ * normals only; the result is the same bytes as computing it.  `mfkit prefilter` reads the region
+ * tiles' R from their files (docs/prefilter.md, "The gate across ranks"). */
+mf_status mf_prefilter_gate_stream_row_ref(mf_prefilter_gate_stream *s, int level_index, int row, const float *m,
+                                           const float *magnitude, const float *albedo,
+                                           const double *ref) MF_WARN_UNUSED;
 mf_status mf_prefilter_gate_stream_end(mf_prefilter_gate_stream *s) MF_WARN_UNUSED;
 void mf_prefilter_gate_stream_free(mf_prefilter_gate_stream *s);
+
+/* The gate's reference R where a region is fitted: for levels 1 .. nlevels of the width x height
+ * map `normals` (shapes: level l + 1 at index l, its width, height max(width >> (l + 1), 1) ..., n_theta
+ * and n_phi as o's; their arrays are not read), R[l] (the caller's, MF_PREFILTER_GATE_NLIGHTS doubles
+ * per lobe in the level's C order) gets each lobe's reference shading of the gate's lights, the
+ * values the streamed gate computes for the same entries of a map holding this region as a tile
+ * (every footprint inside it: a region tile of `mfkit prefilter`), bit for bit.  Level 1's rows are
+ * split over o->threads (the same bits for any count).  MF_ERR_DOMAIN, MF_ERR_ALLOC, or the reference
+ * fit's status. */
+#define MF_PREFILTER_GATE_NLIGHTS 6
+mf_status mf_prefilter_gate_reference(const mf_prefilter_level *shapes, int nlevels, const double *normals, int width,
+                                      int height, const mf_prefilter_options *o, double *const *R) MF_WARN_UNUSED;
+
+/* The gate across tiles (docs/prefilter.md, "The gate across ranks").  A region tile's part of the
+ * gate: every check of its entries, but the texel checks of its border entries (their neighbours lie
+ * in the next tile), with the keys of its worsts (global: the map's levels and places).
+ * mf_prefilter_gate_region computes it where the tile is fitted: levels 1 .. nlevels of the rw x rh
+ * region at level-0 texel (x0, y0) of a map_w x map_h map (levels and R as mf_prefilter_gate_reference
+ * takes them, with their m, magnitude and albedo).  Rank 0 then begins its stream with
+ * mf_prefilter_gate_stream_begin_regions (begin's arguments, and rw x rh, nreg: the region tiles' size
+ * and levels; it needs no reference fit, as every level-1 R is given), feeds the region levels' rows
+ * with their R (mf_prefilter_gate_stream_row_ref) and every tile's part once
+ * (mf_prefilter_gate_stream_merge, any order): it computes S only for the two outer rings of each tile
+ * and runs the texel checks of the borders (the seams) and everything at the levels above.  The result
+ * is the same bytes as the whole gate's (the worsts merged by the gate's rule: the larger value, on a
+ * tie the smaller key). */
+typedef struct {
+    mf_prefilter_gate res; /* the part's worsts, places, reported maxima and NaN count */
+    uint64_t keys[12];     /* the worsts' keys: energy, level, view, texel, cont_texel, cont_view,
+                              cont_grazing, cont_cross, cont_excess, cont_owner, cont_owner_view,
+                              cont_dominated */
+} mf_prefilter_gate_part;
+mf_status mf_prefilter_gate_region(const mf_prefilter_level *levels, int nlevels, double *const *R, int map_w,
+                                   int map_h, int x0, int y0, int rw, int rh, const mf_prefilter_options *o,
+                                   mf_prefilter_gate_part *part) MF_WARN_UNUSED;
+mf_status mf_prefilter_gate_stream_begin_regions(const mf_prefilter_level *shapes, int nlevels, const double *normals,
+                                                 int width, int height, int rw, int rh, int nreg,
+                                                 const mf_prefilter_options *o, mf_prefilter_gate *g,
+                                                 mf_prefilter_gate_stream **out) MF_WARN_UNUSED;
+mf_status mf_prefilter_gate_stream_merge(mf_prefilter_gate_stream *s, const mf_prefilter_gate_part *p) MF_WARN_UNUSED;
 
 /* The view of table index (i_theta, i_phi). */
 double mf_prefilter_theta(const mf_prefilter_options *o, int i);
