@@ -1456,6 +1456,101 @@ static double closed_form_start(const atexel *t, double *p, double bound2, const
     return best;
 }
 
+/* The closed-form start in index order (revision 7's loops, kept as the reference of
+ * mf_ltcfit_aniso_closed_form_compare: closed_form_start must give its point and cost bit for bit). */
+static double closed_form_start_indexed(const atexel *t, double *p, double bound2)
+{
+    double best = INFINITY, s_best = 1.0;
+    for (int i = 0; i < NP; ++i)
+        p[i] = 0.0;
+    p[PA] = p[PD] = 1.0;
+    for (int i = 0; i <= 20; ++i) {
+        double s = pow(10.0, -4.5 + 0.25 * i);
+        double q[NP] = {s, 0.0, 0.0, s, 0.0, 0.0, 0.0};
+        double c = cost_at_bound(t, q, best);
+        if (c < best) {
+            best = c;
+            s_best = s;
+            memcpy(p, q, sizeof q);
+        }
+    }
+    for (int j = -8; j <= 8; ++j) {
+        double r = pow(10.0, 0.25 * j);
+        double q[NP] = {s_best * r, 0.0, 0.0, s_best / r, 0.0, 0.0, 0.0};
+        double lim = fmin(best, bound2);
+        double c = cost_at_bound(t, q, lim);
+        if (c < lim) {
+            best = c;
+            memcpy(p, q, sizeof q);
+        }
+    }
+    return best;
+}
+
+int mf_ltcfit_aniso_closed_form_compare(const mf_brdf_model *model, mf_brdf_params prm, double theta, int mirrors,
+                                        double magnitude, int samples, int flat, const double *prox_at,
+                                        int *mismatches)
+{
+    if (!model || !model->eval_cos || !(prm.alpha_x > 0.0) || !(prm.alpha_y > 0.0) ||
+        !(theta >= 0.0 && theta < 0.5 * MF_PI) || (mirrors & ~(SYM_X | SYM_Y)) || ((mirrors & SYM_X) && theta != 0.0) ||
+        !(magnitude > 0.0 && magnitude < INFINITY) || samples < 64 || (samples & (samples - 1)) || !mismatches ||
+        (prox_at && !valid(prox_at)))
+        return -1;
+    mf_ltcfit_aniso_options o;
+    mf_ltcfit_aniso_options_default(&o);
+    uint32_t scr[2];
+    sobol_scramble(1, scr);
+    workspace ws;
+    atexel *t = malloc(sizeof *t);
+    int ok = ws_init(&ws, samples) && t;
+    double mag[2] = {magnitude, 0.0};
+    if (ok) {
+        t->ladder = prm.alpha_x; /* the prefilter's ladder of base-lobe-sized lights */
+        ok = atexel_prepare(model, prm, theta, 0.0, mirrors, FAMILY_SHAPED, mag, scr, &ws, t) == MF_OK;
+    }
+    int n = 0;
+    *mismatches = 0;
+    if (ok) {
+        t->mask = NULL; /* the direct sums; the targets are the same either way */
+        t->mask_ok = 0;
+        t->wfloor = o.objective == MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE ? RELATIVE_FLOOR : AWEIGHT_FLOOR;
+        t->mixed = 0;
+        targets_raw(t, &ws);
+        if (flat) { /* every light's residual 0: the grid's costs tie (the barrier's aside) */
+            for (int k = 0; k < t->k; ++k)
+                t->target[k] = 0.0;
+            t->magnitude = 0.0;
+        }
+        t->prox = 0.0;
+        if (prox_at) {
+            t->prox = PROX_WEIGHT;
+            memcpy(t->prox_at, prox_at, sizeof t->prox_at);
+        }
+        double pr[NP], pn[NP];
+        double c_inf = closed_form_start_indexed(t, pr, INFINITY);
+        const double bounds[7] = {INFINITY, c_inf, nextafter(c_inf, 0.0), nextafter(c_inf, INFINITY), 0.5 * c_inf,
+                                  2.0 * c_inf, 0.0};
+        static const int js[5] = {-8, -3, 0, 1, 8};
+        for (int b = 0; b < 7; ++b) {
+            double cr = closed_form_start_indexed(t, pr, bounds[b]);
+            for (int h = -1; h < 21 * 5; ++h) { /* h = -1: no hint (this thread's last choice) */
+                double hint[NP] = {0.0};
+                if (h >= 0) {
+                    double s = pow(10.0, -4.5 + 0.25 * (h / 5)), r = pow(10.0, 0.25 * js[h % 5]);
+                    hint[PA] = s * r, hint[PD] = s / r;
+                }
+                double cn = closed_form_start(t, pn, bounds[b], h >= 0 ? hint : NULL);
+                ++n;
+                if (memcmp(pr, pn, sizeof pr) != 0 || memcmp(&cr, &cn, sizeof cr) != 0)
+                    ++*mismatches;
+            }
+        }
+    }
+    ws_free(&ws);
+    free(t);
+    return ok ? n : -1;
+}
+
 /* The stored gauge of the view-frame M (the lobe is M R_z for every rotation R_z about z): the
  * R_z that makes the upper-left 2x2 block of M R_z symmetric with a positive trace (its polar
  * factor: the rotation closest to the identity), beta = atan2(m01 - m10, m00 + m11).  Neighbouring
