@@ -1308,15 +1308,21 @@ static int residual_fn(void *user, const double *p, double *res, double *jac)
      * values of an accepted step), and integral_grad's value is integral_value's bit for bit
      * (test_ltcfit_aniso, gradient_compare), so a kept integral is the one a new pass would give. */
     if (!(t->ic >= (jac ? 2 : 1) && memcmp(t->ic_p, p, sizeof t->ic_p) == 0)) {
+        /* In the prefilter's fits (t->mask) the values come with their gradient (revision 8, the same
+         * bits): Ceres asks for the Jacobian at most points whose values it asked for (the accepted
+         * steps), and a gradient pass costs about 1.5 value passes.  Measured on `bench_prefilter
+         * --size 16` (revision 7): per solve 11.8 value passes, 8.7 Jacobian passes, 6.7 of them at
+         * the point of the value pass just before (docs/prefilter.md, "Speed of revision 8"). */
+        int grad = jac || t->mask;
         double adj[9];
         adj_value(p, adj);
         for (int k = 0; k < t->k; ++k) {
             const light *l = &t->lights[k];
-            t->ic_e[k] = jac ? integral_grad(l->lobe_poly.v, l->lobe_poly.n, p, adj, t->ic_g[k])
-                             : integral_value(l->lobe_poly.v, l->lobe_poly.n, adj);
+            t->ic_e[k] = grad ? integral_grad(l->lobe_poly.v, l->lobe_poly.n, p, adj, t->ic_g[k])
+                              : integral_value(l->lobe_poly.v, l->lobe_poly.n, adj);
         }
         memcpy(t->ic_p, p, sizeof t->ic_p);
-        t->ic = jac ? 2 : 1;
+        t->ic = grad ? 2 : 1;
     }
     for (int k = 0; k < t->k; ++k) {
         const double e = t->ic_e[k], *g = t->ic_g[k];
@@ -1350,11 +1356,14 @@ static double cost_at_bound(const atexel *t, const double *p, double bound)
         return INFINITY;
     double adj[9];
     adj_value(p, adj);
+    /* the integrals residual_fn kept, where p is their point: integral_grad's and integral_value's
+     * values are the same bits (revision 8: the final residual and the convergence test at the
+     * solver's last point mostly) */
+    int kept = t->ic >= 1 && memcmp(t->ic_p, p, sizeof t->ic_p) == 0;
     double c = 0.0;
     for (int k = 0; k < t->k; ++k) {
-        double r = (t->magnitude * integral_value(t->lights[k].lobe_poly.v, t->lights[k].lobe_poly.n, adj) -
-                    t->target[k]) *
-                   t->inv_weight[k];
+        double e = kept ? t->ic_e[k] : integral_value(t->lights[k].lobe_poly.v, t->lights[k].lobe_poly.n, adj);
+        double r = (t->magnitude * e - t->target[k]) * t->inv_weight[k];
         c += r * r;
         if (c > bound)
             return c;
