@@ -1,5 +1,5 @@
 /* test_ltcfit_cf_order.c -- the closed-form start of the anisotropic fits (mf_ltcfit_aniso.c,
- * closed_form_start) evaluated in its hinted order (revision 8: the scale grid from the hint's
+ * closed_form_start) evaluated in its hinted order (the scale grid from the hint's
  * scale outwards, the aspect from the hint's ratio, the aspect's j = 0 skipped) against index order
  * (revision 7's loops), through mf_ltcfit_aniso_closed_form_compare.  The order promises the same
  * point and cost, so every comparison is exact (memcmp of the 7 parameters and of the cost): any

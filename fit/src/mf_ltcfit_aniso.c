@@ -1308,11 +1308,11 @@ static int residual_fn(void *user, const double *p, double *res, double *jac)
      * values of an accepted step), and integral_grad's value is integral_value's bit for bit
      * (test_ltcfit_aniso, gradient_compare), so a kept integral is the one a new pass would give. */
     if (!(t->ic >= (jac ? 2 : 1) && memcmp(t->ic_p, p, sizeof t->ic_p) == 0)) {
-        /* In the prefilter's fits (t->mask) the values come with their gradient (revision 8, the same
+        /* In the prefilter's fits (t->mask) the values come with their gradient (the same
          * bits): Ceres asks for the Jacobian at most points whose values it asked for (the accepted
          * steps), and a gradient pass costs about 1.5 value passes.  Measured on `bench_prefilter
          * --size 16` (revision 7): per solve 11.8 value passes, 8.7 Jacobian passes, 6.7 of them at
-         * the point of the value pass just before (docs/prefilter.md, "Speed of revision 8"). */
+         * the point of the value pass just before (docs/prefilter.md, "Same-bits speed of revision 7"). */
         int grad = jac || t->mask;
         double adj[9];
         adj_value(p, adj);
@@ -1357,7 +1357,7 @@ static double cost_at_bound(const atexel *t, const double *p, double bound)
     double adj[9];
     adj_value(p, adj);
     /* the integrals residual_fn kept, where p is their point: integral_grad's and integral_value's
-     * values are the same bits (revision 8: the final residual and the convergence test at the
+     * values are the same bits (the final residual and the convergence test at the
      * solver's last point mostly) */
     int kept = t->ic >= 1 && memcmp(t->ic_p, p, sizeof t->ic_p) == 0;
     double c = 0.0;
@@ -1407,7 +1407,7 @@ static _Thread_local int g_cf_last_i = 14, g_cf_last_j = 0;
  * result is below bound2 it is the same point and cost as with INFINITY, and otherwise it is at or
  * above bound2 too (the caller keeps its competitor either way).
  *
- * The order of the points (revision 8; the same point, cost and bits as index order): the grid
+ * The order of the points (the same point, cost and bits as index order): the grid
  * from the scale nearest the hint's sqrt(a d) outwards, the aspect from the ratio nearest its
  * sqrt(a / d) (hint: a point near the expected optimum, e.g. the warm start; NULL: this thread's
  * last choice).  Taken is the lowest cost, the lowest index among equal costs, as in index order:
@@ -1416,7 +1416,7 @@ static _Thread_local int g_cf_last_i = 14, g_cf_last_j = 0;
  * bound (the best so far), and a partial sum above the bound means a full cost above it, a point
  * that index order does not take either.  A low cost met early stops the other points' sums
  * sooner: on `bench_prefilter --size 16` the light integrals of the closed-form starts fell from
- * 11.6 M to 3.9 M with the grid reordered (docs/prefilter.md, "Speed of revision 8").  The aspect's
+ * 11.6 M to 3.9 M with the grid reordered (docs/prefilter.md, "Same-bits speed of revision 7").  The aspect's
  * j = 0 is the grid's point itself (r = 10^0 = 1 exactly, the same q and cost), never below the
  * best: it is skipped. */
 static double closed_form_start(const atexel *t, double *p, double bound2, const double *hint)

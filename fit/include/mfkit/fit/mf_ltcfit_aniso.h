@@ -241,7 +241,7 @@ int mf_ltcfit_aniso_mask_compare(const double *dirs, int n, const double axis[3]
                                  const double *verts, uint64_t *cells, uint64_t *direct);
 
 /* For tests: the closed-form start of the fits (the scaled cosine's log grid, then its aspect),
- * evaluated in the hinted order of revision 8 against index order, on one prepared entry of the
+ * evaluated in its hinted order against index order, on one prepared entry of the
  * prefilter's light family (model at prm, view theta in the xz plane, mirrors as
  * mf_ltcfit_aniso_entry_fit_mirrored, magnitude > 0, samples a power of two >= 64).  flat != 0 sets
  * every light's target and the magnitude to 0 (the grid's costs then tie, which tests the
