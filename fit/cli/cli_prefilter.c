@@ -1549,8 +1549,10 @@ static int pf_table(const cli_val *v, const char *input, const char *dir, int la
     q.normals = normals, q.W = W, q.H = H, q.tiles = tiles, q.ab = &ab, q.dir = dir, q.input = input;
     q.max_tiles = max_tiles;
     /* several tiles at once when there are enough (a footprint tile is one fit job: threads inside it
-     * would idle), else the threads inside the tiles; the bits depend on neither */
-    int workers = q.ntodo < o.threads ? (int)(q.ntodo > 0 ? q.ntodo : 1) : o.threads;
+     * would idle), else the threads inside the tiles; the bits depend on neither. The tiles counted
+     * are the ones this run fits: a --max-tiles slice's own, not all those left in the checkpoint */
+    long nrun = q.max_tiles >= 0 && q.max_tiles < q.ntodo ? q.max_tiles : q.ntodo;
+    int workers = nrun < o.threads ? (int)(nrun > 0 ? nrun : 1) : o.threads;
     q.o = o;
     q.o.threads = o.threads / workers > 0 ? o.threads / workers : 1;
     pf_progress prog = {.show = !g_pf_quiet && mpi->rank == 0 && isatty(fileno(stderr)),
@@ -1558,7 +1560,7 @@ static int pf_table(const cli_val *v, const char *input, const char *dir, int la
     atomic_init(&prog.done, 0);
     atomic_init(&prog.last_ms, -1000);
     clock_gettime(CLOCK_MONOTONIC, &prog.t0);
-    for (long i = 0; i < q.ntodo; ++i)
+    for (long i = 0; i < nrun; ++i)
         prog.total += pf_tile_lobes(&tiles[q.todo[i]], (long)o.n_theta * o.n_phi);
     if (prog.show)
         q.o.progress = pf_progress_cb, q.o.progress_user = &prog;

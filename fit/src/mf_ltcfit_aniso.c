@@ -1308,15 +1308,21 @@ static int residual_fn(void *user, const double *p, double *res, double *jac)
      * values of an accepted step), and integral_grad's value is integral_value's bit for bit
      * (test_ltcfit_aniso, gradient_compare), so a kept integral is the one a new pass would give. */
     if (!(t->ic >= (jac ? 2 : 1) && memcmp(t->ic_p, p, sizeof t->ic_p) == 0)) {
+        /* In the prefilter's fits (t->mask) the values come with their gradient (the same
+         * bits): Ceres asks for the Jacobian at most points whose values it asked for (the accepted
+         * steps), and a gradient pass costs about 1.5 value passes.  Measured on `bench_prefilter
+         * --size 16` (revision 7): per solve 11.8 value passes, 8.7 Jacobian passes, 6.7 of them at
+         * the point of the value pass just before (docs/prefilter.md, "Same-bits speed of revision 7"). */
+        int grad = jac || t->mask;
         double adj[9];
         adj_value(p, adj);
         for (int k = 0; k < t->k; ++k) {
             const light *l = &t->lights[k];
-            t->ic_e[k] = jac ? integral_grad(l->lobe_poly.v, l->lobe_poly.n, p, adj, t->ic_g[k])
-                             : integral_value(l->lobe_poly.v, l->lobe_poly.n, adj);
+            t->ic_e[k] = grad ? integral_grad(l->lobe_poly.v, l->lobe_poly.n, p, adj, t->ic_g[k])
+                              : integral_value(l->lobe_poly.v, l->lobe_poly.n, adj);
         }
         memcpy(t->ic_p, p, sizeof t->ic_p);
-        t->ic = jac ? 2 : 1;
+        t->ic = grad ? 2 : 1;
     }
     for (int k = 0; k < t->k; ++k) {
         const double e = t->ic_e[k], *g = t->ic_g[k];
@@ -1350,11 +1356,14 @@ static double cost_at_bound(const atexel *t, const double *p, double bound)
         return INFINITY;
     double adj[9];
     adj_value(p, adj);
+    /* the integrals residual_fn kept, where p is their point: integral_grad's and integral_value's
+     * values are the same bits (the final residual and the convergence test at the
+     * solver's last point mostly) */
+    int kept = t->ic >= 1 && memcmp(t->ic_p, p, sizeof t->ic_p) == 0;
     double c = 0.0;
     for (int k = 0; k < t->k; ++k) {
-        double r = (t->magnitude * integral_value(t->lights[k].lobe_poly.v, t->lights[k].lobe_poly.n, adj) -
-                    t->target[k]) *
-                   t->inv_weight[k];
+        double e = kept ? t->ic_e[k] : integral_value(t->lights[k].lobe_poly.v, t->lights[k].lobe_poly.n, adj);
+        double r = (t->magnitude * e - t->target[k]) * t->inv_weight[k];
         c += r * r;
         if (c > bound)
             return c;
@@ -1370,14 +1379,95 @@ static double cost_at_bound(const atexel *t, const double *p, double bound)
 
 static double cost_at(const atexel *t, const double *p) { return cost_at_bound(t, p, INFINITY); }
 
+/* The n-th index (n = 0 .. hi - lo) of [lo, hi] from c outwards: c, c - 1, c + 1, c - 2, c + 2, ...,
+ * past one end of the range the other side's indices in turn (a permutation of [lo, hi]). */
+static int ring_index(int c, int lo, int hi, int n)
+{
+    int below = c - lo, above = hi - c, h = (n + 1) / 2;
+    if (h <= below && h <= above)
+        return n % 2 ? c - h : c + h;
+    return below < above ? c + (n - below) : c - (n - above);
+}
+
+/* The grid index nearest x on [lo, hi] (the start of ring_index). */
+static int nearest_index(double x, int lo, int hi)
+{
+    return !(x > lo) ? lo : x >= hi ? hi : (int)lround(x);
+}
+
+/* The last grid and aspect indices the closed-form start took on this thread: where a call has no
+ * hint, its order starts there (the order changes no result, only the work). */
+static _Thread_local int g_cf_last_i = 14, g_cf_last_j = 0;
+
 /* The closed-form start: the cosine scaled by (s, s) about the lobe's mean, s on the log grid
  * 10^(-4.5 + 0.25 i), i = 0..20, then the aspect: (s r, s / r), r = 10^(0.25 j), j = -8..8.
  * Returns its cost.  The grid's costs are summed against the best so far (cost_at_bound: a point
  * that cannot win stops early, the choice is the same); the aspect points also against bound2
  * (a competing start's cost, or INFINITY): a point at or above it is not taken, so when the
  * result is below bound2 it is the same point and cost as with INFINITY, and otherwise it is at or
- * above bound2 too (the caller keeps its competitor either way). */
-static double closed_form_start(const atexel *t, double *p, double bound2)
+ * above bound2 too (the caller keeps its competitor either way).
+ *
+ * The order of the points (the same point, cost and bits as index order): the grid
+ * from the scale nearest the hint's sqrt(a d) outwards, the aspect from the ratio nearest its
+ * sqrt(a / d) (hint: a point near the expected optimum, e.g. the warm start; NULL: this thread's
+ * last choice).  Taken is the lowest cost, the lowest index among equal costs, as in index order:
+ * a point is taken when its cost is below the best so far, or equal to it at a lower index.  That is
+ * exact with the early stop: cost_at_bound returns the full cost whenever it is at or below the
+ * bound (the best so far), and a partial sum above the bound means a full cost above it, a point
+ * that index order does not take either.  A low cost met early stops the other points' sums
+ * sooner: on `bench_prefilter --size 16` the light integrals of the closed-form starts fell from
+ * 11.6 M to 3.9 M with the grid reordered (docs/prefilter.md, "Same-bits speed of revision 7").  The aspect's
+ * j = 0 is the grid's point itself (r = 10^0 = 1 exactly, the same q and cost), never below the
+ * best: it is skipped. */
+static double closed_form_start(const atexel *t, double *p, double bound2, const double *hint)
+{
+    double best = INFINITY, s_best = 1.0;
+    for (int i = 0; i < NP; ++i)
+        p[i] = 0.0;
+    p[PA] = p[PD] = 1.0;
+    int i0 = g_cf_last_i, j0 = g_cf_last_j;
+    if (hint && hint[PA] > 0.0 && hint[PD] > 0.0 && hint[PA] < INFINITY && hint[PD] < INFINITY) {
+        i0 = nearest_index((log10(sqrt(hint[PA] * hint[PD])) + 4.5) / 0.25, 0, 20);
+        j0 = nearest_index(log10(sqrt(hint[PA] / hint[PD])) / 0.25, -8, 8);
+    }
+    int i_best = -1;
+    for (int n = 0; n <= 20; ++n) {
+        int i = ring_index(i0, 0, 20, n);
+        double s = pow(10.0, -4.5 + 0.25 * i);
+        double q[NP] = {s, 0.0, 0.0, s, 0.0, 0.0, 0.0};
+        double c = cost_at_bound(t, q, best);
+        if (c < best || (c == best && i_best >= 0 && i < i_best)) {
+            best = c;
+            s_best = s;
+            i_best = i;
+            memcpy(p, q, sizeof q);
+        }
+    }
+    int j_best = 99;
+    for (int n = 0; n <= 16; ++n) {
+        int j = ring_index(j0, -8, 8, n);
+        if (j == 0)
+            continue;
+        double r = pow(10.0, 0.25 * j);
+        double q[NP] = {s_best * r, 0.0, 0.0, s_best / r, 0.0, 0.0, 0.0};
+        double lim = fmin(best, bound2);
+        double c = cost_at_bound(t, q, lim);
+        /* below every cost so far and bound2; or equal to an aspect point's taken before at a higher
+         * j (then best < bound2, so lim = best and c == lim) */
+        if (c < lim || (j_best != 99 && c == best && j < j_best)) {
+            best = c;
+            j_best = j;
+            memcpy(p, q, sizeof q);
+        }
+    }
+    if (i_best >= 0)
+        g_cf_last_i = i_best, g_cf_last_j = j_best != 99 ? j_best : 0;
+    return best;
+}
+
+/* The closed-form start in index order (revision 7's loops, kept as the reference of
+ * mf_ltcfit_aniso_closed_form_compare: closed_form_start must give its point and cost bit for bit). */
+static double closed_form_start_indexed(const atexel *t, double *p, double bound2)
 {
     double best = INFINITY, s_best = 1.0;
     for (int i = 0; i < NP; ++i)
@@ -1404,6 +1494,70 @@ static double closed_form_start(const atexel *t, double *p, double bound2)
         }
     }
     return best;
+}
+
+int mf_ltcfit_aniso_closed_form_compare(const mf_brdf_model *model, mf_brdf_params prm, double theta, int mirrors,
+                                        double magnitude, int samples, int flat, const double *prox_at,
+                                        int *mismatches)
+{
+    if (!model || !model->eval_cos || !(prm.alpha_x > 0.0) || !(prm.alpha_y > 0.0) ||
+        !(theta >= 0.0 && theta < 0.5 * MF_PI) || (mirrors & ~(SYM_X | SYM_Y)) || ((mirrors & SYM_X) && theta != 0.0) ||
+        !(magnitude > 0.0 && magnitude < INFINITY) || samples < 64 || (samples & (samples - 1)) || !mismatches ||
+        (prox_at && !valid(prox_at)))
+        return -1;
+    mf_ltcfit_aniso_options o;
+    mf_ltcfit_aniso_options_default(&o);
+    uint32_t scr[2];
+    sobol_scramble(1, scr);
+    workspace ws;
+    atexel *t = malloc(sizeof *t);
+    int ok = ws_init(&ws, samples) && t;
+    double mag[2] = {magnitude, 0.0};
+    if (ok) {
+        t->ladder = prm.alpha_x; /* the prefilter's ladder of base-lobe-sized lights */
+        ok = atexel_prepare(model, prm, theta, 0.0, mirrors, FAMILY_SHAPED, mag, scr, &ws, t) == MF_OK;
+    }
+    int n = 0;
+    *mismatches = 0;
+    if (ok) {
+        t->mask = NULL; /* the direct sums; the targets are the same either way */
+        t->mask_ok = 0;
+        t->wfloor = o.objective == MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE ? RELATIVE_FLOOR : AWEIGHT_FLOOR;
+        t->mixed = 0;
+        targets_raw(t, &ws);
+        if (flat) { /* every light's residual 0: the grid's costs tie (the barrier's aside) */
+            for (int k = 0; k < t->k; ++k)
+                t->target[k] = 0.0;
+            t->magnitude = 0.0;
+        }
+        t->prox = 0.0;
+        if (prox_at) {
+            t->prox = PROX_WEIGHT;
+            memcpy(t->prox_at, prox_at, sizeof t->prox_at);
+        }
+        double pr[NP], pn[NP];
+        double c_inf = closed_form_start_indexed(t, pr, INFINITY);
+        const double bounds[7] = {INFINITY, c_inf, nextafter(c_inf, 0.0), nextafter(c_inf, INFINITY), 0.5 * c_inf,
+                                  2.0 * c_inf, 0.0};
+        static const int js[5] = {-8, -3, 0, 1, 8};
+        for (int b = 0; b < 7; ++b) {
+            double cr = closed_form_start_indexed(t, pr, bounds[b]);
+            for (int h = -1; h < 21 * 5; ++h) { /* h = -1: no hint (this thread's last choice) */
+                double hint[NP] = {0.0};
+                if (h >= 0) {
+                    double s = pow(10.0, -4.5 + 0.25 * (h / 5)), r = pow(10.0, 0.25 * js[h % 5]);
+                    hint[PA] = s * r, hint[PD] = s / r;
+                }
+                double cn = closed_form_start(t, pn, bounds[b], h >= 0 ? hint : NULL);
+                ++n;
+                if (memcmp(pr, pn, sizeof pr) != 0 || memcmp(&cr, &cn, sizeof cr) != 0)
+                    ++*mismatches;
+            }
+        }
+    }
+    ws_free(&ws);
+    free(t);
+    return ok ? n : -1;
 }
 
 /* The stored gauge of the view-frame M (the lobe is M R_z for every rotation R_z about z): the
@@ -1482,7 +1636,7 @@ static mf_status solve_entry(atexel *t, workspace *ws, const double *lobe_start,
     }
     if (!warm) {
         targets_raw(t, ws);
-        closed_form_start(t, q, INFINITY);
+        closed_form_start(t, q, INFINITY, NULL);
     }
     control_variate(t, ws, q);
     t->prox = 0.0;
@@ -1491,7 +1645,7 @@ static mf_status solve_entry(atexel *t, workspace *ws, const double *lobe_start,
         memcpy(t->prox_at, q, sizeof q);
     }
     double cw = warm ? cost_at(t, q) : INFINITY;
-    double c0 = closed_form_start(t, p, cw);
+    double c0 = closed_form_start(t, p, cw, q);
     if (warm && cw <= c0) {
         memcpy(p, q, sizeof p);
         c0 = cw;
@@ -1548,7 +1702,7 @@ static mf_status solve_entry(atexel *t, workspace *ws, const double *lobe_start,
         if (attempt == 0)
             memcpy(r, p, sizeof r);
         else
-            closed_form_start(t, r, INFINITY);
+            closed_form_start(t, r, INFINITY, p);
         for (int i = 0; i < NP; ++i)
             if (t->fixed[i])
                 r[i] = 0.0;

@@ -250,10 +250,23 @@ static mf_vec3 mix_sample(const mf_brdf_model *m, const mf_brdf_params *p, mf_ve
 #define MIX_VEC2 1
 typedef double mix_v2d __attribute__((vector_size(16)));
 typedef long long mix_v2l __attribute__((vector_size(16)));
+/* The square roots of a vector's lanes: one packed instruction (IEEE square roots are correctly
+ * rounded, so a packed root has each lane's scalar bits; the argument is a sum of squares, >= 0 or
+ * NaN, where both give the same NaN).  Elsewhere lane by lane. */
+#if defined(__SSE2__)
+#define mix_vsqrt2(v) __builtin_ia32_sqrtpd(v)
+#else
+static inline mix_v2d mix_vsqrt2(mix_v2d v)
+{
+    for (int k = 0; k < 2; ++k)
+        v[k] = sqrt(v[k]);
+    return v;
+}
+#endif
 #endif
 /* One definition for both widths: the vector loop W directions at a time in vectors VD (lanes
  * compared into VL), then the scalar rule for the rest. */
-#define MIX_EVAL_PDF_BATCH_LANES(VD, VL, W)                                                                 \
+#define MIX_EVAL_PDF_BATCH_LANES(VD, VL, W, SQRTV)                                                          \
     for (; i + (W) <= cnt; i += (W)) {                                                                      \
         VD ax, ay, az;                                                                                      \
         memcpy(&ax, vx + i, sizeof ax);                                                                     \
@@ -265,9 +278,7 @@ typedef long long mix_v2l __attribute__((vector_size(16)));
         const VD s2 = hx * hx + hy * hy, z2 = hz * hz;                                                      \
         const VD den = a2 * z2 + s2, l2 = s2 + z2;                                                          \
         const VD dq = c[14] * (l2 * l2) / (den * den);                                                      \
-        VD q = tz * tz + a2 * (tx * tx + ty * ty);                                                          \
-        for (int k = 0; k < (W); ++k)                                                                       \
-            q[k] = sqrt(q[k]);                                                                              \
+        const VD q = SQRTV(tz * tz + a2 * (tx * tx + ty * ty));                                             \
         const VD fj = 2.0 * dq * tz / (c[15] * tz + q);                                                     \
         const VD pj = dq * c[16];                                                                           \
         const VL up = tz > 0.0;                                                                             \
@@ -302,7 +313,7 @@ typedef long long mix_v2l __attribute__((vector_size(16)));
     }
 
 #ifdef MIX_VEC2
-MIX_EVAL_PDF_BATCH_DEF(mix_eval_pdf_batch, MIX_EVAL_PDF_BATCH_LANES(mix_v2d, mix_v2l, 2))
+MIX_EVAL_PDF_BATCH_DEF(mix_eval_pdf_batch, MIX_EVAL_PDF_BATCH_LANES(mix_v2d, mix_v2l, 2, mix_vsqrt2))
 #else
 MIX_EVAL_PDF_BATCH_DEF(mix_eval_pdf_batch, )
 #endif
@@ -317,7 +328,8 @@ MIX_EVAL_PDF_BATCH_DEF(mix_eval_pdf_batch, )
 #define MIX_VEC4 1
 typedef double mix_v4d __attribute__((vector_size(32)));
 typedef long long mix_v4l __attribute__((vector_size(32)));
-__attribute__((target("avx2"))) MIX_EVAL_PDF_BATCH_DEF(mix_eval_pdf_batch4, MIX_EVAL_PDF_BATCH_LANES(mix_v4d, mix_v4l, 4))
+#define mix_vsqrt4(v) __builtin_ia32_sqrtpd256(v)
+__attribute__((target("avx2"))) MIX_EVAL_PDF_BATCH_DEF(mix_eval_pdf_batch4, MIX_EVAL_PDF_BATCH_LANES(mix_v4d, mix_v4l, 4, mix_vsqrt4))
 #endif
 
 int mf_prefilter_mix_wide = 1;
@@ -353,7 +365,7 @@ static void mix_eval_pdf_batch_any(const mf_prefilter_mix *x, double a2, const d
  * geometric frame, ok[i] its sampler's positive-density test (the same bits: tested by
  * test_prefilter_mix_fast). */
 #ifdef MIX_VEC2
-static inline mix_v2d mix_sqrt2(mix_v2d a) { return (mix_v2d){sqrt(a[0]), sqrt(a[1])}; }
+static inline mix_v2d mix_sqrt2(mix_v2d a) { return mix_vsqrt2(a); } /* the same bits as lane by lane */
 static inline mix_v2d mix_fmax02(mix_v2d a) { return (mix_v2d){fmax(0.0, a[0]), fmax(0.0, a[1])}; }
 #endif
 /* The cosines and sines of phi = 2 pi u[2 i + 1] (ggx_sample_cached's angle) for the points u:

@@ -240,6 +240,20 @@ int mf_ltcfit_aniso_gradient_compare(const double p[7], const double *v, int n, 
 int mf_ltcfit_aniso_mask_compare(const double *dirs, int n, const double axis[3], int nl, const int *nv,
                                  const double *verts, uint64_t *cells, uint64_t *direct);
 
+/* For tests: the closed-form start of the fits (the scaled cosine's log grid, then its aspect),
+ * evaluated in its hinted order against index order, on one prepared entry of the
+ * prefilter's light family (model at prm, view theta in the xz plane, mirrors as
+ * mf_ltcfit_aniso_entry_fit_mirrored, magnitude > 0, samples a power of two >= 64).  flat != 0 sets
+ * every light's target and the magnitude to 0 (the grid's costs then tie, which tests the
+ * tie-break); prox_at (may be NULL): the proximal centre of a warm solve.  Each of 7 bounds (no
+ * bound, the cost itself and its neighbouring doubles, half, twice, 0) times 106 hints (none, and 105
+ * grid points of scale and aspect) is one comparison of the point and the cost, bit for bit;
+ * *mismatches counts those that differ.  Returns the number of comparisons, or -1 on bad
+ * arguments or a failed preparation. */
+int mf_ltcfit_aniso_closed_form_compare(const mf_brdf_model *model, mf_brdf_params prm, double theta, int mirrors,
+                                        double magnitude, int samples, int flat, const double *prox_at,
+                                        int *mismatches);
+
 /* mf_ltcfit_aniso_entry_fit_general at phi = 0 (the view in the xz plane) for a model the caller
  * knows to be mirror symmetric: mirrors MF_LTCFIT_ANISO_MIRROR_Y (f invariant under y -> -y)
  * holds the phi = 0 zero pattern exactly, MF_LTCFIT_ANISO_MIRROR_X (under x -> -x; theta == 0
