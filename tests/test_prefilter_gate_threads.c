@@ -106,6 +106,19 @@ static int place(const char *where, int *c, int *r)
     return p && sscanf(p, "texel (%d, %d)", c, r) == 2;
 }
 
+/* Feeds stream s every row of lv with the reference R of levels 1 .. lr (the levels above: none),
+ * then ends it. */
+static void feed_rows(mf_prefilter_gate_stream *s, const mf_prefilter_level *lv, int nv, int lr, double *const *R)
+{
+    int li, r;
+    while (mf_prefilter_gate_stream_next(s, &li, &r)) {
+        size_t off = (size_t)r * lv[li].width * nv;
+        CHECK(mf_prefilter_gate_stream_row_ref(s, li, r, lv[li].m + 9 * off, lv[li].magnitude + off, lv[li].albedo + off,
+                                               li < lr ? R[li] + MF_PREFILTER_GATE_NLIGHTS * off : NULL) == MF_OK);
+    }
+    CHECK(mf_prefilter_gate_stream_end(s) == MF_OK);
+}
+
 /* The gate with the reference of the region levels computed per region tile, as `mfkit prefilter` does
  * (mf_prefilter_gate_reference on each T x T block's own normals, clipped to the map as the CLI's
  * tiling; read back row by row into mf_prefilter_gate_stream_row_ref; the levels above the regions'
@@ -162,13 +175,7 @@ static void check_tiled_ref(const mf_prefilter_level *lv, int nl, const double *
     mf_prefilter_gate_bounds_default(&g);
     mf_prefilter_gate_stream *s;
     CHECK(mf_prefilter_gate_stream_begin(lv, nl, n, W, H, o, &g, &s) == MF_OK);
-    int li, r;
-    while (mf_prefilter_gate_stream_next(s, &li, &r)) {
-        size_t off = (size_t)r * lv[li].width * nv;
-        CHECK(mf_prefilter_gate_stream_row_ref(s, li, r, lv[li].m + 9 * off, lv[li].magnitude + off, lv[li].albedo + off,
-                                               li < lr ? R[li] + MF_PREFILTER_GATE_NLIGHTS * off : NULL) == MF_OK);
-    }
-    CHECK(mf_prefilter_gate_stream_end(s) == MF_OK);
+    feed_rows(s, lv, nv, lr, R);
     CHECKF(memcmp(&g, g1, sizeof g) == 0,
            "%s %dx%d, %d threads, the reference of region tiles %d x %d (levels 1-%d) given: the gate differs from run_ref "
            "(cont texel %.17g / %.17g at %s / %s; cross %.17g / %.17g; excess %.17g / %.17g at %s / %s; ref error %.17g / "
@@ -182,12 +189,7 @@ static void check_tiled_ref(const mf_prefilter_level *lv, int nl, const double *
     CHECK(mf_prefilter_gate_stream_begin_regions(lv, nl, n, W, H, rw, rh, lr, o, &g, &s) == MF_OK);
     for (int q = nparts - 1; q >= 0; --q)
         CHECK(mf_prefilter_gate_stream_merge(s, &parts[q]) == MF_OK);
-    while (mf_prefilter_gate_stream_next(s, &li, &r)) {
-        size_t off = (size_t)r * lv[li].width * nv;
-        CHECK(mf_prefilter_gate_stream_row_ref(s, li, r, lv[li].m + 9 * off, lv[li].magnitude + off, lv[li].albedo + off,
-                                               li < lr ? R[li] + MF_PREFILTER_GATE_NLIGHTS * off : NULL) == MF_OK);
-    }
-    CHECK(mf_prefilter_gate_stream_end(s) == MF_OK);
+    feed_rows(s, lv, nv, lr, R);
     CHECKF(memcmp(&g, g1, sizeof g) == 0,
            "%s %dx%d, %d threads, %d region tiles %d x %d (levels 1-%d) gated where fitted, rank 0 the seams: the gate "
            "differs from run_ref (energy %.17g / %.17g at %s / %s; level %.17g / %.17g at %s / %s; view %s / %s; texel %s / "

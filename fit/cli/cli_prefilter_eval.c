@@ -187,32 +187,46 @@ typedef struct pe_itab {
     int field[5];
 } pe_itab;
 
+/* A record's view wo (in the xz plane at elevation theta), its light (a square of half side hside
+ * facing the origin, centred on the mirror direction at elevation <= 75 deg: centre c, edges e1, e2,
+ * corners v) and the stored lobe m9 as an LTC (an error status when the matrix is singular). */
+typedef struct {
+    mf_vec3 wo, c, e1, e2, v[4];
+    mf_polygon poly;
+    mf_ltc ltc;
+} pe_setup;
+
+static mf_status record_setup(double theta, double hside, const float *m9, pe_setup *q)
+{
+    q->wo = mf_vec3_make(sin(theta), 0.0, cos(theta));
+    double tl = theta < PE_LIGHT_MAX_ELEV ? theta : PE_LIGHT_MAX_ELEV;
+    q->c = mf_vec3_make(-sin(tl), 0.0, cos(tl)), q->e1 = mf_vec3_make(cos(tl), 0.0, sin(tl));
+    q->e2 = mf_vec3_make(0.0, 1.0, 0.0);
+    mf_vec3 c = q->c, e1 = q->e1, e2 = q->e2;
+    for (int k = 0; k < 4; ++k) {
+        double a = (k == 0 || k == 3) ? -hside : hside, b = (k < 2) ? -hside : hside;
+        q->v[k] = mf_vec3_make(c.x + a * e1.x + b * e2.x, c.y + a * e1.y + b * e2.y, c.z + a * e1.z + b * e2.z);
+    }
+    q->poly = mf_polygon_make(4, q->v);
+    mf_mat3 M;
+    for (int i = 0; i < 9; ++i)
+        M.m[i / 3][i % 3] = m9[i];
+    return mf_ltc_init(&q->ltc, M);
+}
+
 static int eval_record(const mf_brdf_model *ggx, const pe_itab *itab, double alpha, const double *nrm, int count,
                        double theta,
                        double hside, const float *m9, float magnitude, int samples, uint64_t seed, pe_rec *r,
                        char *msg, size_t msz)
 {
-    mf_vec3 wo = mf_vec3_make(sin(theta), 0.0, cos(theta));
-    /* the light: square facing the origin, centred on the mirror direction (elevation <= 75 deg) */
-    double tl = theta < PE_LIGHT_MAX_ELEV ? theta : PE_LIGHT_MAX_ELEV;
-    mf_vec3 c = mf_vec3_make(-sin(tl), 0.0, cos(tl)), e1 = mf_vec3_make(cos(tl), 0.0, sin(tl)),
-            e2 = mf_vec3_make(0.0, 1.0, 0.0);
-    mf_vec3 v[4];
-    for (int k = 0; k < 4; ++k) {
-        double a = (k == 0 || k == 3) ? -hside : hside, b = (k < 2) ? -hside : hside;
-        v[k] = mf_vec3_make(c.x + a * e1.x + b * e2.x, c.y + a * e1.y + b * e2.y, c.z + a * e1.z + b * e2.z);
-    }
-    mf_polygon poly = mf_polygon_make(4, v);
-
-    /* mfkit's lobe */
-    mf_mat3 M;
-    for (int i = 0; i < 9; ++i)
-        M.m[i / 3][i % 3] = m9[i];
-    mf_ltc ltc;
-    if (mf_ltc_init(&ltc, M) != MF_OK) {
+    pe_setup su;
+    if (record_setup(theta, hside, m9, &su) != MF_OK) {
         snprintf(msg, msz, "a stored LTC matrix is singular");
         return CLI_EXIT_USAGE;
     }
+    const mf_vec3 wo = su.wo, c = su.c, e1 = su.e1, e2 = su.e2, *v = su.v;
+    const mf_polygon poly = su.poly;
+    const mf_ltc ltc = su.ltc;
     r->est[M_MFKIT] = (double)magnitude * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
 
     /* the thesis' reference: the footprint average of the per-texel LTC shading */
@@ -299,24 +313,14 @@ static int eval_record_lambert(const mf_brdf_model *leadr, const double *nrm, in
                                const float *m9, float magnitude, int samples, uint64_t seed, pe_rec *r, char *msg,
                                size_t msz)
 {
-    mf_vec3 wo = mf_vec3_make(sin(theta), 0.0, cos(theta));
-    double tl = theta < PE_LIGHT_MAX_ELEV ? theta : PE_LIGHT_MAX_ELEV;
-    mf_vec3 c = mf_vec3_make(-sin(tl), 0.0, cos(tl)), e1 = mf_vec3_make(cos(tl), 0.0, sin(tl)),
-            e2 = mf_vec3_make(0.0, 1.0, 0.0);
-    mf_vec3 v[4];
-    for (int k = 0; k < 4; ++k) {
-        double a = (k == 0 || k == 3) ? -hside : hside, b = (k < 2) ? -hside : hside;
-        v[k] = mf_vec3_make(c.x + a * e1.x + b * e2.x, c.y + a * e1.y + b * e2.y, c.z + a * e1.z + b * e2.z);
-    }
-    mf_polygon poly = mf_polygon_make(4, v);
-    mf_mat3 M;
-    for (int i = 0; i < 9; ++i)
-        M.m[i / 3][i % 3] = m9[i];
-    mf_ltc ltc;
-    if (mf_ltc_init(&ltc, M) != MF_OK) {
+    pe_setup su;
+    if (record_setup(theta, hside, m9, &su) != MF_OK) {
         snprintf(msg, msz, "a stored LTC matrix is singular");
         return CLI_EXIT_USAGE;
     }
+    const mf_vec3 wo = su.wo, c = su.c, e1 = su.e1, e2 = su.e2, *v = su.v;
+    const mf_polygon poly = su.poly;
+    const mf_ltc ltc = su.ltc;
     memset(r, 0, sizeof *r);
     r->est[0] = (double)magnitude * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
 
