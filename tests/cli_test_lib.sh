@@ -27,3 +27,17 @@ finish() {
   echo "$1: $((checks-fails)) passed, $fails failed"
   [ $fails -eq 0 ]
 }
+
+# write_const_map OUT.png: a 4 x 4 8-bit unorm normal map, every texel the normal (0.25, 0.15, 1)
+# normalised (the prefilter tests' constant map: every level's footprint holds that one normal).
+write_const_map() {
+    /usr/bin/python3 - "$1" <<'PY'
+import math, struct, sys, zlib
+n = [0.25, 0.15, 1.0]; l = math.sqrt(sum(x * x for x in n))
+e = [round((x / l + 1) / 2 * 255) for x in n]
+raw = b''.join(b'\x00' + bytes(e) * 4 for _ in range(4))
+def chunk(t, d): return struct.pack('>I', len(d)) + t + d + struct.pack('>I', zlib.crc32(t + d) & 0xffffffff)
+open(sys.argv[1], 'wb').write(b'\x89PNG\r\n\x1a\n' + chunk(b'IHDR', struct.pack('>IIBBBBB', 4, 4, 8, 2, 0, 0, 0))
+                              + chunk(b'IDAT', zlib.compress(raw)) + chunk(b'IEND', b''))
+PY
+}

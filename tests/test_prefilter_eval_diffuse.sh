@@ -23,15 +23,7 @@ mfkit="$1"; src="$2"
 source "$(dirname "$0")/cli_test_lib.sh"
 py=/usr/bin/python3
 
-$py - "$tmp/const_4.png" <<'PY'
-import math, struct, sys, zlib
-n = [0.25, 0.15, 1.0]; l = math.sqrt(sum(x * x for x in n))
-e = [round((x / l + 1) / 2 * 255) for x in n]
-raw = b''.join(b'\x00' + bytes(e) * 4 for _ in range(4))
-def chunk(t, d): return struct.pack('>I', len(d)) + t + d + struct.pack('>I', zlib.crc32(t + d) & 0xffffffff)
-open(sys.argv[1], 'wb').write(b'\x89PNG\r\n\x1a\n' + chunk(b'IHDR', struct.pack('>IIBBBBB', 4, 4, 8, 2, 0, 0, 0))
-                              + chunk(b'IDAT', zlib.compress(raw)) + chunk(b'IEND', b''))
-PY
+write_const_map "$tmp/const_4.png"
 "$mfkit" prefilter "$tmp/const_4.png" --views 3x4 --out "$tmp/pf" >"$tmp/pf.log" 2>&1; rc=$?
 ok '[ $rc -eq 0 ] && [ -s "$tmp/pf/diffuse/prefilter.json" ]' "prefilter (both tables) exits 0 (rc=$rc): $(tail -2 "$tmp/pf.log")"
 "$mfkit" prefilter-eval "$tmp/pf/diffuse" --samples 4096 --lights 0.1,0.4 --out "$tmp/ev" >"$tmp/ev.log" 2>&1; rc=$?
