@@ -352,11 +352,7 @@ static int eval_record_lambert(const mf_brdf_model *leadr, const double *nrm, in
     double var = (sxx / count - mx * mx) + (syy / count - my * my);
     double alpha = sqrt(var > 1e-8 ? var : 1e-8);
     mf_frame fr = mf_frame_from_normal(nbar);
-    mf_vec3 wl = mf_frame_to_local(fr, wo);
-    if (wl.z < MF_PREFILTER_COS_MIN) {
-        double h = sqrt(wl.x * wl.x + wl.y * wl.y), cm = MF_PREFILTER_COS_MIN, sm = sqrt(1.0 - cm * cm);
-        wl = h > 0.0 ? mf_vec3_make(wl.x / h * sm, wl.y / h * sm, cm) : mf_vec3_make(sm, 0.0, cm);
-    }
+    mf_vec3 wl = mf_prefilter_clamp_view(mf_frame_to_local(fr, wo));
     mf_brdf_params p = mf_brdf_params_iso(alpha);
     mf_pcg32 rng;
     mf_pcg32_seed(&rng, seed, 0);

@@ -184,6 +184,17 @@ static inline int mf_prefilter_lookup_taps(const mf_prefilter_lookup_levels *s, 
     return ntap;
 }
 
+/* A view wl in a texel's frame, moved up to the elevation of cos theta = MF_PREFILTER_COS_MIN at its
+ * own azimuth when it lies below (azimuth 0 when it has none): the horizon rule of mf_prefilter.h. */
+static inline mf_vec3 mf_prefilter_clamp_view(mf_vec3 wl)
+{
+    if (wl.z < MF_PREFILTER_COS_MIN) {
+        double h = sqrt(wl.x * wl.x + wl.y * wl.y), c = MF_PREFILTER_COS_MIN, s = sqrt(1.0 - c * c);
+        wl = h > 0.0 ? mf_vec3_make(wl.x / h * s, wl.y / h * s, c) : mf_vec3_make(s, 0.0, c);
+    }
+    return wl;
+}
+
 /* Per-texel LTC shading [Nahmias 2022, Sec. 4.1: "for each normal, we evaluate the view elevation
  * and use the standard technique from [HDHN16] to integrate over the light"]: the isotropic LTC of
  * table t (mf_ltc_table.h layout; field[0..4] the indices of minv_00, minv_20, minv_02, minv_22,
@@ -198,11 +209,7 @@ static inline double mf_prefilter_texel_ltc(const mf_table *t, const int field[5
                                             mf_vec3 wo, const mf_vec3 *q, int nq)
 {
     mf_frame f = mf_frame_from_normal(n);
-    mf_vec3 wl = mf_frame_to_local(f, wo);
-    if (wl.z < MF_PREFILTER_COS_MIN) {
-        double h = sqrt(wl.x * wl.x + wl.y * wl.y), c = MF_PREFILTER_COS_MIN, s = sqrt(1.0 - c * c);
-        wl = h > 0.0 ? mf_vec3_make(wl.x / h * s, wl.y / h * s, c) : mf_vec3_make(s, 0.0, c);
-    }
+    mf_vec3 wl = mf_prefilter_clamp_view(mf_frame_to_local(f, wo));
     mf_frame vf = mf_ltc_view_frame(wl);
     mf_vec3 p[MF_POLYGON_MAX_VERTICES];
     if (nq < 3 || nq > MF_POLYGON_MAX_VERTICES)
