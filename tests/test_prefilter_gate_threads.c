@@ -168,8 +168,25 @@ static void check_tiled_ref(const mf_prefilter_level *lv, int nl, const double *
                     memcpy(shp[l].magnitude + to, lv[l].magnitude + go, sizeof(float) * seg);
                     memcpy(shp[l].albedo + to, lv[l].albedo + go, sizeof(float) * seg);
                 }
-            /* the tile's part of the gate, where it is fitted */
-            CHECK(mf_prefilter_gate_region(shp, lr, tr, W, H, x0, y0, rw, rh, o, &parts[nparts++]) == MF_OK);
+            /* the tile's part of the gate, where it is fitted; its places are the map's, inside the tile */
+            CHECK(mf_prefilter_gate_region(shp, lr, tr, W, H, x0, y0, rw, rh, o, &parts[nparts]) == MF_OK);
+            const mf_prefilter_gate *pr = &parts[nparts++].res;
+            const char *pw[] = {pr->where_energy,       pr->where_level,      pr->where_view,
+                                pr->where_texel,        pr->where_cont_texel, pr->where_cont_view,
+                                pr->where_cont_grazing, pr->where_cont_cross, pr->where_cont_excess,
+                                pr->where_cont_owner,   pr->where_cont_owner_view, pr->where_cont_dominated};
+            for (int q = 0; q < 12; ++q) {
+                int c, r, lvl;
+                const char *at = strstr(pw[q], " at level ");
+                if (!at || sscanf(at, " at level %d,", &lvl) != 1 || !place(pw[q], &c, &r) || lvl < 1 || lvl > lr)
+                    continue;
+                const mf_prefilter_level *sl = &shp[lvl - 1];
+                int cx = x0 / rw * sl->width, cy = y0 / rh * sl->height;
+                CHECKF(c >= cx && c < cx + sl->width && r >= cy && r < cy + sl->height,
+                       "%dx%d, region tile at texel (%d, %d) of %d x %d: place %d of its part, \"%s\", is not inside "
+                       "the tile (level %d: columns %d-%d, rows %d-%d)",
+                       W, H, x0, y0, rw, rh, q, pw[q], lvl, cx, cx + sl->width - 1, cy, cy + sl->height - 1);
+            }
         }
     mf_prefilter_gate g;
     mf_prefilter_gate_bounds_default(&g);

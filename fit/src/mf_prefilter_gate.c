@@ -538,7 +538,8 @@ void mf_prefilter_gate_own_fit(int nlights, const double *S, const double *R, do
     }
 }
 
-/* The own-fit check's hook into the streamed gate: entry e (row r, column col, view (a, b)) of level
+/* The own-fit check's hook into the streamed gate: entry e (the map's row r and column col, for the
+ * place; view (a, b)) of level
  * index li against its texel neighbours along x and y (tS, tR, albedos ta0, ta1; has_t) and its
  * azimuth neighbours vp[0], vp[1] in the row's arrays S, R, A (periodic; np >= 2). */
 static void gs_own_fit(mf_prefilter_gate_stream *s, int li, int r, int col, int a, int b, size_t e, const double *Se,
@@ -645,7 +646,7 @@ static void gs_texel_checks(mf_prefilter_gate_stream *s, int li, int r, size_t i
         size_t vq[2][2] = {{i - np, i + np}, {i - b + (b + np - 1) % np, i - b + (b + 1) % np}};
         int has_v[2] = {a > 0 && a + 1 < nt, np >= 3 && a > 0};
         if (s->ref && isfinite(A[i]))
-            gs_own_fit(s, li, r, col, a, b, e, S + GATE_NLIGHTS * i, R + GATE_NLIGHTS * i, A[i], tS, tR, ta0, ta1,
+            gs_own_fit(s, li, grow, gcol, a, b, e, S + GATE_NLIGHTS * i, R + GATE_NLIGHTS * i, A[i], tS, tR, ta0, ta1,
                        has_t, vq[1], S, R, A);
         for (int k = 0; k < GATE_NLIGHTS; ++k) {
             double x = S[GATE_NLIGHTS * i + k];
