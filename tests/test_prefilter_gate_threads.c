@@ -125,6 +125,25 @@ static void feed_rows(mf_prefilter_gate_stream *s, const mf_prefilter_level *lv,
  * computed by the stream from their children), against run_ref's result g1: the same bytes.  The map
  * repeats every 8 columns, so T = 2 and 4 put regions whose normals differ at offsets a misplaced
  * sub-map would confuse. */
+/* mf_prefilter_gate_ref_cols on hand-worked tiles: the two outer rings (every column in tiles of 4 or
+ * fewer), 0 out of range. */
+static void check_ref_cols(void)
+{
+    int c[4];
+    CHECK(mf_prefilter_gate_ref_cols(8, 8, 0, c) == 1 && c[0] == 0 && c[1] == 8);
+    CHECK(mf_prefilter_gate_ref_cols(8, 8, 1, c) == 1 && c[1] == 8);
+    CHECKF(mf_prefilter_gate_ref_cols(8, 8, 2, c) == 2 && c[0] == 0 && c[1] == 2 && c[2] == 6 && c[3] == 8,
+           "row 2 of 8 x 8: [%d, %d) [%d, %d)", c[0], c[1], c[2], c[3]);
+    CHECK(mf_prefilter_gate_ref_cols(8, 8, 5, c) == 2 && c[2] == 6);
+    CHECK(mf_prefilter_gate_ref_cols(8, 8, 6, c) == 1 && c[1] == 8);
+    CHECK(mf_prefilter_gate_ref_cols(8, 8, 7, c) == 1);
+    CHECK(mf_prefilter_gate_ref_cols(4, 16, 8, c) == 1 && c[1] == 4);
+    CHECK(mf_prefilter_gate_ref_cols(5, 16, 8, c) == 2 && c[1] == 2 && c[2] == 3 && c[3] == 5);
+    CHECK(mf_prefilter_gate_ref_cols(1, 1, 0, c) == 1 && c[1] == 1);
+    CHECK(mf_prefilter_gate_ref_cols(8, 8, 8, c) == 0 && mf_prefilter_gate_ref_cols(8, 8, -1, c) == 0);
+    CHECK(mf_prefilter_gate_ref_cols(0, 8, 0, c) == 0 && mf_prefilter_gate_ref_cols(8, 8, 0, NULL) == 0);
+}
+
 static void check_tiled_ref(const mf_prefilter_level *lv, int nl, const double *n, int W, int H,
                             const mf_prefilter_options *o, int T, const mf_prefilter_gate *g1, int lambert)
 {
@@ -206,6 +225,18 @@ static void check_tiled_ref(const mf_prefilter_level *lv, int nl, const double *
     CHECK(mf_prefilter_gate_stream_begin_regions(lv, nl, n, W, H, rw, rh, lr, o, &g, &s) == MF_OK);
     for (int q = nparts - 1; q >= 0; --q)
         CHECK(mf_prefilter_gate_stream_merge(s, &parts[q]) == MF_OK);
+    /* rank 0 gets R only where mf_prefilter_gate_ref_cols says it reads it (the tile files hold only
+     * those): every other entry NaN, so a read of one changes the result */
+    for (int l = 0; l < lr; ++l)
+        for (int y = 0; y < lv[l].height; ++y) {
+            int c[4], k = mf_prefilter_gate_ref_cols(shp[l].width, shp[l].height, y % shp[l].height, c);
+            CHECK(k == 1 || k == 2);
+            for (int x = 0; x < lv[l].width; ++x) {
+                int xt = x % shp[l].width, kept = (xt >= c[0] && xt < c[1]) || (k == 2 && xt >= c[2] && xt < c[3]);
+                for (size_t i = 0; !kept && i < (size_t)MF_PREFILTER_GATE_NLIGHTS * nv; ++i)
+                    R[l][MF_PREFILTER_GATE_NLIGHTS * ((size_t)y * lv[l].width + x) * nv + i] = NAN;
+            }
+        }
     feed_rows(s, lv, nv, lr, R);
     CHECKF(memcmp(&g, g1, sizeof g) == 0,
            "%s %dx%d, %d threads, %d region tiles %d x %d (levels 1-%d) gated where fitted, rank 0 the seams: the gate "
@@ -313,6 +344,7 @@ static void check_run(int W, int H, int nt, int np, int nan_lobes, int lambert)
 
 int main(void)
 {
+    check_ref_cols();
     check_run(16, 8, 4, 4, 0, 0);  /* GGX: levels 8x4, 4x2, 2x1, 1x1 */
     check_run(16, 16, 3, 5, 1, 0); /* GGX with NaN lobes; an odd phi count */
     check_run(32, 4, 2, 4, 0, 1);  /* Lambert: a wide map, levels down to 16x2 ... 1x1 */

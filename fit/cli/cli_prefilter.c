@@ -16,8 +16,9 @@
  *   work    each finished tile is written atomically to DIR/.prefilter-work/tile_<k>.bin, the
  *           checkpoint: a rerun of the same command (same map, options, fitter revision and work
  *           format, recorded in run.txt there) skips the tiles present.  A region tile's file also
- *           holds the gate's reference R of its lobes (mf_prefilter_gate_reference, computed by the
- *           worker that fitted it from the tile's own normals).  SIGINT/SIGTERM and --max-tiles
+ *           holds the gate's reference R of its lobes in its two outer rings, the only ones rank 0
+ *           reads (mf_prefilter_gate_reference, computed by the worker that fitted it from the tile's
+ *           own normals; mf_prefilter_gate_ref_cols).  SIGINT/SIGTERM and --max-tiles
  *           stop between tiles and keep the checkpoint.
  *   ranks   under mpirun (built with MFKIT_WITH_MPI) rank r of K fits every K-th tile from the
  *           r-th, largest footprints first (and every K-th albedo block before them, then a
@@ -152,7 +153,7 @@ int cli_prefilter(int argc, char **argv)
 
 enum { PF_EXIT_INCOMPLETE = 75 };
 #define PF_WORK ".prefilter-work"
-#define PF_TILE_MAGIC "MFPFTIL3" /* 3: region tiles carry the gate's reference R */
+#define PF_TILE_MAGIC "MFPFTIL4" /* 3: region tiles carry the gate's reference R; 4: only where rank 0 reads it */
 
 /* set by the handler; an int is written atomically on every platform mfkit builds on */
 static volatile int g_pf_cancel = 0;
@@ -184,10 +185,23 @@ typedef struct { int level, w, h, nx, ny, tw, th, rec; long base; } pf_plan;
 typedef struct {
     int32_t level, w, h, not_converged;
     int64_t iterations, lobes, off_m, off_mag, off_alb;
-    int64_t off_ref;  /* a region tile's gate reference R (MF_PREFILTER_GATE_NLIGHTS doubles per lobe); 0: none */
+    int64_t off_ref;  /* a region tile's gate reference R (MF_PREFILTER_GATE_NLIGHTS doubles per lobe) of the
+                         entries rank 0 reads (pf_ref_kept), row by row; 0: none */
     int64_t off_part; /* a region tile's part of the gate (mf_prefilter_gate_part); 0: none */
     double worst_residual, worst_albedo_err;
 } pf_rec;
+
+/* The texels of rows [0, y_end) of a region tile's w x h level whose R the tile file holds
+ * (mf_prefilter_gate_ref_cols: the two outer rings). */
+static size_t pf_ref_kept(int w, int h, int y_end)
+{
+    size_t n = 0;
+    for (int y = 0; y < y_end; ++y) {
+        int c[4], k = mf_prefilter_gate_ref_cols(w, h, y, c);
+        n += (size_t)(c[1] - c[0]) + (k == 2 ? (size_t)(c[3] - c[2]) : 0);
+    }
+    return n;
+}
 
 static int ilog2_levels(int w, int h)
 {
@@ -365,7 +379,8 @@ static int pf_run_tile(const double *normals, int W, int H, const mf_prefilter_o
         off = rec[i].off_alb + (int64_t)(n * sizeof(float));
         if (ref[i]) {
             rec[i].off_ref = off;
-            off += (int64_t)(MF_PREFILTER_GATE_NLIGHTS * n * sizeof(double));
+            off += (int64_t)(MF_PREFILTER_GATE_NLIGHTS * pf_ref_kept(L->width, L->height, L->height) *
+                             nv * sizeof(double));
         }
     }
     for (int i = 0; i < nrec && ref[0]; ++i) /* the part after the levels */
@@ -381,8 +396,14 @@ static int pf_run_tile(const double *normals, int W, int H, const mf_prefilter_o
             size_t n = (size_t)L->width * L->height * nv;
             ok = fwrite(L->m, sizeof(float), 9 * n, a.file) == 9 * n && fwrite(L->magnitude, sizeof(float), n, a.file) == n &&
                  fwrite(L->albedo, sizeof(float), n, a.file) == n;
-            if (ok && ref[i])
-                ok = fwrite(ref[i], sizeof(double), MF_PREFILTER_GATE_NLIGHTS * n, a.file) == MF_PREFILTER_GATE_NLIGHTS * n;
+            for (int y = 0; ok && ref[i] && y < L->height; ++y) { /* R where rank 0 reads it */
+                int c[4], k = mf_prefilter_gate_ref_cols(L->width, L->height, y, c);
+                for (int q = 0; q < k && ok; ++q) {
+                    size_t cnt = MF_PREFILTER_GATE_NLIGHTS * (size_t)(c[2 * q + 1] - c[2 * q]) * nv;
+                    ok = fwrite(ref[i] + MF_PREFILTER_GATE_NLIGHTS * ((size_t)y * L->width + c[2 * q]) * nv,
+                                sizeof(double), cnt, a.file) == cnt;
+                }
+            }
         }
         if (ok && ref[0])
             ok = fwrite(&part, sizeof part, 1, a.file) == 1;
@@ -902,9 +923,20 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
                  fseek(f, (long)(recs[gx].off_alb + (int64_t)(rr * seg * sizeof(float))), SEEK_SET) == 0 &&
                  fread(rb + gx * seg, sizeof(float), seg, f) == seg;
             const size_t nref = MF_PREFILTER_GATE_NLIGHTS * seg;
-            if (ok && V->rr)
-                ok = fseek(f, (long)(recs[gx].off_ref + (int64_t)(rr * nref * sizeof(double))), SEEK_SET) == 0 &&
-                     fread(V->rr + gx * nref, sizeof(double), nref, f) == nref;
+            if (ok && V->rr) { /* the kept entries of the row (pf_ref_kept); the others NaN, never read */
+                double *dst = V->rr + gx * nref;
+                int c[4], k = mf_prefilter_gate_ref_cols(P->tw, P->th, rr, c);
+                for (size_t i = 0; i < nref; ++i)
+                    dst[i] = NAN;
+                ok = fseek(f, (long)(recs[gx].off_ref + (int64_t)(MF_PREFILTER_GATE_NLIGHTS *
+                                                                  pf_ref_kept(P->tw, P->th, rr) * nv *
+                                                                  sizeof(double))),
+                           SEEK_SET) == 0;
+                for (int q = 0; q < k && ok; ++q) {
+                    size_t cnt = MF_PREFILTER_GATE_NLIGHTS * (size_t)(c[2 * q + 1] - c[2 * q]) * nv;
+                    ok = fread(dst + MF_PREFILTER_GATE_NLIGHTS * (size_t)c[2 * q] * nv, sizeof(double), cnt, f) == cnt;
+                }
+            }
             if (!ok)
                 snprintf(msg, sizeof msg, "%s/" PF_WORK ": tile %ld truncated", dir, P->base + (long)gy * P->nx + gx);
         }
@@ -1460,7 +1492,7 @@ static int pf_table(const cli_val *v, const char *input, const char *dir, int la
         mf_buf key = {0};
         uint64_t h = fnv1a(1469598103934665603ull, normals, sizeof(double) * 3 * (size_t)W * H);
         mf_buf_printf(&key,
-                      "mfkit prefilter work 3\ngate_part %zu\nrevision %d\nmap %d x %d fnv1a64 %016llx\nbase %s\n"
+                      "mfkit prefilter work 4\ngate_part %zu\nrevision %d\nmap %d x %d fnv1a64 %016llx\nbase %s\n"
                       "keep_albedo %d\nalpha %.17g\nviews %d x %d\nsamples %d\nmax_iterations %d\nseed %llu\ntile %d\n",
                       sizeof(mf_prefilter_gate_part), MF_PREFILTER_REVISION, W, H, (unsigned long long)h, lambert ? "lambert" : "ggx", o.keep_albedo, o.alpha, o.n_theta, o.n_phi, o.samples,
                       o.max_iterations, (unsigned long long)o.seed, T);

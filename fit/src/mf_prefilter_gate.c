@@ -305,6 +305,19 @@ static int gs_ring(const gs_level *L, int row, int col)
     return d == 0 ? 1 : d == 1 ? 2 : 0;
 }
 
+int mf_prefilter_gate_ref_cols(int tw, int th, int y, int c[4])
+{
+    if (tw < 1 || th < 1 || y < 0 || y >= th || !c)
+        return 0;
+    /* gs_ring's rings 1 and 2: min(x, tw - 1 - x, y, th - 1 - y) <= 1 */
+    int dy = y < th - 1 - y ? y : th - 1 - y;
+    c[0] = 0, c[1] = tw, c[2] = c[3] = tw;
+    if (dy <= 1 || tw <= 4)
+        return 1;
+    c[1] = 2, c[2] = tw - 2;
+    return 2;
+}
+
 /* The key of (level index, entry, light, check): the order of a pass over levels, entries, lights
  * and the checks of one light (0 theta, 1 phi, 2 texels along x, 3 along y, 4 level). */
 static uint64_t gs_key(int li, size_t e, int k, int c)

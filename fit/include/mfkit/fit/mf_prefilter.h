@@ -536,6 +536,13 @@ mf_status mf_prefilter_gate_stream_begin_regions(const mf_prefilter_level *shape
                                                  const mf_prefilter_options *o, mf_prefilter_gate *g,
                                                  mf_prefilter_gate_stream **out) MF_WARN_UNUSED;
 mf_status mf_prefilter_gate_stream_merge(mf_prefilter_gate_stream *s, const mf_prefilter_gate_part *p) MF_WARN_UNUSED;
+/* The entries of a region tile's level whose R rank 0 reads: in row y (0 <= y < th) of the tile's tw x th
+ * texels at that level, the columns [c[0], c[1]) and, if it returns 2, [c[2], c[3]): the tile's two
+ * outer rings (the seams' texel checks read them; the top region level, whose R the level check above
+ * averages, is 1 x 1 and so a ring).  Rank 0's stream reads no other entry's R, so `mfkit prefilter`
+ * stores only these in its tile files (docs/prefilter.md, "The gate across ranks").  Returns 0 for
+ * arguments out of range. */
+int mf_prefilter_gate_ref_cols(int tw, int th, int y, int c[4]);
 
 /* The view of table index (i_theta, i_phi). */
 double mf_prefilter_theta(const mf_prefilter_options *o, int i);
