@@ -18,6 +18,11 @@
  *            the footprint's normals are y-mirror symmetric on the 3/255 grid, snapped pairwise):
  *            whether the stored lobe is the fit's own answer at this view or a product of the
  *            warm-start chain and the continuity rule;
+ *   two      two lobes instead of one (not a format mfkit writes; what a second lobe per entry would
+ *            give): the footprint's normals split in two by 2-means (started from the normal farthest
+ *            from the mean and the one farthest from that), each half's mixture fitted at the view as
+ *            `fresh` is (without the mirror symmetry), with the magnitude of its own albedo over its
+ *            horizon mass, the two shadings weighted by the halves' texel counts;
  *   naive, toksvig  the baselines of prefilter-eval, on the same light points.
  * Also the smallest texel-frame view cosine (the below-horizon clamp acts under 0.001) and, with
  * --grid STEP, a 21 x 21 map of the truth's f cos over the plane of the lights (STEP apart, the
@@ -154,6 +159,78 @@ static int mirror_snap_pairs(double *n, int count)
         }
     free(partner);
     return ok;
+}
+
+/* 2-means on count unit normals: side[q] in {0, 1}; returns the size of cluster 1 (0: one cluster).
+ * Starts from the normal farthest from the mean and the normal farthest from that; 50 rounds at most. */
+static int split_two(const double *n, int count, const double mean[3], int *side)
+{
+    int a = 0, b = 0;
+    double best = -1.0;
+    for (int q = 0; q < count; ++q) {
+        double d = (n[3 * q] - mean[0]) * (n[3 * q] - mean[0]) + (n[3 * q + 1] - mean[1]) * (n[3 * q + 1] - mean[1]) +
+                   (n[3 * q + 2] - mean[2]) * (n[3 * q + 2] - mean[2]);
+        if (d > best)
+            best = d, a = q;
+    }
+    best = -1.0;
+    for (int q = 0; q < count; ++q) {
+        double d = (n[3 * q] - n[3 * a]) * (n[3 * q] - n[3 * a]) + (n[3 * q + 1] - n[3 * a + 1]) * (n[3 * q + 1] - n[3 * a + 1]) +
+                   (n[3 * q + 2] - n[3 * a + 2]) * (n[3 * q + 2] - n[3 * a + 2]);
+        if (d > best)
+            best = d, b = q;
+    }
+    if (!(best > 0.0))
+        return 0;
+    double c[2][3] = {{n[3 * a], n[3 * a + 1], n[3 * a + 2]}, {n[3 * b], n[3 * b + 1], n[3 * b + 2]}};
+    int n1 = 0;
+    for (int round = 0; round < 50; ++round) {
+        int changed = 0;
+        double sum[2][3] = {{0, 0, 0}, {0, 0, 0}};
+        int cnt[2] = {0, 0};
+        for (int q = 0; q < count; ++q) {
+            double d[2];
+            for (int k = 0; k < 2; ++k)
+                d[k] = (n[3 * q] - c[k][0]) * (n[3 * q] - c[k][0]) + (n[3 * q + 1] - c[k][1]) * (n[3 * q + 1] - c[k][1]) +
+                       (n[3 * q + 2] - c[k][2]) * (n[3 * q + 2] - c[k][2]);
+            int sd = d[1] < d[0];
+            changed |= round == 0 || side[q] != sd;
+            side[q] = sd;
+            cnt[sd]++;
+            for (int i = 0; i < 3; ++i)
+                sum[sd][i] += n[3 * q + i];
+        }
+        n1 = cnt[1];
+        if (!changed || cnt[0] == 0 || cnt[1] == 0)
+            break;
+        for (int k = 0; k < 2; ++k)
+            for (int i = 0; i < 3; ++i)
+                c[k][i] = sum[k][i] / cnt[k];
+    }
+    return n1 > 0 && n1 < count ? n1 : 0;
+}
+
+/* `fresh` for the mixture of `count` normals: magnitude x the fitted lobe's shading per light (out[nl]);
+ * returns 0, or -1 if the mixture or the fit failed. */
+static int fit_part(const mf_brdf_model *ggx, const double *nrm, int count, double alpha, double theta,
+                    const mf_ltcfit_aniso_options *fo, const double *hs, int nl, double *out)
+{
+    mf_prefilter_mix mix;
+    if (mf_prefilter_mix_init(&mix, ggx, nrm, count) != MF_OK)
+        return -1;
+    mf_brdf_params p = mf_brdf_params_iso(alpha);
+    mf_result rho;
+    mf_ltcfit_aniso_entry e;
+    int rc = -1;
+    if (mf_prefilter_mix_albedo(&mix, &p, mf_vec3_make(sin(theta), 0.0, cos(theta)), &rho) == MF_OK &&
+        mf_ltcfit_aniso_entry_fit_mirrored(&mix.model, p, theta, 0, rho.val, 0.0, NULL, NULL, fo, &e) == MF_OK) {
+        double mag = rho.val / fmax(horizon_mass(e.m), MF_PREFILTER_HORIZON_MIN);
+        for (int k = 0; k < nl; ++k)
+            out[k] = lobe_shading(e.m, mag, theta, hs[k]);
+        rc = 0;
+    }
+    mf_prefilter_mix_free(&mix);
+    return rc;
 }
 
 static int parse_pair(const char *s, int *a, int *b) { return sscanf(s, "%d,%d", a, b) == 2 ? 0 : -1; }
@@ -340,6 +417,29 @@ int main(int argc, char **argv)
     }
     double magf = albedo / fmax(horizon_mass(e.m), MF_PREFILTER_HORIZON_MIN);
 
+    /* two lobes: the halves of a 2-means split, each fitted as `fresh` (one lobe if the split fails) */
+    int *side = malloc(sizeof(int) * (size_t)count);
+    double *half = malloc(sizeof(double) * 3 * (size_t)count), two[CELL_MAX_LIGHTS];
+    if (!side || !half)
+        return 3;
+    int n1 = split_two(nrm, count, mean, side), nh[2] = {count - n1, n1};
+    for (int k = 0; k < nl; ++k)
+        two[k] = n1 ? 0.0 : lobe_shading(e.m, magf, theta, hs[k]);
+    for (int c = 0; c < 2 && n1; ++c) {
+        double part[CELL_MAX_LIGHTS];
+        int m = 0;
+        for (int q = 0; q < count; ++q)
+            if (side[q] == c)
+                memcpy(half + 3 * m++, nrm + 3 * q, sizeof(double) * 3);
+        if (fit_part(ggx, half, m, alpha, theta, &fo, hs, nl, part) != 0) {
+            fprintf(stderr, "study_prefilter_cell: the fit of half %d (%d normals) failed\n", c, m);
+            return 3;
+        }
+        for (int k = 0; k < nl; ++k)
+            two[k] += part[k] * m / (double)count;
+    }
+    free(side), free(half);
+
     printf("# study_prefilter_cell --prefilter %s --level %d --texel %d,%d --view %d,%d --samples %d, mfkit=%s\n", dir,
            level, tx, ty, ia, ip, samples, MFKIT_VERSION);
     printf("footprint: %d texels, mean normal length %.4f (Toksvig alpha %.4f); view theta %.4f deg, phi %.2f deg; "
@@ -355,13 +455,14 @@ int main(int argc, char **argv)
     printf("fresh:  residual %.5f, iterations %d, magnitude %.5f, M", e.residual, e.iterations, magf);
     for (int i = 0; i < 9; ++i)
         printf(" %.4f", e.m[i]);
-    printf("\nh,truth,stored,lookup,stored_mag_albedo,fresh,naive,toksvig\n");
+    printf("\ntwo: halves of %d and %d texels\n", nh[0], nh[1]);
+    printf("h,truth,stored,lookup,stored_mag_albedo,fresh,two,naive,toksvig\n");
     for (int k = 0; k < nl; ++k) {
         double mc[3];
         mc_shading(&truth, &naive, alpha, alpha_t, theta, hs[k], samples, mc);
-        printf("%g,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f\n", hs[k], mc[0], lobe_shading(ms, mag, theta, hs[k]),
+        printf("%g,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f\n", hs[k], mc[0], lobe_shading(ms, mag, theta, hs[k]),
                lobe_shading(ml, magl, theta, hs[k]), lobe_shading(ms, albedo, theta, hs[k]),
-               lobe_shading(e.m, magf, theta, hs[k]), mc[1], mc[2]);
+               lobe_shading(e.m, magf, theta, hs[k]), two[k], mc[1], mc[2]);
     }
     if (grid > 0.0) {
         mf_vec3 c, e1, e2;

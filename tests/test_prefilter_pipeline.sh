@@ -16,6 +16,9 @@
 #     (values, places, pass/fail); under MPIEXEC the same record on 1 process, 2 ranks with --tile 4
 #     and 16, and a stopped 2-rank run finished by one process; a checkpoint of the previous work
 #     format is refused in one line;
+#   - on make_bump.py's 32 x 32 map (3 x 4 views, 256 samples, about 4 s of CPU a run), --tile 16 (region
+#     tiles with inner entries, whose reference the tile files leave out) and --tile 32 give the same
+#     files and gate record;
 #   - --base both (the default: specular table in DIR, diffuse in DIR/diffuse): stopped by --max-tiles
 #     in either table and rerun, it writes the same bits as an uninterrupted run, and the specular
 #     checkpoint stays until the diffuse table is written.
@@ -108,6 +111,21 @@ bump4=(prefilter "$src/tests/data/normalmaps/bump_16.png" --base ggx --views 3x4
 "$mfkit" "${bump4[@]}" --threads 2 --out "$tmp/bt4" 2>"$tmp/bt4.log"; rc=$?
 ok '[ $rc -eq 0 ] && grep -q "in 21 tiles" "$tmp/bt4.log" && same "$tmp/th1" "$tmp/bt4" && same_gate "$tmp/th1" "$tmp/bt4"' \
    "bump map, --tile 4 against --tile 16: the same files and the same gate record, places included (rc=$rc): $(diff <(gate_rec "$tmp/th1") <(gate_rec "$tmp/bt4") | head -c 600)"
+# region tiles with inner entries, whose R their files do not hold (checkpoint format 4: the two outer
+# rings only), and worsts outside the first tile: make_bump.py's 32 x 32 map, --tile 16 (4 region tiles,
+# level 1 of 8 x 8 each) against --tile 32 (one): the same files and gate record, places included
+/usr/bin/python3 "$src/tests/data/normalmaps/make_bump.py" "$tmp/bump_32.png" 32
+b32=(prefilter "$tmp/bump_32.png" --base ggx --views 3x4 --samples 256)
+"$mfkit" "${b32[@]}" --tile 16 --threads 2 --out "$tmp/b16" 2>"$tmp/b16.log"; rc1=$?
+"$mfkit" "${b32[@]}" --tile 32 --threads 2 --out "$tmp/b32" 2>"$tmp/b32.log"; rc2=$?
+nf=0; nd=0
+for f in "$tmp/b32"/*.npy "$tmp/b32"/*.exr "$tmp/b32"/*.glsl "$tmp/b32"/*.hlsl; do
+  nf=$((nf+1)); cmp -s "$f" "$tmp/b16/$(basename "$f")" || nd=$((nd+1))
+done
+ok '[ $rc1 -eq 0 ] && [ $rc2 -eq 0 ] && grep -q "in 5 tiles" "$tmp/b16.log" && [ $nf -eq 32 ] && [ $nd -eq 0 ]' \
+   "32 x 32 bump map, --tile 16 against --tile 32: exit 0, 5 tiles, 32 files, all the same (rc $rc1 $rc2, $nd of $nf differ): $(tail -1 "$tmp/b16.log")"
+ok 'same_gate "$tmp/b16" "$tmp/b32"' \
+   "32 x 32 bump map, --tile 16 against --tile 32: the same gate record, places included: $(diff <(gate_rec "$tmp/b16") <(gate_rec "$tmp/b32") | head -c 600)"
 # a checkpoint of the previous work format (its tiles hold no reference) is refused in one line
 "$mfkit" "${bump4[@]}" --max-tiles 2 --out "$tmp/old" 2>/dev/null
 sed -i '1s/work [0-9]*/work 2/' "$tmp/old/.prefilter-work/run.txt"
