@@ -79,6 +79,12 @@ forced=$(/usr/bin/python3 -c 'import json, sys; g = json.load(open(sys.argv[1]))
 ok '[ $rc -eq 0 ] && [ "$forced" = "False True False True" ]' \
    "--force writes it, the manifest says failed and forced (rc=$rc, $forced): $(tail -2 "$tmp/nk2.log")"
 
+# a roughness the one-texel albedo rule does not resolve (alpha 0.002 on the bump map: a negative
+# footprint albedo at the grazing view, which the fit cannot take): exit 4, one line naming the
+# footprint, view and roughness, no table (the checkpoint stays, as for every fit failure)
+expect_error "--roughness 0.002 on the bump map: the albedo rule's failure named" 4 "albedo of its level-1 texel .* does not resolve roughness 0.002" \
+   prefilter "$src/tests/data/normalmaps/bump_16.png" --base ggx --roughness 0.002 --views 3x4 --out "$tmp/lowa"
+ok '[ ! -e "$tmp/lowa/prefilter.json" ] && [ -z "$(ls "$tmp/lowa")" ]' "--roughness 0.002: no table written: $(ls -A "$tmp/lowa")"
 expect_error "views 0x2 refused" 2 "\-\-views" prefilter "$map" --views 0x2 --out "$tmp/bad1"
 expect_error "missing map" 3 "nonexistent" prefilter "$tmp/nonexistent.png" --out "$tmp/bad2"
 ok '[ ! -e "$tmp/bad1" ] && [ ! -e "$tmp/bad2" ] && [ ! -e "$tmp/bad3" ] && [ ! -e "$tmp/bad4" ] && [ ! -e "$tmp/bad5" ]' "refusals create no output directory: $(ls "$tmp")"
