@@ -161,25 +161,24 @@ static int mirror_snap_pairs(double *n, int count)
     return ok;
 }
 
+static double dist2(const double *a, const double *b)
+{
+    return (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]);
+}
+
 /* 2-means on count unit normals: side[q] in {0, 1}; returns the size of cluster 1 (0: one cluster).
  * Starts from the normal farthest from the mean and the normal farthest from that; 50 rounds at most. */
 static int split_two(const double *n, int count, const double mean[3], int *side)
 {
     int a = 0, b = 0;
     double best = -1.0;
-    for (int q = 0; q < count; ++q) {
-        double d = (n[3 * q] - mean[0]) * (n[3 * q] - mean[0]) + (n[3 * q + 1] - mean[1]) * (n[3 * q + 1] - mean[1]) +
-                   (n[3 * q + 2] - mean[2]) * (n[3 * q + 2] - mean[2]);
-        if (d > best)
-            best = d, a = q;
-    }
+    for (int q = 0; q < count; ++q)
+        if (dist2(n + 3 * q, mean) > best)
+            best = dist2(n + 3 * q, mean), a = q;
     best = -1.0;
-    for (int q = 0; q < count; ++q) {
-        double d = (n[3 * q] - n[3 * a]) * (n[3 * q] - n[3 * a]) + (n[3 * q + 1] - n[3 * a + 1]) * (n[3 * q + 1] - n[3 * a + 1]) +
-                   (n[3 * q + 2] - n[3 * a + 2]) * (n[3 * q + 2] - n[3 * a + 2]);
-        if (d > best)
-            best = d, b = q;
-    }
+    for (int q = 0; q < count; ++q)
+        if (dist2(n + 3 * q, n + 3 * a) > best)
+            best = dist2(n + 3 * q, n + 3 * a), b = q;
     if (!(best > 0.0))
         return 0;
     double c[2][3] = {{n[3 * a], n[3 * a + 1], n[3 * a + 2]}, {n[3 * b], n[3 * b + 1], n[3 * b + 2]}};
@@ -189,11 +188,7 @@ static int split_two(const double *n, int count, const double mean[3], int *side
         double sum[2][3] = {{0, 0, 0}, {0, 0, 0}};
         int cnt[2] = {0, 0};
         for (int q = 0; q < count; ++q) {
-            double d[2];
-            for (int k = 0; k < 2; ++k)
-                d[k] = (n[3 * q] - c[k][0]) * (n[3 * q] - c[k][0]) + (n[3 * q + 1] - c[k][1]) * (n[3 * q + 1] - c[k][1]) +
-                       (n[3 * q + 2] - c[k][2]) * (n[3 * q + 2] - c[k][2]);
-            int sd = d[1] < d[0];
+            int sd = dist2(n + 3 * q, c[1]) < dist2(n + 3 * q, c[0]);
             changed |= round == 0 || side[q] != sd;
             side[q] = sd;
             cnt[sd]++;
