@@ -93,8 +93,8 @@ static void test_constant(void)
                         double r2 = shade(ref, rmag, 0.0, 0.0, hw);
                         /* every elevation, the grazing one (89.9 deg) included: the footprint is
                          * mirror symmetric, so the fit holds the phi = 0 zero pattern as the
-                         * reference does, and grazing rows keep the better of the warm and the
-                         * closed-form start (mf_prefilter.h, MF_PREFILTER_MULTISTART_COS) */
+                         * reference does, and the first azimuth's rows keep the better of the
+                         * warm and the closed-form start (mf_prefilter.c, fit_row_entry) */
                         CHECK_ABS(l1, r1, 2e-2 * e.magnitude);
                         CHECK_ABS(l2, r2, 2e-2 * e.magnitude);
                     }

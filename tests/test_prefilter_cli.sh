@@ -85,6 +85,17 @@ ok '[ $rc -eq 0 ] && [ "$forced" = "False True False True" ]' \
 expect_error "--roughness 0.002 on the bump map: the albedo rule's failure named" 4 "albedo of its level-1 texel .* does not resolve roughness 0.002" \
    prefilter "$src/tests/data/normalmaps/bump_16.png" --base ggx --roughness 0.002 --views 3x4 --out "$tmp/lowa"
 ok '[ ! -e "$tmp/lowa/prefilter.json" ] && [ -z "$(ls "$tmp/lowa")" ]' "--roughness 0.002: no table written: $(ls -A "$tmp/lowa")"
+
+# below the default roughness (fitter revision 9): alpha 0.05 on the bump map at the default 8 x 16
+# views.  Revision 8 fitted the first azimuth's non-grazing rows from the previous elevation's lobe
+# alone, and a sheared lobe there (level 1, texel (7, 0), view (64.2 deg, 0)) read own fit across
+# texels 0.3495 against the bound 0.3; revision 9 adds the closed-form solve with the continuity
+# margin: 0.2856.  (--force: the gate's other checks are not this test's subject.)  About 11 s of CPU.
+"$mfkit" prefilter "$src/tests/data/normalmaps/bump_16.png" --base ggx --roughness 0.05 --threads 2 --force \
+    --out "$tmp/a05" >"$tmp/a05.log" 2>&1; rc=$?
+own=$(/usr/bin/python3 -c 'import json, sys; o = json.load(open(sys.argv[1]))["gate"]["continuity"]["own_fit"]; print(o["worst"] <= o["bound"], o["worst"], o["bound"])' \
+      "$tmp/a05/prefilter.json" 2>/dev/null || echo "no manifest")
+ok '[ $rc -eq 0 ] && [ "${own%% *}" = "True" ]' "--roughness 0.05 on the bump map: own fit across texels within its bound (rc=$rc, within, worst, bound: $own): $(grep -i 'own fit' "$tmp/a05.log" | head -1)"
 expect_error "views 0x2 refused" 2 "\-\-views" prefilter "$map" --views 0x2 --out "$tmp/bad1"
 expect_error "missing map" 3 "nonexistent" prefilter "$tmp/nonexistent.png" --out "$tmp/bad2"
 ok '[ ! -e "$tmp/bad1" ] && [ ! -e "$tmp/bad2" ] && [ ! -e "$tmp/bad3" ] && [ ! -e "$tmp/bad4" ] && [ ! -e "$tmp/bad5" ]' "refusals create no output directory: $(ls "$tmp")"

@@ -61,8 +61,11 @@
  *     MF_PREFILTER_MIRROR_TOL_NORMAL grid below, weights on the fine one) sees at
  *     phi + pi what it sees at phi: those rows are copies of the rows phi (a V-groove's).
  *   - each (phi) row is a chain along theta: the previous elevation's lobe is the warm start
- *     (with the fitter's proximal residuals); rows with cos theta < MF_PREFILTER_MULTISTART_COS
- *     get a second solve from the closed-form start, the lower residual kept.  From the second
+ *     (with the fitter's proximal residuals) and the first azimuth's entries get a second solve
+ *     from the closed-form start: at rows with cos theta < MF_PREFILTER_MULTISTART_COS the lower
+ *     residual is kept, elsewhere the warm start's unless the other is lower by more than
+ *     MF_PREFILTER_CONTINUITY_MARGIN (revision 9; before, those rows had the warm start's solve
+ *     alone).  From the second
  *     azimuth on, every entry also gets a solve from the previous azimuth's lobe at the same
  *     elevation and one from the closed-form start (revision 6: on every row; one preparation,
  *     mf_ltcfit_aniso_entry_fit_mirrored_multi), and the previous azimuth's solve is kept
@@ -118,7 +121,7 @@ extern "C" {
 #define MF_PREFILTER_COS_MIN 0.001
 /* Names the fitted values: bump it whenever they change (objective, starts, constants), so that a
  * resumed `mfkit prefilter` refuses tiles of another revision. */
-#define MF_PREFILTER_REVISION 8
+#define MF_PREFILTER_REVISION 9
 #define MF_PREFILTER_ALBEDO_N 64
 #define MF_PREFILTER_THETA_MAX (0.999 * 0.5 * MF_PI)
 /* Footprints of at least MF_PREFILTER_CLUSTER_MIN texels are fitted to a clustered mixture: cells
@@ -128,9 +131,12 @@ extern "C" {
 #define MF_PREFILTER_CLUSTER_CELL 0.25
 #define MF_PREFILTER_CLUSTER_MIN 64
 #define MF_PREFILTER_CLUSTER_LAMBERT 0.5
-/* Views with cos theta below this get two solves (the warm start's and the closed-form start's),
- * the lower residual kept: at 89.9 deg the warm-started chain of plain GGX ended at residual
- * 0.0153, the closed-form start at 0.0114, lobes 0.03 of the albedo apart in shading. */
+/* The grazing views of the gate's grazing spike check.  Up to revision 8 also the only rows of a
+ * footprint's first azimuth that got two solves (the warm start's and the closed-form start's, the
+ * lower residual kept): at 89.9 deg the warm-started chain of plain GGX ended at residual 0.0153,
+ * the closed-form start at 0.0114, lobes 0.03 of the albedo apart in shading.  Revision 9 solves
+ * the first azimuth's other rows twice as well, under the continuity margin (mf_prefilter.c,
+ * fit_row_entry). */
 #define MF_PREFILTER_MULTISTART_COS 0.2
 /* Mirror symmetry of a footprint's normals is detected on this grid (mf_prefilter_run). */
 #define MF_PREFILTER_MIRROR_TOL 1e-9
@@ -139,7 +145,8 @@ extern "C" {
  * in the mirrored component; a snap moves no normal by more than this. */
 #define MF_PREFILTER_MIRROR_TOL_NORMAL (3.0 / 255.0)
 /* The continuity rule along phi (mf_prefilter_run): the previous azimuth's solution is kept unless
- * its residual exceeds the best start's by more than this fraction. */
+ * its residual exceeds the best start's by more than this fraction; along theta on a footprint's
+ * first azimuth, the previous elevation's (revision 9, rows with cos theta >= MULTISTART_COS). */
 #define MF_PREFILTER_CONTINUITY_MARGIN 0.1
 /* ... and the symmetric lobe of a footprint symmetric only to the map's 8-bit precision is kept unless
  * its residual exceeds the free lobe's by more than this fraction (mf_prefilter_run).  Demo map
