@@ -18,7 +18,7 @@
  *   neighbour (a + 1, a - 1 on the last row); 8 swapped with it; 9 a run of 4 texels along x (fewer on
  *   narrow levels), every view, each given its x + 1 neighbour's lobes (a tile written one texel off).
  *   Levels drawn uniformly, except a 1 x 1 top level (no texel neighbours: the continuity measures do
- *   not cover it). */
+ *   not cover it).  Each line also prints own fit across elevations (ownert, dominatedt). */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdint.h>
@@ -149,10 +149,11 @@ static void corrupt(mf_prefilter_level *lv, int nl, const double *n, int W, int 
         if (mf_prefilter_gate_run_ref(lv, nl, n, W, H, o, &g) != MF_OK)
             exit(1);
         printf("C kind %d level %d texel %zu %zu view %d %d change %.5f gated %d cross %.5f excess %.5f "
-               "cont %.5f %.5f %.5f owner %.5f ownerv %.5f dominated %.5f pass %d\n", kind, L->level, col, row, a, b, ch,
+               "cont %.5f %.5f %.5f owner %.5f ownerv %.5f dominated %.5f ownert %.5f dominatedt %.5f pass %d\n", kind,
+               L->level, col, row, a, b, ch,
                !(g.pass_energy && g.pass_nan && g.pass_level), g.worst_cont_cross, g.worst_cont_excess,
                g.worst_cont_texel, g.worst_cont_view, g.worst_cont_grazing, g.worst_cont_owner, g.worst_cont_owner_view,
-               g.worst_cont_dominated, g.pass);
+               g.worst_cont_dominated, g.worst_cont_owner_theta, g.worst_cont_dominated_theta, g.pass);
         fflush(stdout);
         for (int q = nch - 1; q >= 0; --q)
             memcpy(L->m + 9 * idx[q], sv + 10 * q, 36), L->magnitude[idx[q]] = sv[10 * q + 9];
@@ -239,6 +240,8 @@ int main(int argc, char **argv)
     printf("own fit, azimuths: owner %.6g (%s)\n", g.worst_cont_owner_view, g.where_cont_owner_view);
     printf("own fit: owner %.6g (%s)  dominated %.6g (%s)\n", g.worst_cont_owner, g.where_cont_owner,
            g.worst_cont_dominated, g.where_cont_dominated);
+    printf("own fit, elevations: owner %.6g (%s)  dominated %.6g (%s)\n", g.worst_cont_owner_theta,
+           g.where_cont_owner_theta, g.worst_cont_dominated_theta, g.where_cont_dominated_theta);
     const char *raw = getenv("MF_GATE_RAW"); /* the result's bytes, for comparing builds */
     if (raw) {
         FILE *f = fopen(raw, "wb");
