@@ -2,8 +2,9 @@
  * energy, NaN, parent vs children, view and texel spikes of the lobes' shading, and (with the
  * normal map) the continuity of the lobes' error against the per-texel reference shading and the
  * lobes' own jumps against the reference's (excess, gated), and lobes copied, swapped or shifted
- * between neighbours (own fit, gated) [Nahmias 2022, Ch. 3; docs/prefilter.md, "Gate", "Gating
- * continuity across texels" and "Gating copied lobes (own fit)"]. */
+ * between texel, azimuth and elevation neighbours (own fit and own fit across elevations, gated)
+ * [Nahmias 2022, Ch. 3; docs/prefilter.md, "Gate", "Gating continuity across texels", "Gating copied
+ * lobes (own fit)" and "Own fit across elevations"]. */
 #define _POSIX_C_SOURCE 200809L
 #include "mfkit/fit/mf_prefilter.h"
 
