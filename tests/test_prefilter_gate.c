@@ -491,7 +491,7 @@ static void test_own_fit_cross_values(void)
 }
 
 /* The good run's own fit across elevations: passes, above 0 (the check ran). */
-static int g_good_theta(const mf_prefilter_level *lv, int nl, const double *n, int w, const mf_prefilter_options *o)
+static int good_theta(const mf_prefilter_level *lv, int nl, const double *n, int w, const mf_prefilter_options *o)
 {
     mf_prefilter_gate g;
     mf_prefilter_gate_bounds_default(&g);
@@ -571,7 +571,7 @@ static void test_own_fit_planted(void)
      * copy from the theta neighbour (a + 1, a - 1 on the last row; the first level-1 entry whose copy
      * changes a gate light's shading by >= 0.5 of the albedo) and the swap are caught by it, while every
      * other gated check passes (the gate of main let them through) */
-    CHECKF(g_good_theta(lv, nl, n, w, &o), "bump: good run fails own fit across elevations or reads 0");
+    CHECKF(good_theta(lv, nl, n, w, &o), "bump: good run fails own fit across elevations or reads 0");
     for (int swap = 0; swap < 2; ++swap) {
         size_t et = ne, ft = 0;
         for (size_t i = 0; i < ne && et == ne; ++i) {
