@@ -462,6 +462,46 @@ static void test_own_fit_values(void)
            o.owner, o.owner_at);
 }
 
+/* Own fit across elevations (mf_prefilter_gate_own_fit_cross) on values worked by hand, lights that
+ * differ between the entry and its neighbour: the entry's lobe fits its own reference to 0.38
+ * (s = 0.44, r = 0.06 at light 0 of its view) but j's to 0.02 (x_j = 0.50 under j's lights, r_j = 0.52):
+ * owner = 0.38 - 0.02 = 0.36; j's lobe under the entry's lights (y_j = 0.10) misses r by 0.04: dominated
+ * 0.38 - 0.04 = 0.34.  The same-lights function is this one with xS = S (the same bits on the fitted
+ * bump map below).  Tolerance 1e-15: a few roundings of numbers near 1. */
+static void test_own_fit_cross_values(void)
+{
+    const double S[2] = {0.22, 0.125}, R[2] = {0.03, 0.125};        /* albedo 0.5: s = (0.44, 0.25), r = (0.06, 0.25) */
+    const double X[2] = {0.25, 0.125}, Rj[2] = {0.13, 0.0625};      /* x_j = (0.50, 0.25); albedo_j 0.25: r_j = (0.52, 0.25) */
+    const double Y[2] = {0.025, 0.0625};                             /* y_j = (0.10, 0.25) */
+    const double *xS[1] = {X}, *nR[1] = {Rj}, *yS[1] = {Y}, na[1] = {0.25};
+    mf_prefilter_gate_own o;
+    mf_prefilter_gate_own_fit_cross(2, S, R, 0.5, 1, xS, nR, yS, na, &o);
+    CHECKF(o.owner_at == 0 && fabs(o.owner - 0.36) < 1e-15 && o.dominated_at == 0 && fabs(o.dominated - 0.34) < 1e-15,
+           "own fit across lights: owner %.17g at %d (want 0.36 at 0), dominated %.17g at %d (want 0.34 at 0)", o.owner,
+           o.owner_at, o.dominated, o.dominated_at);
+    /* the same-lights function reads |s - r_j| instead: 0.38 - max(0.08, 0) = 0.30 */
+    const double *nS[1] = {Y};
+    mf_prefilter_gate_own_fit(2, S, R, 0.5, 1, nS, nR, na, &o);
+    CHECKF(o.owner_at == 0 && fabs(o.owner - 0.30) < 1e-15, "own fit, same lights: owner %.17g at %d (want 0.30 at 0)",
+           o.owner, o.owner_at);
+    const double bad[2] = {0.25, NAN}, *bX[1] = {bad};
+    mf_prefilter_gate_own_fit_cross(2, S, R, 0.5, 1, bX, nR, yS, na, &o);
+    CHECKF(o.owner_at == -1 && o.dominated_at == -1, "own fit across lights, a non-finite x_j: owner at %d, dominated at "
+           "%d (want -1: the neighbour is skipped)", o.owner_at, o.dominated_at);
+}
+
+/* The good run's own fit across elevations: passes, above 0 (the check ran). */
+static int good_theta(const mf_prefilter_level *lv, int nl, const double *n, int w, const mf_prefilter_options *o)
+{
+    mf_prefilter_gate g;
+    mf_prefilter_gate_bounds_default(&g);
+    if (mf_prefilter_gate_run_ref(lv, nl, n, w, w, o, &g) != MF_OK)
+        return 0;
+    printf("bump 8x8 4x8 good: own fit across elevations %.4f (%s), dominated %.4f\n", g.worst_cont_owner_theta,
+           g.where_cont_owner_theta, g.worst_cont_dominated_theta);
+    return g.pass && g.pass_cont_owner_theta && g.worst_cont_owner_theta > 0.0;
+}
+
 /* The own-fit check on fitted lobes (bump map 8 x 8, 4 x 8 views; GGX): the good run passes with owner
  * below its bound, and a planted copy and swap of level-1 texel neighbours (x + 1, the same view;
  * magnitudes scaled to keep each entry's albedo, so the energy check cannot see them) are caught by it.
@@ -527,6 +567,47 @@ static void test_own_fit_planted(void)
         memcpy(L->m + 9 * e, se, 36), L->magnitude[e] = se[9];
         memcpy(L->m + 9 * f, sf, 36), L->magnitude[f] = sf[9];
     }
+    /* own fit across elevations: the good run passes it (and reads above 0: the check ran); a planted
+     * copy from the theta neighbour (a + 1, a - 1 on the last row; the first level-1 entry whose copy
+     * changes a gate light's shading by >= 0.5 of the albedo) and the swap are caught by it, while every
+     * other gated check passes (the gate of main let them through) */
+    CHECKF(good_theta(lv, nl, n, w, &o), "bump: good run fails own fit across elevations or reads 0");
+    for (int swap = 0; swap < 2; ++swap) {
+        size_t et = ne, ft = 0;
+        for (size_t i = 0; i < ne && et == ne; ++i) {
+            int a = (int)(i / np % nt);
+            size_t j = a + 1 < nt ? i + np : i - np;
+            memcpy(se, L->m + 9 * i, 36), se[9] = L->magnitude[i];
+            memcpy(L->m + 9 * i, L->m + 9 * j, 36), L->magnitude[i] = L->albedo[i] / L->albedo[j] * L->magnitude[j];
+            if (lobe_change(L, i, se, &o) >= 0.5)
+                et = i, ft = j;
+            memcpy(L->m + 9 * i, se, 36), L->magnitude[i] = se[9];
+        }
+        CHECKF(et < ne, "bump: no level-1 theta copy changes the shading by 0.5 of the albedo (the plant needs one)");
+        if (et == ne)
+            break;
+        memcpy(se, L->m + 9 * et, 36), se[9] = L->magnitude[et];
+        memcpy(sf, L->m + 9 * ft, 36), sf[9] = L->magnitude[ft];
+        memcpy(L->m + 9 * et, sf, 36), L->magnitude[et] = L->albedo[et] / L->albedo[ft] * sf[9];
+        if (swap)
+            memcpy(L->m + 9 * ft, se, 36), L->magnitude[ft] = L->albedo[ft] / L->albedo[et] * se[9];
+        double ch = lobe_change(L, et, se, &o);
+        mf_prefilter_gate_bounds_default(&g);
+        CHECK(mf_prefilter_gate_run_ref(lv, nl, n, w, w, &o, &g) == MF_OK);
+        printf("bump: planted theta %s at level 1, entry %zu (change %.3f): own fit across elevations %.4f (%s), "
+               "dominated %.4f; texels %.4f, azimuths %.4f, excess %.4f, energy %.3g, level %.3f\n",
+               swap ? "swap" : "copy", et, ch, g.worst_cont_owner_theta, g.where_cont_owner_theta,
+               g.worst_cont_dominated_theta, g.worst_cont_owner, g.worst_cont_owner_view, g.worst_cont_excess,
+               g.worst_energy, g.worst_level);
+        CHECKF(!g.pass && !g.pass_cont_owner_theta && strstr(g.where_cont_owner_theta, "theta") &&
+                   g.pass_energy && g.pass_nan && g.pass_level && g.pass_cont_excess && g.pass_cont_owner,
+               "bump: a theta %s at level 1 (change %.3f of the albedo): own fit across elevations %.4g (bound %.3g), "
+               "pass %d; the other gated checks should pass (energy %d nan %d level %d excess %d own fit %d)",
+               swap ? "swap" : "copy", ch, g.worst_cont_owner_theta, g.max_cont_owner_theta, g.pass, g.pass_energy,
+               g.pass_nan, g.pass_level, g.pass_cont_excess, g.pass_cont_owner);
+        memcpy(L->m + 9 * et, se, 36), L->magnitude[et] = se[9];
+        memcpy(L->m + 9 * ft, sf, 36), L->magnitude[ft] = sf[9];
+    }
     mf_prefilter_levels_free(lv, nl);
     make_map(0, w, n);
     CHECK(mf_prefilter_run(n, w, w, &o, &lv, &nl, msg, sizeof msg) == MF_OK);
@@ -535,6 +616,7 @@ static void test_own_fit_planted(void)
     /* 1e-12: the footprints and their lobes are the same; what is left is rounding (measured 9.0e-17) */
     CHECKF(g.pass && g.worst_cont_owner < 1e-12, "constant: own fit %.4g on the good run (want 0: every footprint is "
            "the same), pass %d", g.worst_cont_owner, g.pass);
+    printf("constant 8x8 4x8: own fit across elevations %.4f (%s)\n", g.worst_cont_owner_theta, g.where_cont_owner_theta);
     mf_prefilter_levels_free(lv, nl);
     free(n);
 }
@@ -626,6 +708,7 @@ int main(int argc, char **argv)
     test_facet_continuity();
     test_stream();
     test_own_fit_values();
+    test_own_fit_cross_values();
     test_own_fit_planted();
     MF_TEST_MAIN_END();
 }

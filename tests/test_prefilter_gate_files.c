@@ -16,9 +16,11 @@
  *   albedo (so the energy check cannot see the move): 4 the lobe swapped with its texel neighbour
  *   x + 1; 5 copied from texel y + 1; 6 copied from its phi neighbour b + 1; 7 copied from its theta
  *   neighbour (a + 1, a - 1 on the last row); 8 swapped with it; 9 a run of 4 texels along x (fewer on
- *   narrow levels), every view, each given its x + 1 neighbour's lobes (a tile written one texel off).
+ *   narrow levels), every view, each given its x + 1 neighbour's lobes (a tile written one texel off);
+ *   a (10) a run of 4 texels along x (fewer on narrow levels), every view given its theta neighbour's
+ *   lobe (a + 1, a - 1 on the last row; magnitudes kept per albedo): a table written one elevation off.
  *   Levels drawn uniformly, except a 1 x 1 top level (no texel neighbours: the continuity measures do
- *   not cover it). */
+ *   not cover it).  Each line also prints own fit across elevations (ownert, dominatedt). */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdint.h>
@@ -81,7 +83,7 @@ static void corrupt(mf_prefilter_level *lv, int nl, const double *n, int W, int 
     size_t *idx = malloc(sizeof(size_t) * 4 * nv);
     float *sv = malloc(sizeof(float) * 10 * 4 * nv);
     for (int c = 0; c < nk * ncorr; ++c) {
-        int kind = kinds[c % nk] - '0';
+        int kind = kinds[c % nk] >= 'a' ? kinds[c % nk] - 'a' + 10 : kinds[c % nk] - '0';
         int nlt = nl - (lv[nl - 1].width == 1 && lv[nl - 1].height == 1 && nl > 1); /* not the 1 x 1 top level: no texel axis */
         int l = (int)(lcg(&seed) % (uint64_t)nlt);
         mf_prefilter_level *L = &lv[l];
@@ -96,7 +98,20 @@ static void corrupt(mf_prefilter_level *lv, int nl, const double *n, int W, int 
         int nch = 0; /* the changed entries, saved in idx, sv */
         if (kind == 1 || kind == 4 || kind == 8)
             f = kind == 1 ? vphi : kind == 4 ? tx : vth;
-        if (kind == 9) { /* a run of up to 4 texels along x, every view, each given its x + 1 neighbour's lobes */
+        if (kind == 10) { /* a run of up to 4 texels along x, every view given its theta neighbour's lobe (a + 1;
+                             a - 1 on the last row): a table written one elevation off */
+            int run = L->width >= 4 ? 4 : L->width;
+            for (int q = 0; q < run; ++q)
+                for (size_t v = 0; v < nv; ++v) {
+                    size_t x = (row * (size_t)L->width + (col + q) % (size_t)L->width) * nv + v;
+                    idx[nch] = x, memcpy(sv + 10 * nch, L->m + 9 * x, 36), sv[10 * nch + 9] = L->magnitude[x], ++nch;
+                }
+            for (int q = 0; q < nch; ++q) { /* from the saved lobes: every source is changed too */
+                int aq = (int)(q % nv / (size_t)np);
+                int src = aq + 1 < nt ? q + np : q - np;
+                put_lobe(L, idx[q], idx[src], sv + 10 * src);
+            }
+        } else if (kind == 9) { /* a run of up to 4 texels along x, every view, each given its x + 1 neighbour's lobes */
             int run = L->width >= 5 ? 4 : L->width - 1;
             for (int q = 0; q < run; ++q)
                 for (size_t v = 0; v < nv; ++v) {
@@ -149,10 +164,11 @@ static void corrupt(mf_prefilter_level *lv, int nl, const double *n, int W, int 
         if (mf_prefilter_gate_run_ref(lv, nl, n, W, H, o, &g) != MF_OK)
             exit(1);
         printf("C kind %d level %d texel %zu %zu view %d %d change %.5f gated %d cross %.5f excess %.5f "
-               "cont %.5f %.5f %.5f owner %.5f ownerv %.5f dominated %.5f pass %d\n", kind, L->level, col, row, a, b, ch,
+               "cont %.5f %.5f %.5f owner %.5f ownerv %.5f dominated %.5f ownert %.5f dominatedt %.5f pass %d\n", kind,
+               L->level, col, row, a, b, ch,
                !(g.pass_energy && g.pass_nan && g.pass_level), g.worst_cont_cross, g.worst_cont_excess,
                g.worst_cont_texel, g.worst_cont_view, g.worst_cont_grazing, g.worst_cont_owner, g.worst_cont_owner_view,
-               g.worst_cont_dominated, g.pass);
+               g.worst_cont_dominated, g.worst_cont_owner_theta, g.worst_cont_dominated_theta, g.pass);
         fflush(stdout);
         for (int q = nch - 1; q >= 0; --q)
             memcpy(L->m + 9 * idx[q], sv + 10 * q, 36), L->magnitude[idx[q]] = sv[10 * q + 9];
@@ -239,6 +255,8 @@ int main(int argc, char **argv)
     printf("own fit, azimuths: owner %.6g (%s)\n", g.worst_cont_owner_view, g.where_cont_owner_view);
     printf("own fit: owner %.6g (%s)  dominated %.6g (%s)\n", g.worst_cont_owner, g.where_cont_owner,
            g.worst_cont_dominated, g.where_cont_dominated);
+    printf("own fit, elevations: owner %.6g (%s)  dominated %.6g (%s)\n", g.worst_cont_owner_theta,
+           g.where_cont_owner_theta, g.worst_cont_dominated_theta, g.where_cont_dominated_theta);
     const char *raw = getenv("MF_GATE_RAW"); /* the result's bytes, for comparing builds */
     if (raw) {
         FILE *f = fopen(raw, "wb");

@@ -193,8 +193,9 @@ static void check_tiled_ref(const mf_prefilter_level *lv, int nl, const double *
             const char *pw[] = {pr->where_energy,       pr->where_level,      pr->where_view,
                                 pr->where_texel,        pr->where_cont_texel, pr->where_cont_view,
                                 pr->where_cont_grazing, pr->where_cont_cross, pr->where_cont_excess,
-                                pr->where_cont_owner,   pr->where_cont_owner_view, pr->where_cont_dominated};
-            for (int q = 0; q < 12; ++q) {
+                                pr->where_cont_owner,   pr->where_cont_owner_view, pr->where_cont_dominated,
+                                pr->where_cont_owner_theta, pr->where_cont_dominated_theta};
+            for (int q = 0; q < 14; ++q) {
                 int c, r, lvl;
                 const char *at = strstr(pw[q], " at level ");
                 if (!at || sscanf(at, " at level %d,", &lvl) != 1 || !place(pw[q], &c, &r) || lvl < 1 || lvl > lr)
@@ -278,9 +279,10 @@ static void check_run(int W, int H, int nt, int np, int nan_lobes, int lambert)
             /* the tied level-1 worsts sit at their first place: columns 0-3 (of 0-7), rows 0-1 */
             const char *where[] = {g.where_view,         g.where_texel,      g.where_cont_view, g.where_cont_texel,
                                    g.where_cont_grazing, g.where_cont_cross, g.where_cont_excess,
-                                   g.where_cont_owner,   g.where_cont_owner_view, g.where_cont_dominated};
+                                   g.where_cont_owner,   g.where_cont_owner_view, g.where_cont_dominated,
+                                   g.where_cont_owner_theta, g.where_cont_dominated_theta};
             int seen = 0;
-            for (int q = 0; q < 10 && !nan_lobes; ++q) { /* (NaN lobes break some ties) */
+            for (int q = 0; q < 12 && !nan_lobes; ++q) { /* (NaN lobes break some ties) */
                 int c, r;
                 if (strstr(where[q], "level 1,") && place(where[q], &c, &r)) {
                     ++seen;
@@ -307,6 +309,12 @@ static void check_run(int W, int H, int nt, int np, int nan_lobes, int lambert)
                    "%s %dx%d: own fit %g (%s), azimuths %g, dominated %g: no level-1 worst to compare",
                    lambert ? "lambert" : "ggx", W, H, g.worst_cont_owner, g.where_cont_owner, g.worst_cont_owner_view,
                    g.worst_cont_dominated);
+            /* own fit across elevations (gated) and its reported companion: worsts to merge, at level 1 */
+            CHECKF(g.worst_cont_owner_theta > 0.0 && g.worst_cont_dominated_theta > 0.0 &&
+                       (nan_lobes || strstr(g.where_cont_owner_theta, "level 1,")),
+                   "%s %dx%d: own fit across elevations %g (%s), dominated %g: no level-1 worst to compare",
+                   lambert ? "lambert" : "ggx", W, H, g.worst_cont_owner_theta, g.where_cont_owner_theta,
+                   g.worst_cont_dominated_theta);
             for (int T = 2; T <= 16; T *= 2) /* the region tiles' reference given, 1 thread */
                 check_tiled_ref(lv, nl, n, W, H, &o, T, &g1, lambert);
             continue;

@@ -100,7 +100,7 @@ for n in 1 2 3; do
   ok '[ $rc -eq 0 ]' "bump map on $n threads exits 0 (rc=$rc): $(tail -2 "$tmp/th$n.log")"
 done
 nw=$(grep -o '"where": "[^"]* at level [0-9]*, texel ([0-9]*, [0-9]*)' "$tmp/th1/prefilter.json" | wc -l)
-ok '[ $nw -eq 12 ]' "the manifest holds the gate's 12 places, own fit's three included (compared with the rest): $nw"
+ok '[ $nw -eq 14 ]' "the manifest holds the gate's 14 places, own fit's five (texels, azimuths, elevations and the two dominated) included (compared with the rest): $nw"
 ok 'same "$tmp/th1" "$tmp/th2" manifest && same "$tmp/th1" "$tmp/th3" manifest' "--threads 1, 2, 3: the same bits, manifest included"
 ok 'diff <(grep "^mfkit prefilter: \(gate\|reported\)" "$tmp/th1.log") <(grep "^mfkit prefilter: \(gate\|reported\)" "$tmp/th3.log")' \
    "--threads 1 and 3 print the same gate figures"

@@ -154,7 +154,8 @@ int cli_prefilter(int argc, char **argv)
 
 enum { PF_EXIT_INCOMPLETE = 75 };
 #define PF_WORK ".prefilter-work"
-#define PF_TILE_MAGIC "MFPFTIL4" /* 3: region tiles carry the gate's reference R; 4: only where rank 0 reads it */
+#define PF_TILE_MAGIC "MFPFTIL5" /* 3: region tiles carry the gate's reference R; 4: only where rank 0 reads it;
+                                     5: the gate part holds own fit across elevations */
 
 /* set by the handler; an int is written atomically on every platform mfkit builds on */
 static volatile int g_pf_cancel = 0;
@@ -1049,6 +1050,14 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
         if (!g.pass_cont_owner)
             fprintf(stderr, "mfkit prefilter: worst own fit at %s\n",
                     g.worst_cont_owner >= g.worst_cont_owner_view ? g.where_cont_owner : g.where_cont_owner_view);
+        fprintf(stderr,
+                "mfkit prefilter: own fit across elevations, how much better a lobe shades a theta neighbour's "
+                "reference (at its lights) than its own: %.4g (bound %.3g%s) %s; reported: a theta neighbour's lobe "
+                "better on the entry's reference %.4g\n",
+                g.worst_cont_owner_theta, g.max_cont_owner_theta, g.owner_theta_gated ? "" : ", reported only",
+                g.pass_cont_owner_theta ? "ok" : g.owner_theta_gated ? "FAIL" : "above it", g.worst_cont_dominated_theta);
+        if (!g.pass_cont_owner_theta)
+            fprintf(stderr, "mfkit prefilter: worst own fit across elevations at %s\n", g.where_cont_owner_theta);
         if (g.cont_gated && !(g.pass_cont_texel && g.pass_cont_view && g.pass_cont_grazing))
             fprintf(stderr, "mfkit prefilter: worst continuity at %s\n",
                     !g.pass_cont_texel ? g.where_cont_texel : !g.pass_cont_view ? g.where_cont_view : g.where_cont_grazing);
@@ -1184,7 +1193,19 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
                           "|s - r| - |s_j - r| over texel and azimuth neighbours\", \"where\": ",
                       g.worst_cont_dominated);
         mf_json_string(&b, g.where_cont_dominated);
-        mf_buf_printf(&b, "}}, \"largest_jump\": {\"texel\": %.6g, \"view\": %.6g}, \"largest_error\": %.6g},\n"
+        mf_buf_printf(&b, "}, \"elevations\": {\"passed\": %s, \"reported_only\": %s, \"worst\": %.6g, \"bound\": %.6g, "
+                          "\"measures\": \"the largest, over an entry's theta neighbours j (a +- 1), of |s - r| - "
+                          "|x_j - r_j|, x_j the lobe's shading of j's lights and r_j j's reference of them / albedo\", "
+                          "\"where\": ",
+                      g.pass_cont_owner_theta ? "true" : "false", g.owner_theta_gated ? "false" : "true",
+                      g.worst_cont_owner_theta, g.max_cont_owner_theta);
+        mf_json_string(&b, g.where_cont_owner_theta);
+        mf_buf_printf(&b, ", \"dominated\": {\"reported_only\": true, \"worst\": %.6g, \"measures\": \"the "
+                          "largest |s - r| - |y_j - r|, y_j a theta neighbour's lobe under the entry's lights\", "
+                          "\"where\": ",
+                      g.worst_cont_dominated_theta);
+        mf_json_string(&b, g.where_cont_dominated_theta);
+        mf_buf_printf(&b, "}}}, \"largest_jump\": {\"texel\": %.6g, \"view\": %.6g}, \"largest_error\": %.6g},\n"
                           "    \"worst_albedo_quadrature_err\": %.6g,\n"
                           "    \"not_checked\": \"%s\"}\n}\n",
                       g.worst_jump_texel, g.worst_jump_view, g.worst_ref_error, worst_alb,
@@ -1493,7 +1514,7 @@ static int pf_table(const cli_val *v, const char *input, const char *dir, int la
         mf_buf key = {0};
         uint64_t h = fnv1a(1469598103934665603ull, normals, sizeof(double) * 3 * (size_t)W * H);
         mf_buf_printf(&key,
-                      "mfkit prefilter work 4\ngate_part %zu\nrevision %d\nmap %d x %d fnv1a64 %016llx\nbase %s\n"
+                      "mfkit prefilter work 5\ngate_part %zu\nrevision %d\nmap %d x %d fnv1a64 %016llx\nbase %s\n"
                       "keep_albedo %d\nalpha %.17g\nviews %d x %d\nsamples %d\nmax_iterations %d\nseed %llu\ntile %d\n",
                       sizeof(mf_prefilter_gate_part), MF_PREFILTER_REVISION, W, H, (unsigned long long)h, lambert ? "lambert" : "ggx", o.keep_albedo, o.alpha, o.n_theta, o.n_phi, o.samples,
                       o.max_iterations, (unsigned long long)o.seed, T);

@@ -2,8 +2,9 @@
  * energy, NaN, parent vs children, view and texel spikes of the lobes' shading, and (with the
  * normal map) the continuity of the lobes' error against the per-texel reference shading and the
  * lobes' own jumps against the reference's (excess, gated), and lobes copied, swapped or shifted
- * between neighbours (own fit, gated) [Nahmias 2022, Ch. 3; docs/prefilter.md, "Gate", "Gating
- * continuity across texels" and "Gating copied lobes (own fit)"]. */
+ * between texel, azimuth and elevation neighbours (own fit and own fit across elevations, gated)
+ * [Nahmias 2022, Ch. 3; docs/prefilter.md, "Gate", "Gating continuity across texels", "Gating copied
+ * lobes (own fit)" and "Own fit across elevations"]. */
 #define _POSIX_C_SOURCE 200809L
 #include "mfkit/fit/mf_prefilter.h"
 
@@ -36,6 +37,7 @@ void mf_prefilter_gate_bounds_default(mf_prefilter_gate *g)
     g->max_cont_cross = MF_PREFILTER_GATE_CONT_CROSS;
     g->max_cont_excess = MF_PREFILTER_GATE_CONT_EXCESS;
     g->max_cont_owner = MF_PREFILTER_GATE_OWN_FIT;
+    g->max_cont_owner_theta = MF_PREFILTER_GATE_OWN_FIT_THETA;
 }
 
 /* The gate's lights, in the view-azimuth-aligned frame of view theta: quads of half-width
@@ -67,6 +69,26 @@ static void gate_shade(const float *m9, float mag, const mf_polygon *lights, dou
     int ok = mf_ltc_init(&ltc, m) == MF_OK;
     for (int k = 0; k < GATE_NLIGHTS; ++k)
         s[k] = ok ? mag * mf_ltc_integrate_polygon(&ltc, &lights[k], MF_POLYGON_ONE_SIDED) : NAN;
+}
+
+/* Own fit across elevations: the lobe's shading (magnitude * LTC integral, as gate_shade) of the three
+ * lights about the mirror direction (k < GATE_MIRROR) of its theta neighbours' views, lo (theta a - 1)
+ * into x[0 .. 2] and hi (a + 1) into x[3 .. 5]; a NULL set is skipped (an edge row).  The lights about
+ * the normal are the same at every elevation (gate_lights), so their shading is S's own. */
+#define GATE_MIRROR 3
+
+static void gate_shade_theta(const float *m9, float mag, const mf_polygon *lo, const mf_polygon *hi, double *x)
+{
+    mf_mat3 m;
+    for (int i = 0; i < 9; ++i)
+        m.m[i / 3][i % 3] = m9[i];
+    mf_ltc ltc;
+    int ok = mf_ltc_init(&ltc, m) == MF_OK;
+    for (int q = 0; q < 2; ++q) {
+        const mf_polygon *L = q ? hi : lo;
+        for (int k = 0; k < GATE_MIRROR; ++k)
+            x[GATE_MIRROR * q + k] = L && ok ? mag * mf_ltc_integrate_polygon(&ltc, &L[k], MF_POLYGON_ONE_SIDED) : NAN;
+    }
 }
 
 /* ---- the gate's reference: the effective BRDF's shading of the gate lights -------------------- */
@@ -277,7 +299,11 @@ struct mf_prefilter_gate_stream {
     gate_clipped *clipped; /* the lights clipped to z >= 0, per view theta (GATE_NLIGHTS each) */
     gate_iso *iso;
     uint64_t k_energy, k_level, k_view, k_texel, k_cont_texel, k_cont_view, k_cont_grazing, k_cont_cross, k_cont_excess;
-    uint64_t k_cont_owner, k_cont_owner_view, k_cont_dominated;
+    uint64_t k_cont_owner, k_cont_owner_view, k_cont_dominated, k_cont_owner_theta, k_cont_dominated_theta;
+    /* own fit across elevations: scratch for one column's lobes under their theta neighbours' mirror
+     * lights (2 * GATE_MIRROR doubles per view), one block of nv views per thread (xscr_all, threads
+     * blocks, owned by the stream; xscr: this stream's or part's own block) */
+    double *xscr_all, *xscr;
     int threads;           /* o->threads (1 without o), at most GS_MAX_THREADS */
     struct gs_part *parts; /* threads of them, reused for every row */
     /* the gate across tiles (docs/prefilter.md, "The gate across ranks"), mode:
@@ -348,7 +374,7 @@ void mf_prefilter_gate_stream_free(mf_prefilter_gate_stream *s)
     for (int l = 0; s->L && l < s->nl; ++l)
         for (int i = 0; i < GS_SLOTS; ++i)
             free(s->L[l].S[i]), free(s->L[l].R[i]), free(s->L[l].A[i]);
-    free(s->L), free(s->lights), free(s->clipped), free(s->iso), free(s->parts), free(s);
+    free(s->L), free(s->lights), free(s->clipped), free(s->iso), free(s->parts), free(s->xscr_all), free(s);
 }
 
 /* mf_prefilter_gate_stream_begin's work; ref: with the reference (normals, or R given with every row);
@@ -383,6 +409,7 @@ static mf_status gs_begin(const mf_prefilter_level *shapes, int nlevels, const d
     s->k_energy = s->k_level = s->k_view = s->k_texel = UINT64_MAX;
     s->k_cont_texel = s->k_cont_view = s->k_cont_grazing = s->k_cont_cross = s->k_cont_excess = UINT64_MAX;
     s->k_cont_owner = s->k_cont_owner_view = s->k_cont_dominated = UINT64_MAX;
+    s->k_cont_owner_theta = s->k_cont_dominated_theta = UINT64_MAX;
     /* the results this run sets (as mf_prefilter_gate_run and _run_ref cleared them) */
     g->nan_entries = 0;
     g->worst_energy = g->worst_level = g->worst_view_spike = g->worst_texel_spike = 0.0;
@@ -399,13 +426,18 @@ static mf_status gs_begin(const mf_prefilter_level *shapes, int nlevels, const d
         g->where_cont_excess[0] = '\0';
         g->worst_cont_owner = g->worst_cont_owner_view = g->worst_cont_dominated = 0.0;
         g->where_cont_owner[0] = g->where_cont_owner_view[0] = g->where_cont_dominated[0] = '\0';
+        g->worst_cont_owner_theta = g->worst_cont_dominated_theta = 0.0;
+        g->where_cont_owner_theta[0] = g->where_cont_dominated_theta[0] = '\0';
     }
     s->threads = o && o->threads > 1 ? (o->threads < GS_MAX_THREADS ? o->threads : GS_MAX_THREADS) : 1;
     s->L = calloc((size_t)nlevels, sizeof *s->L);
     s->lights = malloc(sizeof *s->lights * GATE_NLIGHTS * (size_t)nt);
     s->parts = malloc(gs_part_size() * (size_t)s->threads);
     s->clipped = malloc(sizeof *s->clipped * GATE_NLIGHTS * (size_t)nt);
-    mf_status st = s->L && s->lights && s->parts && s->clipped ? MF_OK : MF_ERR_ALLOC;
+    if (s->ref)
+        s->xscr_all = malloc(sizeof(double) * 2 * GATE_MIRROR * (size_t)s->nv * s->threads);
+    s->xscr = s->xscr_all;
+    mf_status st = s->L && s->lights && s->parts && s->clipped && (!s->ref || s->xscr_all) ? MF_OK : MF_ERR_ALLOC;
     for (int a = 0; st == MF_OK && a < nt; ++a)
         gate_lights(a / (double)(nt - 1) * MF_PREFILTER_THETA_MAX, s->lights + GATE_NLIGHTS * a);
     for (int q = 0; st == MF_OK && q < GATE_NLIGHTS * nt; ++q)
@@ -519,9 +551,9 @@ static double gate_excess(double x, double y0, double y1, double r, double r0, d
  * off) shades its own footprint's reference there and the entry's only as well as the two
  * footprints' references agree.  So the check compares the entry's lobe with its neighbours'
  * references, and the neighbours' lobes with its reference (mf_prefilter.h). */
-void mf_prefilter_gate_own_fit(int nlights, const double *S, const double *R, double albedo, int nn,
-                               const double *const *nS, const double *const *nR, const double *nalb,
-                               mf_prefilter_gate_own *out)
+/* The one body of both: xS NULL is the same lights (the entry's lobe under j's lights is S). */
+static void own_fit(int nlights, const double *S, const double *R, double albedo, int nn, const double *const *xS,
+                    const double *const *nR, const double *const *yS, const double *nalb, mf_prefilter_gate_own *out)
 {
     out->owner = out->dominated = 0.0;
     out->owner_at = out->dominated_at = -1;
@@ -535,10 +567,10 @@ void mf_prefilter_gate_own_fit(int nlights, const double *S, const double *R, do
     }
     for (int j = 0; j < nn; ++j) {
         const double ja = 1.0 / fmax(nalb[j], 1e-6);
-        double to = 0.0, from = 0.0; /* |s - r_j|, |s_j - r| */
+        double to = 0.0, from = 0.0; /* |x_j - r_j|, |y_j - r| (same lights: |s - r_j|, |s_j - r|) */
         int ok = 1;
         for (int k = 0; k < nlights; ++k) {
-            double a = S[k] * ia - nR[j][k] * ja, b = nS[j][k] * ja - R[k] * ia;
+            double a = (xS ? xS[j][k] : S[k]) * ia - nR[j][k] * ja, b = yS[j][k] * ja - R[k] * ia;
             ok &= isfinite(a) && isfinite(b);
             to = fmax(to, fabs(a)), from = fmax(from, fabs(b));
         }
@@ -549,6 +581,20 @@ void mf_prefilter_gate_own_fit(int nlights, const double *S, const double *R, do
         if (own - from > out->dominated)
             out->dominated = own - from, out->dominated_at = j;
     }
+}
+
+void mf_prefilter_gate_own_fit(int nlights, const double *S, const double *R, double albedo, int nn,
+                               const double *const *nS, const double *const *nR, const double *nalb,
+                               mf_prefilter_gate_own *out)
+{
+    own_fit(nlights, S, R, albedo, nn, NULL, nR, nS, nalb, out);
+}
+
+void mf_prefilter_gate_own_fit_cross(int nlights, const double *S, const double *R, double albedo, int nn,
+                                     const double *const *xS, const double *const *nR, const double *const *yS,
+                                     const double *nalb, mf_prefilter_gate_own *out)
+{
+    own_fit(nlights, S, R, albedo, nn, xS, nR, yS, nalb, out);
 }
 
 /* The own-fit check's hook into the streamed gate: entry e (the map's row r and column col, for the
@@ -610,6 +656,63 @@ static void gs_own_fit(mf_prefilter_gate_stream *s, int li, int r, int col, int 
                      g->where_cont_dominated, sizeof g->where_cont_dominated, dwhat[sl[o.dominated_at]], L->level, r,
                      col, a, b);
     }
+}
+
+/* Own fit across elevations (docs/prefilter.md, "Own fit across elevations"): column col of row `row` of
+ * level index li, every view.  Each lobe is shaded under its theta neighbours' mirror lights
+ * (gate_shade_theta, into the stream's scratch), then each entry is checked against its theta
+ * neighbours (a - 1, a + 1: the same texel and azimuth) by mf_prefilter_gate_own_fit_cross, every
+ * light judged at its own view: the entry's lobe and reference at its lights, the neighbour's at its. */
+static void gs_own_fit_theta(mf_prefilter_gate_stream *s, int li, int row, int col, const float *m,
+                             const float *magnitude, const double *S, const double *R, const float *A)
+{
+    static const char *what[2] = {"lobe shades the reference of view theta - 1 better than its own",
+                                  "lobe shades the reference of view theta + 1 better than its own"};
+    static const char *dwhat[2] = {"view theta - 1's lobe shades the reference better than its own",
+                                   "view theta + 1's lobe shades the reference better than its own"};
+    mf_prefilter_gate *g = s->g;
+    const gs_level *L = &s->L[li];
+    const int nt = s->nt, np = s->np, nv = s->nv, grow = L->goy + row, gcol = L->gox + col;
+    const size_t c0 = (size_t)col * nv;
+    double *X = s->xscr; /* per view: the lobe under theta a - 1's mirror lights, then a + 1's */
+    for (int a = 0; a < nt; ++a)
+        for (int b = 0; b < np; ++b) {
+            size_t i = c0 + (size_t)a * np + b;
+            gate_shade_theta(m + 9 * i, magnitude[i], a > 0 ? s->lights + GATE_NLIGHTS * (a - 1) : NULL,
+                             a + 1 < nt ? s->lights + GATE_NLIGHTS * (a + 1) : NULL, X + 2 * GATE_MIRROR * (i - c0));
+        }
+    for (int a = 0; a < nt; ++a)
+        for (int b = 0; b < np; ++b) {
+            size_t i = c0 + (size_t)a * np + b, e = (size_t)grow * L->growlen + (size_t)L->gox * nv + i;
+            if (!isfinite(A[i]))
+                continue;
+            double xs[2][GATE_NLIGHTS], ys[2][GATE_NLIGHTS], na[2];
+            const double *xp[2], *yp[2], *rp[2];
+            int dir[2], nn = 0;
+            for (int q = 0; q < 2; ++q) {
+                if (q ? a + 1 >= nt : a < 1)
+                    continue;
+                size_t j = q ? i + (size_t)np : i - (size_t)np;
+                const double *Xi = X + 2 * GATE_MIRROR * (i - c0), *Xj = X + 2 * GATE_MIRROR * (j - c0);
+                for (int k = 0; k < GATE_NLIGHTS; ++k) { /* the lights about the normal: every view's */
+                    xs[nn][k] = k < GATE_MIRROR ? Xi[GATE_MIRROR * q + k] : S[GATE_NLIGHTS * i + k];
+                    ys[nn][k] = k < GATE_MIRROR ? Xj[GATE_MIRROR * (1 - q) + k] : S[GATE_NLIGHTS * j + k];
+                }
+                xp[nn] = xs[nn], yp[nn] = ys[nn], rp[nn] = R + GATE_NLIGHTS * j, na[nn] = A[j], dir[nn] = q;
+                ++nn;
+            }
+            mf_prefilter_gate_own o;
+            mf_prefilter_gate_own_fit_cross(GATE_NLIGHTS, S + GATE_NLIGHTS * i, R + GATE_NLIGHTS * i, A[i], nn, xp, rp,
+                                            yp, na, &o);
+            if (o.owner_at >= 0)
+                gs_worst(o.owner, &g->worst_cont_owner_theta, &s->k_cont_owner_theta, gs_key(li, e, 0, 0),
+                         g->where_cont_owner_theta, sizeof g->where_cont_owner_theta, what[dir[o.owner_at]], L->level,
+                         grow, gcol, a, b);
+            if (o.dominated_at >= 0)
+                gs_worst(o.dominated, &g->worst_cont_dominated_theta, &s->k_cont_dominated_theta, gs_key(li, e, 0, 0),
+                         g->where_cont_dominated_theta, sizeof g->where_cont_dominated_theta, dwhat[dir[o.dominated_at]],
+                         L->level, grow, gcol, a, b);
+        }
 }
 
 /* The texel checks of row r of level index li (its rows r - 1 and r + 1, periodic for the
@@ -843,6 +946,10 @@ static void gs_row_cols(mf_prefilter_gate_stream *s, int level_index, int row, c
                          sizeof g->where_cont_view, "phi error spike", L->level, grow, gcol, a, b);
         }
     }
+    /* own fit across elevations: a column's views are all in this range */
+    if (s->ref)
+        for (int col = c0; col < c1; ++col)
+            gs_own_fit_theta(s, level_index, row, col, m, magnitude, S, R, A);
 }
 
 /* ---- the streamed gate on threads ---------------------------------------------------------------
@@ -874,7 +981,7 @@ static void gs_part_init(gs_part *p, const mf_prefilter_gate_stream *s)
     p->loc.k_energy = p->loc.k_level = p->loc.k_view = p->loc.k_texel = UINT64_MAX;
     p->loc.k_cont_texel = p->loc.k_cont_view = p->loc.k_cont_grazing = p->loc.k_cont_cross = UINT64_MAX;
     p->loc.k_cont_excess = p->loc.k_cont_owner = p->loc.k_cont_owner_view = UINT64_MAX;
-    p->loc.k_cont_dominated = UINT64_MAX;
+    p->loc.k_cont_dominated = p->loc.k_cont_owner_theta = p->loc.k_cont_dominated_theta = UINT64_MAX;
 }
 
 static void *gs_part_run(void *arg)
@@ -908,9 +1015,10 @@ static void gs_merge_res(mf_prefilter_gate_stream *s, const mf_prefilter_gate *r
 static void gs_merge(mf_prefilter_gate_stream *s, const gs_part *p)
 {
     const mf_prefilter_gate_stream *l = &p->loc;
-    const uint64_t key[12] = {l->k_energy,     l->k_level,        l->k_view,       l->k_texel,
+    const uint64_t key[14] = {l->k_energy,     l->k_level,        l->k_view,       l->k_texel,
                               l->k_cont_texel, l->k_cont_view,    l->k_cont_grazing, l->k_cont_cross,
-                              l->k_cont_excess, l->k_cont_owner, l->k_cont_owner_view, l->k_cont_dominated};
+                              l->k_cont_excess, l->k_cont_owner, l->k_cont_owner_view, l->k_cont_dominated,
+                              l->k_cont_owner_theta, l->k_cont_dominated_theta};
     gs_merge_res(s, &p->res, key);
 }
 
@@ -931,6 +1039,8 @@ static void gs_merge_res(mf_prefilter_gate_stream *s, const mf_prefilter_gate *r
     GS_MERGE(worst_cont_owner, 9, k_cont_owner, where_cont_owner);
     GS_MERGE(worst_cont_owner_view, 10, k_cont_owner_view, where_cont_owner_view);
     GS_MERGE(worst_cont_dominated, 11, k_cont_dominated, where_cont_dominated);
+    GS_MERGE(worst_cont_owner_theta, 12, k_cont_owner_theta, where_cont_owner_theta);
+    GS_MERGE(worst_cont_dominated_theta, 13, k_cont_dominated_theta, where_cont_dominated_theta);
 #undef GS_MERGE
     gs_max(r->worst_jump_texel, &g->worst_jump_texel);
     gs_max(r->worst_jump_view, &g->worst_jump_view);
@@ -972,6 +1082,8 @@ static void gs_split(mf_prefilter_gate_stream *s, int n, int task, int li, int r
         for (int q = 0; q < nrows; ++q)
             p->rows[q] = rows[q];
         p->c0 = (int)((long)w * t / n), p->c1 = (int)((long)w * (t + 1) / n);
+        if (s->xscr_all) /* the part's own scratch (its copy of the stream shares the pointers) */
+            p->loc.xscr = s->xscr_all + 2 * GATE_MIRROR * (size_t)s->nv * t;
     }
     gs_parts_run(s, s->parts, n);
 }
@@ -1052,6 +1164,11 @@ mf_status mf_prefilter_gate_stream_end(mf_prefilter_gate_stream *s)
          * lobes (own fit)") */
         g->pass_cont_owner = g->worst_cont_owner <= g->max_cont_owner && g->worst_cont_owner_view <= g->max_cont_owner;
         g->pass = g->pass && g->pass_cont_owner;
+        /* own fit across elevations (docs/prefilter.md, "Own fit across elevations") */
+        g->pass_cont_owner_theta = g->worst_cont_owner_theta <= g->max_cont_owner_theta;
+        g->owner_theta_gated = MF_PREFILTER_GATE_OWN_FIT_THETA_GATED;
+        if (g->owner_theta_gated)
+            g->pass = g->pass && g->pass_cont_owner_theta;
     }
     mf_prefilter_gate_stream_free(s);
     return MF_OK;
@@ -1225,9 +1342,10 @@ mf_status mf_prefilter_gate_region(const mf_prefilter_level *levels, int nlevels
                                               lv->albedo ? lv->albedo + off : NULL, R[l] + GATE_NLIGHTS * off);
     }
     if (st == MF_OK) {
-        const uint64_t key[12] = {s->k_energy,       s->k_level,      s->k_view,          s->k_texel,
+        const uint64_t key[14] = {s->k_energy,       s->k_level,      s->k_view,          s->k_texel,
                                   s->k_cont_texel,   s->k_cont_view,  s->k_cont_grazing,  s->k_cont_cross,
-                                  s->k_cont_excess,  s->k_cont_owner, s->k_cont_owner_view, s->k_cont_dominated};
+                                  s->k_cont_excess,  s->k_cont_owner, s->k_cont_owner_view, s->k_cont_dominated,
+                                  s->k_cont_owner_theta, s->k_cont_dominated_theta};
         memcpy(part->keys, key, sizeof key);
     }
     mf_prefilter_gate_stream_free(s);

@@ -382,12 +382,26 @@ typedef struct mf_prefilter_gate {
      *   owner_view: the same over the azimuth neighbours (phi +- 1, periodic; the same lights);
      *   dominated (reported): the largest, over both, of |s - r| - |s_j - r|, how much better a
      *     neighbour's lobe shades this footprint than the entry's own lobe does.
-     * Every level is covered (the 1 x 1 top level by its azimuth neighbours); theta neighbours are
-     * not (their S and R are of other lights).  pass_cont_owner: owner and owner_view <=
-     * max_cont_owner (MF_PREFILTER_GATE_OWN_FIT) (docs/prefilter.md, "Gating copied lobes (own fit)"). */
+     * Every level is covered (the 1 x 1 top level by its azimuth neighbours).  pass_cont_owner: owner
+     * and owner_view <= max_cont_owner (MF_PREFILTER_GATE_OWN_FIT) (docs/prefilter.md, "Gating copied
+     * lobes (own fit)"). */
     double max_cont_owner, worst_cont_owner, worst_cont_owner_view, worst_cont_dominated;
     int pass_cont_owner;
     char where_cont_owner[128], where_cont_owner_view[128], where_cont_dominated[128];
+    /* (mf_prefilter_gate_run_ref) own fit across elevations: the same measures over the theta
+     * neighbours (a +- 1, the same texel and azimuth), whose gate lights about the mirror direction
+     * lie about another mirror direction.  Each lobe is shaded under its theta neighbours' three
+     * mirror lights as well (the three lights about the normal are the same at every elevation), and
+     * each entry is judged at its own view's lights (mf_prefilter_gate_own_fit_cross):
+     *   owner_theta: max_j |s - r| - |x_j - r_j|, x_j the lobe's shading of j's lights / albedo, r_j
+     *     j's reference of its lights / j's albedo: how much better the lobe shades the neighbouring
+     *     elevation's footprint view than its own (a lobe copied from, or swapped with, j);
+     *   dominated_theta (reported): max_j |s - r| - |y_j - r|, y_j j's lobe under this entry's lights.
+     * pass_cont_owner_theta: owner_theta <= max_cont_owner_theta (MF_PREFILTER_GATE_OWN_FIT_THETA);
+     * owner_theta_gated: 1 when it is part of pass (docs/prefilter.md, "Own fit across elevations"). */
+    double max_cont_owner_theta, worst_cont_owner_theta, worst_cont_dominated_theta;
+    int pass_cont_owner_theta, owner_theta_gated;
+    char where_cont_owner_theta[128], where_cont_dominated_theta[128];
 } mf_prefilter_gate;
 
 /* Sets the default bounds and clears the results. */
@@ -448,6 +462,13 @@ mf_status mf_prefilter_gate_run(const mf_prefilter_level *levels, int nlevels, m
  * and catches as many of the copies and swaps that change a light's shading by 0.4 of the albedo or
  * more as 0.25 did (docs/prefilter.md, "Gating copied lobes (own fit)") */
 #define MF_PREFILTER_GATE_OWN_FIT 0.3
+/* own fit across elevations (owner_theta): bound and whether it is part of pass.  Good runs read at most
+ * 0.218 (the demo V-groove at 4 x 8 views, whose two-normal footprints a single lobe cannot follow;
+ * bump maps 0.147 to 0.169 from 16^2 to 128^2; diffuse tables at most 0.012): a factor 1.37.  It
+ * catches every theta copy, swap and one-elevation shift of >= 0.4 of the albedo measured (57 of 57;
+ * the gate before it 38) (docs/prefilter.md, "Own fit across elevations") */
+#define MF_PREFILTER_GATE_OWN_FIT_THETA 0.3
+#define MF_PREFILTER_GATE_OWN_FIT_THETA_GATED 1
 mf_status mf_prefilter_gate_run_ref(const mf_prefilter_level *levels, int nlevels, const double *normals, int width,
                                     int height, const mf_prefilter_options *o, mf_prefilter_gate *g) MF_WARN_UNUSED;
 
@@ -469,6 +490,17 @@ typedef struct mf_prefilter_gate_own {
 void mf_prefilter_gate_own_fit(int nlights, const double *S, const double *R, double albedo, int nn,
                                const double *const *nS, const double *const *nR, const double *nalb,
                                mf_prefilter_gate_own *out);
+/* The same across lights that differ between the entry and its neighbours (theta neighbours: their
+ * gate lights lie about another mirror direction).  S, R, albedo: the entry's shading and reference of
+ * its own lights; for neighbour j: xS[j] the entry's lobe under j's lights, nR[j] j's reference of
+ * j's lights, yS[j] j's lobe under the entry's lights, nalb[j] j's albedo.  With s, r as above,
+ * x_j = xS[j] / albedo, y_j = yS[j] / nalb[j], r_j = nR[j] / nalb[j]:
+ *   owner = max_j |s - r| - |x_j - r_j|;  dominated = max_j |s - r| - |y_j - r|;
+ * the rest as mf_prefilter_gate_own_fit, which is this function with xS[j] = S and yS[j] = nS[j]
+ * (the same bits). */
+void mf_prefilter_gate_own_fit_cross(int nlights, const double *S, const double *R, double albedo, int nn,
+                                     const double *const *xS, const double *const *nR, const double *const *yS,
+                                     const double *nalb, mf_prefilter_gate_own *out);
 
 /* The gate streamed row by row, for levels not held whole (`mfkit prefilter`'s assembly): the same
  * result as mf_prefilter_gate_run (normals NULL) or mf_prefilter_gate_run_ref (normals, width,
@@ -531,9 +563,9 @@ mf_status mf_prefilter_gate_reference(const mf_prefilter_level *shapes, int nlev
  * tie the smaller key). */
 typedef struct {
     mf_prefilter_gate res; /* the part's worsts, places, reported maxima and NaN count */
-    uint64_t keys[12];     /* the worsts' keys: energy, level, view, texel, cont_texel, cont_view,
+    uint64_t keys[14];     /* the worsts' keys: energy, level, view, texel, cont_texel, cont_view,
                               cont_grazing, cont_cross, cont_excess, cont_owner, cont_owner_view,
-                              cont_dominated */
+                              cont_dominated, cont_owner_theta, cont_dominated_theta */
 } mf_prefilter_gate_part;
 mf_status mf_prefilter_gate_region(const mf_prefilter_level *levels, int nlevels, double *const *R, int map_w,
                                    int map_h, int x0, int y0, int rw, int rh, const mf_prefilter_options *o,
