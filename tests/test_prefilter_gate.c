@@ -490,6 +490,32 @@ static void test_own_fit_cross_values(void)
            "%d (want -1: the neighbour is skipped)", o.owner_at, o.dominated_at);
 }
 
+/* The first entry of level L, in storage order, whose copy from its neighbour (theta 0: texel x + 1,
+ * periodic, at the same view; 1: view a + 1, a - 1 on the last row) changes a gate light's shading by
+ * at least 0.5 of the albedo (lobe_change; the magnitude scaled to keep the entry's albedo); its
+ * neighbour in *from.  L is left as it was; the level's entry count when there is none. */
+static size_t first_big_copy(mf_prefilter_level *L, int nt, int np, int theta, const mf_prefilter_options *o,
+                             size_t *from)
+{
+    const size_t nv = (size_t)nt * np, ne = (size_t)L->width * L->height * nv;
+    float se[10];
+    for (size_t i = 0; i < ne; ++i) {
+        size_t t = i / nv, row = t / (size_t)L->width, col = t % (size_t)L->width;
+        int a = (int)(i / np % nt);
+        size_t j = theta ? (a + 1 < nt ? i + np : i - np)
+                         : (row * (size_t)L->width + (col + 1) % (size_t)L->width) * nv + i % nv;
+        memcpy(se, L->m + 9 * i, 36), se[9] = L->magnitude[i];
+        memcpy(L->m + 9 * i, L->m + 9 * j, 36), L->magnitude[i] = L->albedo[i] / L->albedo[j] * L->magnitude[j];
+        int big = lobe_change(L, i, se, o) >= 0.5;
+        memcpy(L->m + 9 * i, se, 36), L->magnitude[i] = se[9];
+        if (big) {
+            *from = j;
+            return i;
+        }
+    }
+    return ne;
+}
+
 /* The good run's own fit across elevations: passes, above 0 (the check ran). */
 static int good_theta(const mf_prefilter_level *lv, int nl, const double *n, int w, const mf_prefilter_options *o)
 {
@@ -531,17 +557,8 @@ static void test_own_fit_planted(void)
            g.worst_cont_owner, g.max_cont_owner);
     mf_prefilter_level *L = &lv[0];
     const size_t nv = (size_t)nt * np, ne = (size_t)L->width * L->height * nv;
-    size_t e = ne, f = 0;
+    size_t f = 0, e = first_big_copy(L, nt, np, 0, &o, &f);
     float se[10], sf[10];
-    for (size_t i = 0; i < ne && e == ne; ++i) {
-        size_t t = i / nv, row = t / (size_t)L->width, col = t % (size_t)L->width;
-        size_t j = (row * (size_t)L->width + (col + 1) % (size_t)L->width) * nv + i % nv;
-        memcpy(se, L->m + 9 * i, 36), se[9] = L->magnitude[i];
-        memcpy(L->m + 9 * i, L->m + 9 * j, 36), L->magnitude[i] = L->albedo[i] / L->albedo[j] * L->magnitude[j];
-        if (lobe_change(L, i, se, &o) >= 0.5)
-            e = i, f = j;
-        memcpy(L->m + 9 * i, se, 36), L->magnitude[i] = se[9];
-    }
     CHECKF(e < ne, "bump: no level-1 texel copy changes the shading by 0.5 of the albedo (the plant needs one)");
     if (e < ne) {
         memcpy(se, L->m + 9 * e, 36), se[9] = L->magnitude[e];
@@ -573,16 +590,7 @@ static void test_own_fit_planted(void)
      * other gated check passes (the gate of main let them through) */
     CHECKF(good_theta(lv, nl, n, w, &o), "bump: good run fails own fit across elevations or reads 0");
     for (int swap = 0; swap < 2; ++swap) {
-        size_t et = ne, ft = 0;
-        for (size_t i = 0; i < ne && et == ne; ++i) {
-            int a = (int)(i / np % nt);
-            size_t j = a + 1 < nt ? i + np : i - np;
-            memcpy(se, L->m + 9 * i, 36), se[9] = L->magnitude[i];
-            memcpy(L->m + 9 * i, L->m + 9 * j, 36), L->magnitude[i] = L->albedo[i] / L->albedo[j] * L->magnitude[j];
-            if (lobe_change(L, i, se, &o) >= 0.5)
-                et = i, ft = j;
-            memcpy(L->m + 9 * i, se, 36), L->magnitude[i] = se[9];
-        }
+        size_t ft = 0, et = first_big_copy(L, nt, np, 1, &o, &ft);
         CHECKF(et < ne, "bump: no level-1 theta copy changes the shading by 0.5 of the albedo (the plant needs one)");
         if (et == ne)
             break;
