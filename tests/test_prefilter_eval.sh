@@ -97,4 +97,43 @@ cp "$tmp/pf/ltc_mip2.npy" "$tmp/pfshape/ltc_mip1.npy"
 expect_error "level shape mismatch" 2 "does not match" prefilter-eval "$tmp/pfshape" --out "$tmp/bad4"
 ok '[ ! -e "$tmp/bad1" ] && [ ! -e "$tmp/bad2" ] && [ ! -e "$tmp/bad3" ] && [ ! -e "$tmp/bad4" ] && [ ! -e "$tmp/bad5" ]' \
    "refusals leave no output directory: $(ls "$tmp")"
+# the per-level lines on stdout agree with the summary file: per level the mean over its cells (light x
+# elevation) of mse_<method>, printed to 3 significant digits (so a relative tolerance of 5e-3, the
+# rounding of %.3g), the cells where mfkit's MSE is below every baseline's, and whether its level mean
+# is.  On the demo groove (3 x 4 views, 256 directions; about 2 s of CPU) level 1 is lost (naive and
+# Toksvig exact) and levels 2-4 are won in some cells, so both answers and the counts are exercised.
+"$mfkit" prefilter "$src/tests/data/normalmaps/vgroove_16.png" --base ggx --views 3x4 --samples 256 --out "$tmp/pfv" \
+    >"$tmp/pfv.log" 2>&1; rc=$?
+"$mfkit" prefilter-eval "$tmp/pfv" --texels 2 --samples 512 --lights 0.1,0.4 --out "$tmp/evv" >"$tmp/evv.log" 2>&1
+rc2=$?
+res=$($py - "$tmp/evv" "$tmp/evv.log" <<'PY'
+import csv, re, sys
+rows = list(csv.DictReader(open(sys.argv[1] + "/prefilter_eval_summary.csv")))
+lines = [l for l in open(sys.argv[2]) if l.startswith("level ")]
+meth = ("mfkit", "naive", "toksvig", "leadr")
+out, levels, answers = [], sorted({int(r["level"]) for r in rows}), set()
+if len(lines) != len(levels):
+    out.append("%d level lines for %d levels" % (len(lines), len(levels)))
+for lev, line in zip(levels, lines):
+    cells = [r for r in rows if int(r["level"]) == lev]
+    mean = {m: sum(float(r["mse_" + m]) for r in cells) / len(cells) for m in meth}
+    won = sum(all(float(r["mse_mfkit"]) < float(r["mse_" + m]) for m in meth[1:]) for r in cells)
+    best = "yes" if all(mean["mfkit"] < mean[m] for m in meth[1:]) else "no"
+    answers.add(best)
+    got = {m: float(v) for m, v in re.findall(r"(mfkit|naive|toksvig|leadr) ([0-9.e+-]+)[,;]", line)}
+    n = re.search(r"best in (\d+) of (\d+) cells .*best level mean: (yes|no)", line)
+    if set(got) != set(meth) or not n:
+        out.append("level %d: unparsed line %r" % (lev, line.strip())); continue
+    for m in meth:
+        if not abs(got[m] - mean[m]) <= 5e-3 * abs(mean[m]):
+            out.append("level %d: %s printed %g, the file's mean %.6g" % (lev, m, got[m], mean[m]))
+    if (int(n.group(1)), int(n.group(2)), n.group(3)) != (won, len(cells), best):
+        out.append("level %d: printed %s of %s cells, %s; the file: %d of %d, %s" % (lev, n.group(1), n.group(2),
+                   n.group(3), won, len(cells), best))
+if answers != {"yes", "no"}:
+    out.append("the demo should read both yes and no over its levels: %s" % sorted(answers))
+print("; ".join(out) if out else "ok")
+PY
+)
+ok '[ $rc -eq 0 ] && [ $rc2 -eq 0 ] && [ "$res" = ok ]' "prefilter-eval's level lines match its summary file (rc=$rc, $rc2): $res: $(head -2 "$tmp/evv.log")"
 finish test_prefilter_eval
