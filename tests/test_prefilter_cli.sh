@@ -97,6 +97,14 @@ ok '[ ! -e "$tmp/lowa/prefilter.json" ] && [ -z "$(ls "$tmp/lowa")" ]' "--roughn
 own=$(/usr/bin/python3 -c 'import json, sys; o = json.load(open(sys.argv[1]))["gate"]["continuity"]["own_fit"]; print(o["worst"] <= o["bound"], o["worst"], o["bound"])' \
       "$tmp/a05/prefilter.json" 2>/dev/null || echo "no manifest")
 ok '[ $rc -eq 0 ] && [ "${own%% *}" = "True" ]' "--roughness 0.05 on the bump map: own fit across texels within its bound (rc=$rc, within, worst, bound: $own): $(grep -i 'own fit' "$tmp/a05.log" | head -1)"
+# a gate failure below the roughness the gate is tuned at says so, in the same one line (3 x 4 views: the
+# gate fails there, about 3 s of CPU); at the default roughness the failure above (--no-keep-albedo) does not
+"$mfkit" prefilter "$src/tests/data/normalmaps/bump_16.png" --base ggx --roughness 0.05 --views 3x4 --threads 2 \
+    --out "$tmp/a05f" >"$tmp/a05f.log" 2>&1; rc=$?
+ok '[ $rc -eq 1 ] && [ ! -e "$tmp/a05f/prefilter.json" ] && tail -1 "$tmp/a05f.log" |
+    grep -q "gate failed (see above); nothing written .*; roughness 0.05 is below the 0.1 the gate is tuned at"' \
+   "a failed gate at roughness 0.05 names the roughness (rc=$rc): $(tail -1 "$tmp/a05f.log")"
+ok '! grep -q "gate is tuned at" "$tmp/nk.log"' "a failed gate at the default roughness does not: $(grep 'gate failed' "$tmp/nk.log")"
 expect_error "views 0x2 refused" 2 "\-\-views" prefilter "$map" --views 0x2 --out "$tmp/bad1"
 expect_error "missing map" 3 "nonexistent" prefilter "$tmp/nonexistent.png" --out "$tmp/bad2"
 ok '[ ! -e "$tmp/bad1" ] && [ ! -e "$tmp/bad2" ] && [ ! -e "$tmp/bad3" ] && [ ! -e "$tmp/bad4" ] && [ ! -e "$tmp/bad5" ]' "refusals create no output directory: $(ls "$tmp")"

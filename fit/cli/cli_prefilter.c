@@ -1217,8 +1217,16 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
     }
     int rc = 0;
     if (ok && !gate_ok && !A->force) {
-        rc = cli_error(k_cmd, "%s: the gate failed (see above); nothing written (--force writes it, marked unvalidated)",
-                       A->input), rc = CLI_EXIT_CHECK_FAILED;
+        /* below the roughness the gate's bounds were set at, say so: there one lobe's own error reaches them
+         * (docs/prefilter.md, "Fitter revision 9") */
+        char low[320] = "";
+        if (!A->lambert && o->alpha < MF_PREFILTER_GATE_TUNED_ALPHA)
+            snprintf(low, sizeof low,
+                     "; roughness %g is below the %g the gate is tuned at, where one lobe's own error reaches its "
+                     "bounds: compare the lobes with the baselines (mfkit prefilter-eval) before using --force",
+                     o->alpha, MF_PREFILTER_GATE_TUNED_ALPHA);
+        rc = cli_error(k_cmd, "%s: the gate failed (see above); nothing written (--force writes it, marked unvalidated)%s",
+                       A->input, low), rc = CLI_EXIT_CHECK_FAILED;
         mf_io_atomic_abort_all(files, (size_t)nf);
     } else if (!ok) {
         mf_io_atomic_abort_all(files, (size_t)nf);

@@ -469,6 +469,11 @@ mf_status mf_prefilter_gate_run(const mf_prefilter_level *levels, int nlevels, m
  * the gate before it 38) (docs/prefilter.md, "Own fit across elevations") */
 #define MF_PREFILTER_GATE_OWN_FIT_THETA 0.3
 #define MF_PREFILTER_GATE_OWN_FIT_THETA_GATED 1
+/* The GGX roughness every bound above was set at (the default).  Below it one lobe's own error reaches the
+ * bounds on the shipped maps (at 0.05: own fit across elevations 0.30 to 0.35) while the lobes still beat
+ * every baseline per level; bounds scaled with roughness would catch half the corruptions (docs/prefilter.md,
+ * "Fitter revision 9").  `mfkit prefilter` says so when the gate fails below it. */
+#define MF_PREFILTER_GATE_TUNED_ALPHA 0.1
 mf_status mf_prefilter_gate_run_ref(const mf_prefilter_level *levels, int nlevels, const double *normals, int width,
                                     int height, const mf_prefilter_options *o, mf_prefilter_gate *g) MF_WARN_UNUSED;
 
