@@ -136,4 +136,31 @@ print("; ".join(out) if out else "ok")
 PY
 )
 ok '[ $rc -eq 0 ] && [ $rc2 -eq 0 ] && [ "$res" = ok ]' "prefilter-eval's level lines match its summary file (rc=$rc, $rc2): $res: $(head -2 "$tmp/evv.log")"
+# fitter revision 10: the fit sees the magnitude it stores (the albedo over the lobe's mass above the
+# horizon).  The constant map at alpha 0.03, default views, level 1, view (77.1 deg, 202.5 deg): the
+# tilted texel faces away and its lobe leaves the hemisphere by 8 to 12 %.  The lobe's shading of the
+# h = 0.2 and 0.8 lights must be within 10 % of the Monte Carlo truth (plus 3 standard errors, about
+# 0.3 %): 10 % is about one LTC's own error for a GGX lobe at 77 deg; revision 10 reads 6.1 % and 3.3 %,
+# revision 9 (magnitude not in the fit: the stored lobe 1 / h times the fitted one) 17 % and 16 %.
+# (--force: the gate is not the subject here.)  About 4 s of CPU.
+"$mfkit" prefilter "$tmp/const_4.png" --base ggx --roughness 0.03 --threads 2 --force --out "$tmp/pf03" >"$tmp/pf03.log" 2>&1
+rc=$?
+"$mfkit" prefilter-eval "$tmp/pf03" --texels 1 --samples 65536 --lights 0.2,0.8 --out "$tmp/ev03" >"$tmp/ev03.log" 2>&1
+rc2=$?
+res=$($py - "$tmp/ev03" <<'PY'
+import csv, sys
+sel = [r for r in csv.DictReader(open(sys.argv[1] + "/prefilter_eval.csv"))
+       if r["level"] == "1" and r["i_theta"] == "6" and r["i_phi"] == "9"]
+out = [] if len(sel) == 2 else ["%d records at (6, 9), want 2" % len(sel)]
+for r in sel:
+    t, m, se = float(r["truth"]), float(r["mfkit"]), float(r["truth_se"])
+    print("h %.1f: truth %.6f (se %.2g), lobe %.6f, %+.1f %%" % (float(r["light_half_side"]), t, se, m, 100 * (m - t) / t),
+          file=sys.stderr)
+    if not abs(m - t) <= 0.10 * t + 3 * se:
+        out.append("h %.1f: lobe %.6f against truth %.6f (%+.1f %%, bound 10 %% + 3 se)" % (float(r["light_half_side"]), m, t,
+                   100 * (m - t) / t))
+print("; ".join(out) if out else "ok")
+PY
+)
+ok '[ $rc -eq 0 ] && [ $rc2 -eq 0 ] && [ "$res" = ok ]' "a grazing lobe leaving the hemisphere shades within 10 % (rc=$rc, $rc2): $res"
 finish test_prefilter_eval

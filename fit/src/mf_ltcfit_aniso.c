@@ -107,6 +107,7 @@ typedef struct {
     int mixed;       /* the weights of the table's default objective (light_weight) */
     int family;      /* FAMILY_* of the lights */
     double ladder;   /* the options' ladder_alpha (FAMILY_SHAPED; set before atexel_prepare) */
+    double hmin;     /* the options' horizon_min (fit_magnitude; set before atexel_prepare) */
     uint64_t *mask;  /* NULL, or per live direction the lights (bit k) it is inside (inside_masks) */
     int mask_ok;     /* mask holds this preparation's sets */
     /* residual_fn's light integrals at the point ic_p (ic 0: none, 1: their values ic_e, 2: also
@@ -1294,6 +1295,66 @@ int mf_ltcfit_aniso_mask_compare(const double *dirs, int n, const double axis[3]
 
 /* ---- the least-squares problem ---------------------------------------------------------------- */
 
+/* The magnitude the lights' integrals are scaled by at p.  t->hmin 0: the given one.  t->hmin > 0, the
+ * prefilter's keep-albedo rule: the given magnitude (the effective BRDF's albedo) over the lobe's mass
+ * above the horizon, max(h, hmin), h = (1 + n.z) / 2 with n = M^T z / |M^T z| (row 2 of the view matrix;
+ * mf_prefilter.c, horizon_mass).  That is the magnitude the prefilter stores, so the fit minimises the
+ * error of the stored lobe; with the given magnitude instead (fitter revisions up to 9) the stored lobe
+ * read 1 / h times the fitted one, up to 13 % high where a grazing lobe leaves the hemisphere
+ * (docs/prefilter.md, "Fitter revision 10"). */
+static double horizon_h(const atexel *t, const double *p)
+{
+    mf_mat3 m = view_matrix(t, p);
+    double n = sqrt(m.m[2][0] * m.m[2][0] + m.m[2][1] * m.m[2][1] + m.m[2][2] * m.m[2][2]);
+    return n > 0.0 ? 0.5 * (1.0 + m.m[2][2] / n) : 0.0;
+}
+
+static double fit_magnitude(const atexel *t, const double *p)
+{
+    if (!(t->hmin > 0.0))
+        return t->magnitude;
+    return t->magnitude / fmax(horizon_h(t, p), t->hmin);
+}
+
+/* With t->hmin > 0 the lights no longer hold the lobe above the horizon (the magnitude makes up for
+ * its lost mass), and below hmin the stored lobe loses energy (the prefilter's energy check): so a
+ * barrier, HORIZON_BARRIER (HORIZON_MARGIN + hmin - h) where h < hmin + HORIZON_MARGIN, added to the
+ * width barrier's residual (its gradient in g by forward differences, as fit_magnitude_grad).  Without
+ * it the demo groove's level-2 lobe at 38.6 deg kept h = 0.44 (energy check 0.12).  The margin, on the
+ * demo (prefilter-eval, levels 2-4, mean MSE): 0.05 1.57e-3, 0.25 1.48e-3, 0.35 1.55e-3 (revision 9:
+ * 1.43e-3); a 32 x 32 bump map read the same with all three. */
+#define HORIZON_MARGIN 0.25
+#define HORIZON_BARRIER 10.0
+static double horizon_barrier(const atexel *t, const double *p, double *g)
+{
+    if (!(t->hmin > 0.0))
+        return 0.0;
+    double h1 = t->hmin + HORIZON_MARGIN, b = HORIZON_BARRIER * fmax(0.0, h1 - horizon_h(t, p));
+    for (int j = 0; g && j < NP; ++j) {
+        double q[NP], hs = 1e-7 * fmax(1.0, fabs(p[j]));
+        memcpy(q, p, sizeof q);
+        q[j] = p[j] + hs;
+        if (!valid(q))
+            q[j] = p[j] - hs, hs = -hs;
+        g[j] = valid(q) ? (HORIZON_BARRIER * fmax(0.0, h1 - horizon_h(t, q)) - b) / hs : 0.0;
+    }
+    return b;
+}
+
+/* fit_magnitude's gradient in p, by forward differences (a step of 1e-7 relative, backward where the
+ * forward point is not valid): a smooth function of p but for the kink at h = hmin. */
+static void fit_magnitude_grad(const atexel *t, const double *p, double mag, double *g)
+{
+    for (int j = 0; j < NP; ++j) {
+        double q[NP], hs = 1e-7 * fmax(1.0, fabs(p[j]));
+        memcpy(q, p, sizeof q);
+        q[j] = p[j] + hs;
+        if (!valid(q))
+            q[j] = p[j] - hs, hs = -hs;
+        g[j] = valid(q) ? (fit_magnitude(t, q) - mag) / hs : 0.0;
+    }
+}
+
 /* Proximal residuals towards the warm start: the scales a, d relative, the shears absolute. */
 static int is_scale(int i) { return i == PA || i == PD; }
 
@@ -1324,12 +1385,16 @@ static int residual_fn(void *user, const double *p, double *res, double *jac)
         memcpy(t->ic_p, p, sizeof t->ic_p);
         t->ic = grad ? 2 : 1;
     }
+    const double mag = fit_magnitude(t, p);
+    double dmag[NP] = {0.0};
+    if (jac && t->hmin > 0.0)
+        fit_magnitude_grad(t, p, mag, dmag);
     for (int k = 0; k < t->k; ++k) {
         const double e = t->ic_e[k], *g = t->ic_g[k];
-        res[k] = (t->magnitude * e - t->target[k]) * t->inv_weight[k];
+        res[k] = (mag * e - t->target[k]) * t->inv_weight[k];
         if (jac)
             for (int j = 0; j < NP; ++j)
-                jac[NP * k + j] = t->magnitude * g[j] * t->inv_weight[k];
+                jac[NP * k + j] = (mag * g[j] + (t->hmin > 0.0 ? e * dmag[j] : 0.0)) * t->inv_weight[k];
     }
     for (int i = 0; i < NP; ++i) {
         double w = t->prox > 0.0 ? (is_scale(i) ? t->prox / t->prox_at[i] : t->prox) : 0.0;
@@ -1339,10 +1404,11 @@ static int residual_fn(void *user, const double *p, double *res, double *jac)
                 jac[NP * (t->k + i) + j] = j == i ? w : 0.0;
     }
     dual b = width_barrier(p);
-    res[t->k + NP] = b.v;
+    double hg[NP] = {0.0}, hb = horizon_barrier(t, p, jac ? hg : NULL);
+    res[t->k + NP] = b.v + hb;
     if (jac)
         for (int j = 0; j < NP; ++j)
-            jac[NP * (t->k + NP) + j] = b.d[j];
+            jac[NP * (t->k + NP) + j] = b.d[j] + hg[j];
     return 0;
 }
 
@@ -1360,10 +1426,11 @@ static double cost_at_bound(const atexel *t, const double *p, double bound)
      * values are the same bits (the final residual and the convergence test at the
      * solver's last point mostly) */
     int kept = t->ic >= 1 && memcmp(t->ic_p, p, sizeof t->ic_p) == 0;
+    const double mag = fit_magnitude(t, p);
     double c = 0.0;
     for (int k = 0; k < t->k; ++k) {
         double e = kept ? t->ic_e[k] : integral_value(t->lights[k].lobe_poly.v, t->lights[k].lobe_poly.n, adj);
-        double r = (t->magnitude * e - t->target[k]) * t->inv_weight[k];
+        double r = (mag * e - t->target[k]) * t->inv_weight[k];
         c += r * r;
         if (c > bound)
             return c;
@@ -1373,7 +1440,7 @@ static double cost_at_bound(const atexel *t, const double *p, double bound)
         double r = w * (p[i] - t->prox_at[i]);
         c += r * r;
     }
-    double b = width_barrier(p).v;
+    double b = width_barrier(p).v + horizon_barrier(t, p, NULL);
     return c + b * b;
 }
 
@@ -1515,6 +1582,7 @@ int mf_ltcfit_aniso_closed_form_compare(const mf_brdf_model *model, mf_brdf_para
     double mag[2] = {magnitude, 0.0};
     if (ok) {
         t->ladder = prm.alpha_x; /* the prefilter's ladder of base-lobe-sized lights */
+        t->hmin = 0.0;
         ok = atexel_prepare(model, prm, theta, 0.0, mirrors, FAMILY_SHAPED, mag, scr, &ws, t) == MF_OK;
     }
     int n = 0;
@@ -1743,6 +1811,7 @@ static mf_status fit_entry_starts(const mf_brdf_model *model, mf_brdf_params prm
         return MF_ERR_ALLOC;
     memset(out, 0, sizeof *out);
     t->ladder = o->ladder_alpha;
+    t->hmin = family == FAMILY_SHAPED ? o->horizon_min : 0.0;
     mf_status st = atexel_prepare(model, prm, theta, phi, sym, family, given_mag, scr, ws, t);
     t->mask = mask;
     t->mask_ok = 0;
@@ -1776,7 +1845,7 @@ static int check_options(const mf_ltcfit_aniso_options *o)
         (o->samples & (o->samples - 1)) || o->max_iterations < 1 ||
         (o->param != MF_LTC_ANISO_PARAM_ALPHA_XY && o->param != MF_LTC_ANISO_PARAM_ALPHA_LAMBDA) ||
         (o->objective != MF_LTCFIT_ANISO_OBJECTIVE_DEFAULT && o->objective != MF_LTCFIT_ANISO_OBJECTIVE_RELATIVE) ||
-        !(o->ladder_alpha >= 0.0 && o->ladder_alpha < INFINITY))
+        !(o->ladder_alpha >= 0.0 && o->ladder_alpha < INFINITY) || !(o->horizon_min >= 0.0 && o->horizon_min < 1.0))
         return 0;
     for (int k = 0; k < 4; ++k)
         if (o->n[k] < 2 || o->n[k] > 256)
@@ -1952,7 +2021,7 @@ mf_status mf_ltcfit_aniso_entry_fit_mirrored_multi(const mf_brdf_model *model, m
     sobol_scramble(o->seed, scr);
     atexel *t = malloc(sizeof *t);
     if (t)
-        t->ladder = o->ladder_alpha;
+        t->ladder = o->ladder_alpha, t->hmin = o->horizon_min;
     mf_status st = t ? atexel_prepare(model, prm, theta, 0.0, mirrors, FAMILY_SHAPED, mag, scr, &w->ws, t) : MF_ERR_ALLOC;
     if (t) {
         t->mask = w->mask;

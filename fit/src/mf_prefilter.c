@@ -1439,6 +1439,13 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
     fo.seed = o->seed;
     /* the ladder of base-lobe-sized lights (revision 6; mf_ltcfit_aniso_options.ladder_alpha) */
     fo.ladder_alpha = o->fit_lights == MF_PREFILTER_LIGHTS_LADDER && o->base == MF_PREFILTER_BASE_GGX ? o->alpha : 0.0;
+    /* GGX: the stored magnitude (store: the albedo over the lobe's mass above the horizon) in the fit's
+     * objective (revision 10; mf_ltcfit_aniso.c, fit_magnitude).  Measured on make_bump.py 32 (8 x 16
+     * views, prefilter-eval --texels 64 --samples 1024): mean MSE per level 1-5 -17 % to -45 %; the demo
+     * groove: level 1 -44 %, levels 2-4 +3.5 %, its grazing scene -5 % to -39 %, its normal scene at
+     * lod 2 +24 % (docs/prefilter.md, "Fitter revision 10").  Not for Lambert: its levels 1 and 2 read
+     * 30 % and 53 % worse, so the diffuse table keeps revision 9's lobes. */
+    fo.horizon_min = o->keep_albedo && o->base == MF_PREFILTER_BASE_GGX ? MF_PREFILTER_HORIZON_MIN : 0.0;
     mf_brdf_params p = base_params(o);
     /* the per-component arrays (rn .. key) are sized by the component count nc, known after the
      * clustering: bounded for the largest footprints (one per occupied slope cell) */

@@ -149,6 +149,11 @@ typedef struct mf_ltcfit_aniso_options {
                                  * that resolve a mixture of base lobes whose own spread sizes every other
                                  * light; mf_ltcfit_aniso.c, "The ladder").  The
                                  * random family of the table and of mf_ltcfit_aniso_entry_fit never reads it */
+    double horizon_min;         /* 0 (default): the lights' integrals are scaled by the given magnitude.  In
+                                 * (0, 1) (the prefilter's keep-albedo rule, the structured family only): by
+                                 * magnitude / max(h, horizon_min), h the lobe's mass above the horizon, the
+                                 * magnitude the prefilter stores, so the fit sees the lobe as it is stored
+                                 * (mf_ltcfit_aniso.c, fit_magnitude) */
 } mf_ltcfit_aniso_options;
 
 #define MF_LTCFIT_ANISO_LADDER 8

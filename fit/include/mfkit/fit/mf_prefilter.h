@@ -121,7 +121,7 @@ extern "C" {
 #define MF_PREFILTER_COS_MIN 0.001
 /* Names the fitted values: bump it whenever they change (objective, starts, constants), so that a
  * resumed `mfkit prefilter` refuses tiles of another revision. */
-#define MF_PREFILTER_REVISION 9
+#define MF_PREFILTER_REVISION 10
 #define MF_PREFILTER_ALBEDO_N 64
 #define MF_PREFILTER_THETA_MAX (0.999 * 0.5 * MF_PI)
 /* Footprints of at least MF_PREFILTER_CLUSTER_MIN texels are fitted to a clustered mixture: cells
