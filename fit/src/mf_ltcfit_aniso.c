@@ -1316,34 +1316,10 @@ static double fit_magnitude(const atexel *t, const double *p)
     return t->magnitude / fmax(horizon_h(t, p), t->hmin);
 }
 
-/* With t->hmin > 0 the lights no longer hold the lobe above the horizon (the magnitude makes up for
- * its lost mass), and below hmin the stored lobe loses energy (the prefilter's energy check): so a
- * barrier, HORIZON_BARRIER (HORIZON_MARGIN + hmin - h) where h < hmin + HORIZON_MARGIN, added to the
- * width barrier's residual (its gradient in g by forward differences, as fit_magnitude_grad).  Without
- * it the demo groove's level-2 lobe at 38.6 deg kept h = 0.44 (energy check 0.12).  The margin, on the
- * demo (prefilter-eval, levels 2-4, mean MSE): 0.05 1.57e-3, 0.25 1.48e-3, 0.35 1.55e-3 (revision 9:
- * 1.43e-3); a 32 x 32 bump map read the same with all three. */
-#define HORIZON_MARGIN 0.25
-#define HORIZON_BARRIER 10.0
-static double horizon_barrier(const atexel *t, const double *p, double *g)
-{
-    if (!(t->hmin > 0.0))
-        return 0.0;
-    double h1 = t->hmin + HORIZON_MARGIN, b = HORIZON_BARRIER * fmax(0.0, h1 - horizon_h(t, p));
-    for (int j = 0; g && j < NP; ++j) {
-        double q[NP], hs = 1e-7 * fmax(1.0, fabs(p[j]));
-        memcpy(q, p, sizeof q);
-        q[j] = p[j] + hs;
-        if (!valid(q))
-            q[j] = p[j] - hs, hs = -hs;
-        g[j] = valid(q) ? (HORIZON_BARRIER * fmax(0.0, h1 - horizon_h(t, q)) - b) / hs : 0.0;
-    }
-    return b;
-}
-
-/* fit_magnitude's gradient in p, by forward differences (a step of 1e-7 relative, backward where the
- * forward point is not valid): a smooth function of p but for the kink at h = hmin. */
-static void fit_magnitude_grad(const atexel *t, const double *p, double mag, double *g)
+/* The gradient in p of f (fit_magnitude, horizon_barrier_value) by forward differences, f0 = f(t, p): a
+ * step of 1e-7 relative, backward where the forward point is not valid; smooth functions of p but for
+ * their kinks at h = hmin and hmin + HORIZON_MARGIN. */
+static void fd_grad(const atexel *t, const double *p, double f0, double (*f)(const atexel *, const double *), double *g)
 {
     for (int j = 0; j < NP; ++j) {
         double q[NP], hs = 1e-7 * fmax(1.0, fabs(p[j]));
@@ -1351,8 +1327,30 @@ static void fit_magnitude_grad(const atexel *t, const double *p, double mag, dou
         q[j] = p[j] + hs;
         if (!valid(q))
             q[j] = p[j] - hs, hs = -hs;
-        g[j] = valid(q) ? (fit_magnitude(t, q) - mag) / hs : 0.0;
+        g[j] = valid(q) ? (f(t, q) - f0) / hs : 0.0;
     }
+}
+
+/* With t->hmin > 0 the lights no longer hold the lobe above the horizon (the magnitude makes up for
+ * its lost mass), and below hmin the stored lobe loses energy (the prefilter's energy check): so a
+ * barrier, HORIZON_BARRIER (HORIZON_MARGIN + hmin - h) where h < hmin + HORIZON_MARGIN, added to the
+ * width barrier's residual (its gradient in g by forward differences, fd_grad).  Without
+ * it the demo groove's level-2 lobe at 38.6 deg kept h = 0.44 (energy check 0.12).  The margin, on the
+ * demo (prefilter-eval, levels 2-4, mean MSE): 0.05 1.57e-3, 0.25 1.48e-3, 0.35 1.55e-3 (revision 9:
+ * 1.43e-3); a 32 x 32 bump map read the same with all three. */
+#define HORIZON_MARGIN 0.25
+#define HORIZON_BARRIER 10.0
+static double horizon_barrier_value(const atexel *t, const double *p)
+{
+    return t->hmin > 0.0 ? HORIZON_BARRIER * fmax(0.0, t->hmin + HORIZON_MARGIN - horizon_h(t, p)) : 0.0;
+}
+
+static double horizon_barrier(const atexel *t, const double *p, double *g)
+{
+    double b = horizon_barrier_value(t, p);
+    if (g && t->hmin > 0.0)
+        fd_grad(t, p, b, horizon_barrier_value, g);
+    return b;
 }
 
 /* Proximal residuals towards the warm start: the scales a, d relative, the shears absolute. */
@@ -1388,7 +1386,7 @@ static int residual_fn(void *user, const double *p, double *res, double *jac)
     const double mag = fit_magnitude(t, p);
     double dmag[NP] = {0.0};
     if (jac && t->hmin > 0.0)
-        fit_magnitude_grad(t, p, mag, dmag);
+        fd_grad(t, p, mag, fit_magnitude, dmag);
     for (int k = 0; k < t->k; ++k) {
         const double e = t->ic_e[k], *g = t->ic_g[k];
         res[k] = (mag * e - t->target[k]) * t->inv_weight[k];
