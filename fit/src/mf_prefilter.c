@@ -1354,24 +1354,13 @@ static mf_status fit_row_entry(mf_prefilter_mix *mix, const mf_brdf_params *p, d
     double fth = mix->kind == MF_PREFILTER_BASE_LAMBERT ? 0.0 : th;
     if (!nb && cos(th) < MF_PREFILTER_MULTISTART_COS)
         return mf_ltcfit_aniso_entry_fit_mirrored_two(&mix->model, *p, fth, mir, alb[0], alb[1], prev, NULL, fo, e);
-    if (!nb) { /* revision 9: the continuity rule along theta */
-        const double *two[2] = {prev, NULL};
-        mf_ltcfit_aniso_entry et[2];
-        int nt = 0;
-        st = mf_ltcfit_aniso_entry_fit_mirrored_multi(&mix->model, *p, fth, mir, alb[0], alb[1], two, 2, -1.0, fo, et,
-                                                      &nt);
-        if (st != MF_OK)
-            return st;
-        int keep = nt > 1 && et[1].residual * (1.0 + MF_PREFILTER_CONTINUITY_MARGIN) < et[0].residual;
-        *e = et[keep];
-        e->iterations = et[0].iterations + (nt > 1 ? et[1].iterations : 0);
-        return MF_OK;
-    }
-    const double *starts[3] = {nb, prev, NULL};
+    /* with nb: nb, prev and the closed form; without (the first azimuth, revision 9: the continuity rule
+     * along theta): prev and the closed form, prev's kept unless the other is lower by the margin */
+    const double *starts[3] = {nb ? nb : prev, nb ? prev : NULL, NULL};
     int nsolved = 0;
     mf_ltcfit_aniso_entry ee[3];
-    st = mf_ltcfit_aniso_entry_fit_mirrored_multi(&mix->model, *p, fth, mir, alb[0], alb[1], starts, 3,
-                                                  nb_res >= 0.0 ? MF_PREFILTER_ACCEPT * nb_res : -1.0, fo, ee,
+    st = mf_ltcfit_aniso_entry_fit_mirrored_multi(&mix->model, *p, fth, mir, alb[0], alb[1], starts, nb ? 3 : 2,
+                                                  nb && nb_res >= 0.0 ? MF_PREFILTER_ACCEPT * nb_res : -1.0, fo, ee,
                                                   &nsolved);
     if (st != MF_OK)
         return st;
