@@ -6,7 +6,8 @@
  * the view's mirror direction (elevation clamped to 75 deg, as prefilter-eval and the fit's ladder
  * place them), the shading of
  *   truth    the footprint's effective BRDF (mf_prefilter_mix, every texel) by Monte Carlo over the
- *            light's area (--samples uniform points, as prefilter-eval);
+ *            light (--samples points, even: half uniform on the light's area, half from the
+ *            mixture, balance heuristic, as prefilter-eval);
  *   stored   the stored lobe: magnitude x the LTC integral (ltc_mip<L>.npy, magnitude_mip<L>.npy);
  *   lookup   the lobe of the C twin of the GLSL lookup (mf_prefilter_lookup) at the texel's centre,
  *            lod L and the tabulated view: whether the table's filter returns the stored lobe;
@@ -96,28 +97,28 @@ static double horizon_mass(const double m[9])
     return 0.5 * (1.0 + m[8] / sqrt(m[6] * m[6] + m[7] * m[7] + m[8] * m[8]));
 }
 
-/* truth, naive and Toksvig on the same uniform points of the light (prefilter-eval's estimator). */
+/* truth, naive and Toksvig on the same points and weights (prefilter-eval's estimator: half uniform on
+ * the light, half from the footprint's mixture, mf_prefilter_quad_mis_sample). */
 static void mc_shading(mf_prefilter_mix *truth, mf_prefilter_mix *naive, double alpha, double alpha_t, double theta,
                        double h, int samples, double out[3])
 {
-    mf_vec3 c, e1, e2;
-    light_frame(theta, &c, &e1, &e2);
+    mf_prefilter_quad q;
+    light_frame(theta, &q.c, &q.e1, &q.e2);
+    q.h = h;
     mf_vec3 wo = mf_vec3_make(sin(theta), 0.0, cos(theta));
     mf_brdf_params p = mf_brdf_params_iso(alpha), pt = mf_brdf_params_iso(alpha_t);
     mf_pcg32 rng;
     mf_pcg32_seed(&rng, 1, 0);
-    double s[3] = {0, 0, 0}, area = 4.0 * h * h;
+    double s[3] = {0, 0, 0};
     for (int i = 0; i < samples; ++i) {
-        double a = (2.0 * mf_pcg32_next_double(&rng) - 1.0) * h, b = (2.0 * mf_pcg32_next_double(&rng) - 1.0) * h;
-        mf_vec3 x = light_point(c, e1, e2, a, b);
-        double r2 = x.x * x.x + x.y * x.y + x.z * x.z, rl = sqrt(r2);
-        mf_vec3 wi = mf_vec3_make(x.x / rl, x.y / rl, x.z / rl);
-        if (!(wi.z > 0.0))
+        double u[2] = {mf_pcg32_next_double(&rng), mf_pcg32_next_double(&rng)}, f;
+        mf_vec3 wi;
+        double w = mf_prefilter_quad_mis_sample(truth, &p, wo, &q, i & 1, u, &wi, &f);
+        if (!(w > 0.0))
             continue;
-        double jac = area * fabs(wi.x * c.x + wi.y * c.y + wi.z * c.z) / r2;
-        s[0] += truth->model.eval_cos(&truth->model, &p, wo, wi) * jac;
-        s[1] += naive->model.eval_cos(&naive->model, &p, wo, wi) * jac;
-        s[2] += naive->model.eval_cos(&naive->model, &pt, wo, wi) * jac;
+        s[0] += f * w;
+        s[1] += naive->model.eval_cos(&naive->model, &p, wo, wi) * w;
+        s[2] += naive->model.eval_cos(&naive->model, &pt, wo, wi) * w;
     }
     for (int k = 0; k < 3; ++k)
         out[k] = s[k] / samples;
@@ -273,7 +274,7 @@ int main(int argc, char **argv)
         ++nl;
         p = *end == ',' ? end + 1 : end;
     }
-    if (!dir || level < 1 || samples < 16 || nl < 1)
+    if (!dir || level < 1 || samples < 16 || samples % 2 || nl < 1)
         return usage();
 
     char path[4200], msg[4400], mapbuf[4096];

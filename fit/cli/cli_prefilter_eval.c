@@ -10,8 +10,10 @@
  *
  *   truth    (1/N) sum_q integral_light f(R_q^T wo, R_q^T wi) (R_q^T wi).z dwi
  *            [Nahmias 2022, Eq. 2.36], wi.z > 0, with the prefilter's below-horizon rule
- *            (mf_prefilter.h); Monte Carlo over the light's area (uniform points, fixed seed)
- *            with its standard error;
+ *            (mf_prefilter.h); Monte Carlo with its standard error (fixed seed): half the
+ *            points uniform on the light's area, half from the footprint's mixture, combined by
+ *            the balance heuristic (mf_prefilter_quad_mis_sample; before, uniform points alone,
+ *            whose noise grows as the lobe narrows);
  *   truth_ltc the thesis' reference [Nahmias 2022, Sec. 4.1]: (1/N) sum_q of the per-texel LTC
  *            shading, the base GGX's isotropic LTC at the texel-frame view elevation rotated to
  *            n(q), integrated over the light in closed form (mf_prefilter_texel_ltc); the table is
@@ -41,8 +43,10 @@
  *   leadr, then mean_leadr_se.  --ltc-table is refused for such a table.
  *
  * Every method's error is reported against both truths (GGX).
- * The baselines are integrated with the same light samples as the truth (so their differences
- * from it carry little Monte Carlo noise); mfkit's lobe is integrated in closed form.
+ * The baselines are integrated with the same samples and weights as the truth (so their differences
+ * from it carry little Monte Carlo noise); mfkit's lobe is integrated in closed form, so its error
+ * against the truth includes the truth's own noise (truth_se; docs/prefilter.md, "The evaluation's
+ * Monte Carlo truth").
  * The light: a square of half side h at distance 1, facing the origin, centred on the mirror
  * direction of the view, its elevation clamped to at most 75 deg so the lights of grazing views
  * stay mostly above the horizon; what lies below the geometric horizon contributes nothing.
@@ -68,7 +72,7 @@ static const cli_opt k_opts[E_NOPTS] = {
     {.name = "--lights", .metavar = "H,H,...", .kind = CLI_OPT_STRING, .def = "0.05,0.2,0.5",
      .help = "half sides of the square lights at distance 1 (1 to 8 values in (0, 10])"},
     {.name = "--samples", .metavar = "N", .kind = CLI_OPT_INT, .lo = 16, .hi = 1 << 24, .def = "4096",
-     .help = "Monte Carlo points on the light per record"},
+     .help = "Monte Carlo points per record (even: half uniform on the light, half from the footprint's BRDF)"},
     {.name = "--texels", .metavar = "N", .kind = CLI_OPT_INT, .lo = 1, .hi = 1 << 24, .def = "16",
      .help = "at most N texels per level, evenly spaced in row-major order"},
     {.name = "--seed", .metavar = "S", .kind = CLI_OPT_INT, .lo = 0, .hi = 1L << 30, .def = "1",
@@ -92,7 +96,7 @@ static const cli_command k_eval_cmd = {
     .description =
         "Shading error of the prefiltered lobes (magnitude x LTC integral over square lights) against the\n"
         "ground truth (the footprint average of the exact base-GGX integral, Monte Carlo with its standard\n"
-        "error) and against the thesis' per-texel LTC shading, beside the baselines naive (mean normal),\n"
+        "error: light and BRDF samples, balance heuristic) and against the thesis' per-texel LTC shading, beside the baselines naive (mean normal),\n"
         "Toksvig (mean normal, widened roughness) and LEADR.\n"
         "A diffuse (Lambert) table (mfkit prefilter's DIR/diffuse, or --base lambert) is compared with the exact\n"
         "truth (the footprint average of each texel's Lambert integral over the light, in closed form), beside\n"
@@ -309,28 +313,27 @@ static int eval_record(const mf_brdf_model *ggx, const pe_itab *itab, double alp
     mf_brdf_params p = mf_brdf_params_iso(alpha), pt = mf_brdf_params_iso(alpha_t);
     mf_pcg32 rng;
     mf_pcg32_seed(&rng, seed, 0);
-    double area = 4.0 * hside * hside;
-    double s[4] = {0, 0, 0, 0}, s2 = 0;
+    /* the truth's samples, shared by the baselines: half uniform points of the light, half from the
+     * footprint's mixture, weighted by the balance heuristic (mf_prefilter_quad_mis_sample) */
+    const mf_prefilter_quad quad = {c, e1, e2, hside};
+    double s[4] = {0, 0, 0, 0}, n2[2] = {0, 0}, s1[2] = {0, 0}, sq[2] = {0, 0};
     for (int i = 0; i < samples; ++i) {
-        double a = (2.0 * mf_pcg32_next_double(&rng) - 1.0) * hside;
-        double b = (2.0 * mf_pcg32_next_double(&rng) - 1.0) * hside;
-        mf_vec3 x = mf_vec3_make(c.x + a * e1.x + b * e2.x, c.y + a * e1.y + b * e2.y, c.z + a * e1.z + b * e2.z);
-        double r2 = x.x * x.x + x.y * x.y + x.z * x.z, rl = sqrt(r2);
-        mf_vec3 wi = mf_vec3_make(x.x / rl, x.y / rl, x.z / rl);
-        if (!(wi.z > 0.0))
-            continue; /* below the geometric horizon: contributes 0 to every method */
-        double jac = area * fabs(wi.x * c.x + wi.y * c.y + wi.z * c.z) / r2;
-        double ft = truth.model.eval_cos(&truth.model, &p, wo, wi) * jac;
-        s[0] += ft, s2 += ft * ft;
-        s[1] += naive.model.eval_cos(&naive.model, &p, wo, wi) * jac;
-        s[2] += naive.model.eval_cos(&naive.model, &pt, wo, wi) * jac;
-        s[3] += mf_leadr_specular(&g, fr, wo, wi) * jac;
+        double u[2] = {mf_pcg32_next_double(&rng), mf_pcg32_next_double(&rng)}, ft;
+        mf_vec3 wi;
+        int k = i & 1;
+        double w = mf_prefilter_quad_mis_sample(&truth, &p, wo, &quad, k, u, &wi, &ft);
+        n2[k] += 1.0;
+        if (!(w > 0.0))
+            continue; /* off the light or below the geometric horizon: 0 for every method */
+        ft *= w;
+        s1[k] += ft, sq[k] += ft * ft;
+        s[1] += naive.model.eval_cos(&naive.model, &p, wo, wi) * w;
+        s[2] += naive.model.eval_cos(&naive.model, &pt, wo, wi) * w;
+        s[3] += mf_leadr_specular(&g, fr, wo, wi) * w;
     }
     mf_prefilter_mix_free(&truth);
     mf_prefilter_mix_free(&naive);
-    r->truth = s[0] / samples;
-    double var = (s2 / samples - r->truth * r->truth) * samples / (samples - 1.0);
-    r->se = sqrt(var > 0.0 ? var / samples : 0.0);
+    mf_prefilter_quad_mis_mean(n2, s1, sq, &r->truth, &r->se);
     r->est[M_NAIVE] = s[1] / samples;
     r->est[M_TOKSVIG] = s[2] / samples;
     r->est[M_LEADR] = s[3] / samples;
@@ -480,6 +483,9 @@ static int pe_main(int argc, char **argv)
         return cli_error(k_cmd, "--lights %s: expected 1 to %d comma-separated half sides in (0, 10]", v[E_LIGHTS].s,
                          PE_MAX_LIGHTS);
     int samples = v[E_SAMPLES].set ? (int)v[E_SAMPLES].i : 4096;
+    if (samples % 2)
+        return cli_error(k_cmd, "--samples %d: must be even (half the points are drawn on the light, half from the "
+                                "footprint's BRDF)", samples);
     long max_texels = v[E_TEXELS].set ? v[E_TEXELS].i : 16;
     uint64_t seed = v[E_SEED].set ? (uint64_t)v[E_SEED].i : 1;
 

@@ -670,6 +670,61 @@ void mf_prefilter_mix_free(mf_prefilter_mix *m)
     m->n = 0;
 }
 
+double mf_prefilter_quad_mis_sample(const mf_prefilter_mix *m, const mf_brdf_params *p, mf_vec3 wo,
+                                    const mf_prefilter_quad *q, int strategy, const double u[2], mf_vec3 *wi,
+                                    double *fcos)
+{
+    *fcos = 0.0;
+    *wi = mf_vec3_make(0.0, 0.0, 1.0);
+    if (!(wo.z > 0.0) || !(q->h > 0.0))
+        return 0.0;
+    const mf_vec3 c = q->c, e1 = q->e1, e2 = q->e2;
+    const double h = q->h, area = 4.0 * h * h;
+    double pl = 0.0; /* p_L(wi) per steradian, 0 off the light */
+    mf_vec3 d;
+    if (strategy == 0) {
+        double a = (2.0 * u[0] - 1.0) * h, b = (2.0 * u[1] - 1.0) * h;
+        mf_vec3 x = mf_vec3_make(c.x + a * e1.x + b * e2.x, c.y + a * e1.y + b * e2.y, c.z + a * e1.z + b * e2.z);
+        double r2 = x.x * x.x + x.y * x.y + x.z * x.z, rl = sqrt(r2);
+        d = mf_vec3_make(x.x / rl, x.y / rl, x.z / rl);
+        double dc = fabs(d.x * c.x + d.y * c.y + d.z * c.z);
+        pl = r2 / (area * dc);
+    } else {
+        double bp;
+        d = mix_sample_texel(m, p, wo, u, &bp, m->kind == MF_PREFILTER_BASE_GGX ? view_cache(m, p, wo) : NULL);
+        if (!(bp > 0.0) || !mf_vec3_isfinite(d))
+            return 0.0;
+        double dc = d.x * c.x + d.y * c.y + d.z * c.z; /* the ray meets the light's plane at t = 1 / dc */
+        if (!(dc > 0.0))
+            return 0.0;
+        double t = 1.0 / dc;
+        mf_vec3 x = mf_vec3_make(t * d.x - c.x, t * d.y - c.y, t * d.z - c.z);
+        double a = x.x * e1.x + x.y * e1.y + x.z * e1.z, b = x.x * e2.x + x.y * e2.y + x.z * e2.z;
+        if (!(fabs(a) <= h && fabs(b) <= h))
+            return 0.0;
+        pl = t * t / (area * dc);
+    }
+    *wi = d;
+    if (!(d.z > 0.0) || !(pl > 0.0) || !isfinite(pl))
+        return 0.0;
+    double f, pm;
+    mix_eval_pdf(m, p, wo, d, &f, &pm);
+    *fcos = f;
+    return 1.0 / (0.5 * pl + 0.5 * pm);
+}
+
+void mf_prefilter_quad_mis_mean(const double n[2], const double s1[2], const double s2[2], double *mean, double *se)
+{
+    double nt = n[0] + n[1], var = 0.0;
+    *mean = nt > 0.0 ? (s1[0] + s1[1]) / nt : 0.0;
+    for (int k = 0; k < 2; ++k)
+        if (n[k] > 1.0) {
+            double mk = s1[k] / n[k], vk = (s2[k] / n[k] - mk * mk) * n[k] / (n[k] - 1.0);
+            var += n[k] * (vk > 0.0 ? vk : 0.0);
+        }
+    *se = nt > 0.0 ? sqrt(var) / nt : 0.0;
+}
+
 mf_status mf_prefilter_mix_albedo(const mf_prefilter_mix *m, const mf_brdf_params *p, mf_vec3 wo, mf_result *out)
 {
     if (!m || !p || !out || !(wo.z > 0.0))
