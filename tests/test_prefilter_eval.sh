@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# test_prefilter_eval.sh MFKIT SRC -- `mfkit prefilter-eval` (about 2 s of CPU):
+# test_prefilter_eval.sh MFKIT SRC STUDY -- `mfkit prefilter-eval` (about 2 s of CPU), and
+# analysis/study_prefilter_two.py over STUDY (analysis/study_prefilter_cell):
 # a constant, tilted 4 x 4 normal map (n = (0.25, 0.15, 1) normalised, 8-bit) prefiltered with 3 x 4 views.
 # - Every footprint holds one normal, so the naive and Toksvig baselines ARE the ground truth's integrand
 #   (the same rotated GGX on the same light samples; Toksvig's |n_a| = 1 leaves alpha unchanged): each must
@@ -16,7 +17,7 @@
 #   equals level 1's to 1e-12 relative; the summary's truth_ltc MSEs of naive equal mse_truth_ltc (naive is
 #   the MC truth's integrand here).  --ltc-table with the reference CSV runs; an unreadable table is refused.
 # - Refusals: one line, non-zero exit, no output directory.
-mfkit="$1"; src="$2"
+mfkit="$1"; src="$2"; study="$3"
 source "$(dirname "$0")/cli_test_lib.sh"
 py=/usr/bin/python3
 
@@ -136,6 +137,21 @@ print("; ".join(out) if out else "ok")
 PY
 )
 ok '[ $rc -eq 0 ] && [ $rc2 -eq 0 ] && [ "$res" = ok ]' "prefilter-eval's level lines match its summary file (rc=$rc, $rc2): $res: $(head -2 "$tmp/evv.log")"
+# odd --samples: the estimator draws half its points on the light, half from the BRDF
+expect_error "odd --samples" 2 "\-\-samples 17: must be even" prefilter-eval "$tmp/pfv" --samples 17 --out "$tmp/bad6"
+# analysis/study_prefilter_two.py on the same table: every view of one level-2 footprint (3 x 4 views, 2
+# lights: 12 records of 2 lights), one line per level with 6 cells (lights x elevations), the records file;
+# a bad --texels is refused (exit 2), a failing study run stops it (exit 3: a texel outside the level)
+"$py" "$src/analysis/study_prefilter_two.py" --prefilter "$tmp/pfv" --level 2 --texels 0,0 --study "$study" \
+    --lights 0.1,0.4 --samples 512 --records "$tmp/two.csv" >"$tmp/two.log" 2>&1; rc=$?
+ok '[ $rc -eq 0 ] && grep -Eq "^level 2: cells won: stored [0-6] of 6, two [0-6] of 6; mean MSE: stored" "$tmp/two.log" && [ "$(wc -l <"$tmp/two.csv")" -eq 25 ]' \
+   "study_prefilter_two.py runs (rc=$rc): $(tail -2 "$tmp/two.log")"
+"$py" "$src/analysis/study_prefilter_two.py" --prefilter "$tmp/pfv" --level 2 --texels 0 --study "$study" >"$tmp/two2.log" 2>&1
+rc=$?
+ok '[ $rc -eq 2 ] && grep -q "\-\-texels 0: expected X,Y" "$tmp/two2.log"' "study_prefilter_two.py refuses --texels 0 (rc=$rc)"
+"$py" "$src/analysis/study_prefilter_two.py" --prefilter "$tmp/pfv" --level 2 --texels 9,9 --study "$study" >"$tmp/two3.log" 2>&1
+rc=$?
+ok '[ $rc -eq 3 ] && grep -q "texel 9,9" "$tmp/two3.log"' "study_prefilter_two.py stops on a failing study run (rc=$rc): $(tail -1 "$tmp/two3.log")"
 # fitter revision 10: the fit sees the magnitude it stores (the albedo over the lobe's mass above the
 # horizon).  The constant map at alpha 0.03, default views, level 1, view (77.1 deg, 202.5 deg): the
 # tilted texel faces away and its lobe leaves the hemisphere by 8 to 12 %.  The lobe's shading of the
