@@ -144,7 +144,7 @@ typedef struct mf_ltcfit_aniso_options {
                                  * family (mf_ltcfit_aniso_entry_fit_general, _mirrored, _mirrored_two,
                                  * _mirrored_multi: the prefilter's fits) gets MF_LTCFIT_ANISO_LADDER more
                                  * lights, squares at distance 1 centred on the view's mirror direction about
-                                 * the normal (elevation clamped to 75 deg) whose half sides run geometrically
+                                 * the normal (not clamped: since prefilter revision 11) whose half sides run geometrically
                                  * from ladder_alpha / 4 to 10 ladder_alpha (a base lobe's roughness: lights
                                  * that resolve a mixture of base lobes whose own spread sizes every other
                                  * light; mf_ltcfit_aniso.c, "The ladder").  The
@@ -295,7 +295,7 @@ mf_status mf_ltcfit_aniso_entry_fit_mirrored_multi(const mf_brdf_model *model, m
 
 /* For tests: the ladder's squares (mf_ltcfit_aniso_options.ladder_alpha = alpha > 0) for the view at
  * elevation theta in the xz plane (azimuth 0): v gets MF_LTCFIT_ANISO_LADDER x 4 vertices (xyz, square
- * after square), in the plane at distance 1 of the centre c = (-sin t, 0, cos t), t = min(theta, 75 deg),
+ * after square), in the plane at distance 1 of the centre c = (-sin theta, 0, cos theta) (the mirror direction),
  * counter-clockwise about c.  Returns MF_LTCFIT_ANISO_LADDER, or -1 (alpha not > 0 and finite, theta not
  * in [0, pi/2), v NULL). */
 int mf_ltcfit_aniso_ladder_lights(double theta, double alpha, double *v);

@@ -36,7 +36,8 @@
  *
  * Fits (mf_prefilter_run).  Levels coarse to fine; per footprint:
  *   - the light family: the anisotropic fitter's structured family (mf_ltcfit_aniso_entry_fit_general),
- *     and for GGX since revision 6 its ladder of 8 squares centred on the view's mirror direction,
+ *     and for GGX since revision 6 its ladder of 8 squares centred on the view's mirror direction
+ *     (since revision 11 at every elevation; before, clamped to 75 deg),
  *     half sides alpha / 4 .. 10 alpha (mf_ltcfit_aniso_options.ladder_alpha = alpha; options.fit_lights):
  *     the structured family sizes its lights by the footprint lobe's own spread, so a mixture of
  *     base lobes far apart (a groove seen along the groove) had no light that resolves the gap
@@ -121,7 +122,7 @@ extern "C" {
 #define MF_PREFILTER_COS_MIN 0.001
 /* Names the fitted values: bump it whenever they change (objective, starts, constants), so that a
  * resumed `mfkit prefilter` refuses tiles of another revision. */
-#define MF_PREFILTER_REVISION 10
+#define MF_PREFILTER_REVISION 11
 #define MF_PREFILTER_ALBEDO_N 64
 #define MF_PREFILTER_THETA_MAX (0.999 * 0.5 * MF_PI)
 /* Footprints of at least MF_PREFILTER_CLUSTER_MIN texels are fitted to a clustered mixture: cells
