@@ -75,6 +75,23 @@ for r in rec:
 s = list(csv.DictReader(open(d + "/prefilter_eval_summary.csv")))
 if len(s) != 2 * 2 * 3:
     out.append("summary rows %d, expected 12" % len(s))
+# mse_unbiased_<method>: per cell the mean of (est - truth)^2 - dse^2 over its records, dse = truth_se
+# for mfkit (its lobe is exact) and se_diff_<baseline> for a baseline (recomputed here from the records:
+# a wrong aggregation, or subtracting se^2 twice, fails; relative 1e-9 + 1e-30: the file's 17 digits).
+# Naive and Toksvig are the truth's own integrand here: their se_diff is rounding (<= 1e-9 truth).
+for r in rec:
+    for m in ("naive", "toksvig"):
+        if not float(r["se_diff_" + m]) <= 1e-9 * float(r["truth"]):
+            out.append("se_diff_%s %s on the constant map (truth %s)" % (m, r["se_diff_" + m], r["truth"])); break
+for c in s:
+    sel = [r for r in rec if (r["level"], r["i_theta"]) == (c["level"], c["i_theta"]) and
+           float(r["light_half_side"]) == float(c["light_half_side"])]
+    for m in ("mfkit", "naive", "toksvig", "leadr"):
+        dse = "truth_se" if m == "mfkit" else "se_diff_" + m
+        want = sum((float(r[m]) - float(r["truth"])) ** 2 - float(r[dse]) ** 2 for r in sel) / len(sel)
+        got = float(c["mse_unbiased_" + m])
+        if not abs(got - want) <= 1e-9 * abs(want) + 1e-30:
+            out.append("mse_unbiased_%s %.17g, recomputed %.17g" % (m, got, want)); break
 for r in s:
     a, b = float(r["mse_ltc_naive"]), float(r["mse_truth_ltc"])
     if not abs(a - b) <= 1e-9 * max(a, 1e-300):

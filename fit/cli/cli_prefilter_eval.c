@@ -42,7 +42,11 @@
  *   truth is exact), mfkit, naive, leadr, leadr_se; the summary: mse_ and relrms_ of mfkit, naive,
  *   leadr, then mean_leadr_se.  --ltc-table is refused for such a table.
  *
- * Every method's error is reported against both truths (GGX).
+ * Every method's error is reported against both truths (GGX).  Against the Monte Carlo truth the
+ * summary also gives mse_unbiased_<method>: the mean over the cell's records of (est - truth)^2 -
+ * dse^2, dse the standard error of est - truth (pe_rec), an unbiased estimate of the squared error
+ * against the exact truth (E (x + e)^2 = x^2 + var e); it can read below 0 where a method is exact or
+ * nearly (the records' se_diff_<baseline> columns give dse; mfkit's is truth_se).
  * The baselines are integrated with the same samples and weights as the truth (so their differences
  * from it carry little Monte Carlo noise); mfkit's lobe is integrated in closed form, so its error
  * against the truth includes the truth's own noise (truth_se; docs/prefilter.md, "The evaluation's
@@ -175,7 +179,7 @@ static int parse_lights(const char *s, double *h, int *n)
 }
 
 typedef struct pe_acc {
-    double se2[5], sr[5], st, sse, cnt, se2l[4], stl, sll;
+    double se2[5], sr[5], st, sse, cnt, se2l[4], stl, sll, un[4];
 } pe_acc;
 
 enum { M_MFKIT, M_NAIVE, M_TOKSVIG, M_LEADR, M_TRUTH_SE, M_N };
@@ -217,9 +221,11 @@ static void print_level(int lev, int lambert, const pe_acc *acc, int ncell, char
              won, ncell, level_best ? "yes" : "no");
 }
 
-/* One record: truth (MC), truth_ltc (per-texel LTC) and the four estimates. */
+/* One record: truth (MC), truth_ltc (per-texel LTC) and the four estimates; dse[k] the standard error of
+ * est[k] - truth (mfkit's: the truth's se, its lobe being exact; a baseline's: of the per-sample
+ * differences, the two sharing the samples). */
 typedef struct pe_rec {
-    double truth, se, truth_ltc, est[4];
+    double truth, se, truth_ltc, est[4], dse[4];
 } pe_rec;
 
 /* The per-texel LTC table and its field indices. */
@@ -317,6 +323,7 @@ static int eval_record(const mf_brdf_model *ggx, const pe_itab *itab, double alp
      * footprint's mixture, weighted by the balance heuristic (mf_prefilter_quad_mis_sample) */
     const mf_prefilter_quad quad = {c, e1, e2, hside};
     double s[4] = {0, 0, 0, 0}, n2[2] = {0, 0}, s1[2] = {0, 0}, sq[2] = {0, 0};
+    double d1[3][2] = {{0, 0}, {0, 0}, {0, 0}}, d2[3][2] = {{0, 0}, {0, 0}, {0, 0}}; /* baseline - truth terms */
     for (int i = 0; i < samples; ++i) {
         double u[2] = {mf_pcg32_next_double(&rng), mf_pcg32_next_double(&rng)}, ft;
         mf_vec3 wi;
@@ -327,13 +334,21 @@ static int eval_record(const mf_brdf_model *ggx, const pe_itab *itab, double alp
             continue; /* off the light or below the geometric horizon: 0 for every method */
         ft *= w;
         s1[k] += ft, sq[k] += ft * ft;
-        s[1] += naive.model.eval_cos(&naive.model, &p, wo, wi) * w;
-        s[2] += naive.model.eval_cos(&naive.model, &pt, wo, wi) * w;
-        s[3] += mf_leadr_specular(&g, fr, wo, wi) * w;
+        double gb[3] = {naive.model.eval_cos(&naive.model, &p, wo, wi) * w,
+                        naive.model.eval_cos(&naive.model, &pt, wo, wi) * w, mf_leadr_specular(&g, fr, wo, wi) * w};
+        for (int m = 0; m < 3; ++m) {
+            s[m + 1] += gb[m];
+            d1[m][k] += gb[m] - ft, d2[m][k] += (gb[m] - ft) * (gb[m] - ft);
+        }
     }
     mf_prefilter_mix_free(&truth);
     mf_prefilter_mix_free(&naive);
     mf_prefilter_quad_mis_mean(n2, s1, sq, &r->truth, &r->se);
+    r->dse[M_MFKIT] = r->se;
+    for (int m = 0; m < 3; ++m) {
+        double dm;
+        mf_prefilter_quad_mis_mean(n2, d1[m], d2[m], &dm, &r->dse[m + 1]);
+    }
     r->est[M_NAIVE] = s[1] / samples;
     r->est[M_TOKSVIG] = s[2] / samples;
     r->est[M_LEADR] = s[3] / samples;
@@ -612,13 +627,15 @@ static int pe_main(int argc, char **argv)
         fprintf(fs, ",mean_leadr_se\n");
     } else {
         fprintf(fr, "level,row,col,i_theta,theta,i_phi,phi,light_half_side,truth,truth_se,mfkit,naive,toksvig,leadr,"
-                    "truth_ltc\n");
+                    "truth_ltc,se_diff_naive,se_diff_toksvig,se_diff_leadr\n");
         fprintf(fs, "level,light_half_side,i_theta,theta,records,mean_truth,mean_truth_se");
         for (int k = 0; k < 4; ++k)
             fprintf(fs, ",mse_%s,relrms_%s", k_method[k], k_method[k]);
         fprintf(fs, ",mean_truth_ltc,mse_truth_ltc");
         for (int k = 0; k < 4; ++k)
             fprintf(fs, ",mse_ltc_%s,relrms_ltc_%s", k_method[k], k_method[k]);
+        for (int k = 0; k < 4; ++k)
+            fprintf(fs, ",mse_unbiased_%s", k_method[k]);
         fprintf(fs, "\n");
     }
 
@@ -693,12 +710,16 @@ static int pe_main(int argc, char **argv)
                             A->st += r.truth, A->sse += r.se, A->cnt += 1;
                             continue;
                         }
-                        fprintf(fr, "%d,%d,%d,%d,%.17g,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", lev,
-                                row, col, a, theta, b, phi, hs[l], r.truth, r.se, r.est[0], r.est[1], r.est[2], r.est[3],
-                                r.truth_ltc);
-                        for (int k = 0; k < 4; ++k)
-                            A->se2[k] += (r.est[k] - r.truth) * (r.est[k] - r.truth),
-                                A->se2l[k] += (r.est[k] - r.truth_ltc) * (r.est[k] - r.truth_ltc);
+                        fprintf(fr,
+                                "%d,%d,%d,%d,%.17g,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,"
+                                "%.17g\n",
+                                lev, row, col, a, theta, b, phi, hs[l], r.truth, r.se, r.est[0], r.est[1], r.est[2],
+                                r.est[3], r.truth_ltc, r.dse[1], r.dse[2], r.dse[3]);
+                        for (int k = 0; k < 4; ++k) {
+                            double e2 = (r.est[k] - r.truth) * (r.est[k] - r.truth);
+                            A->se2[k] += e2, A->un[k] += e2 - r.dse[k] * r.dse[k];
+                            A->se2l[k] += (r.est[k] - r.truth_ltc) * (r.est[k] - r.truth_ltc);
+                        }
                         A->st += r.truth, A->sse += r.se, A->cnt += 1;
                         A->stl += r.truth_ltc, A->sll += (r.truth_ltc - r.truth) * (r.truth_ltc - r.truth);
                     }
@@ -730,6 +751,8 @@ static int pe_main(int argc, char **argv)
                     double mse = A->se2l[k] / A->cnt;
                     fprintf(fs, ",%.17g,%.17g", mse, mtl > 0.0 ? sqrt(mse) / mtl : 0.0);
                 }
+                for (int k = 0; k < 4; ++k)
+                    fprintf(fs, ",%.17g", A->un[k] / A->cnt);
                 fprintf(fs, "\n");
             }
         if (rc == 0)
