@@ -52,8 +52,10 @@
  * against the truth includes the truth's own noise (truth_se; docs/prefilter.md, "The evaluation's
  * Monte Carlo truth").
  * The light: a square of half side h at distance 1, facing the origin, centred on the mirror
- * direction of the view, its elevation clamped to at most 75 deg so the lights of grazing views
- * stay mostly above the horizon; what lies below the geometric horizon contributes nothing.
+ * direction of the view, its elevation clamped to at most --light-elevation-max (default 75 deg, so
+ * the lights of grazing views stay mostly above the horizon; 90: every light on the mirror
+ * direction, as the gate's and the fit's ladder); what lies below the geometric horizon contributes
+ * nothing.
  */
 #include "cli.h"
 #include "cli_opt.h"
@@ -68,7 +70,7 @@ static const char *const k_cmd = "prefilter-eval";
 static const char *const k_green_names[] = {"up", "down", NULL};
 static const char *const k_encoding_names[] = {"auto", "unorm", "raw", NULL};
 
-enum { E_OUT, E_LIGHTS, E_SAMPLES, E_TEXELS, E_SEED, E_MAP, E_GREEN, E_ENCODING, E_LTC_TABLE, E_NOPTS };
+enum { E_OUT, E_LIGHTS, E_SAMPLES, E_TEXELS, E_SEED, E_MAP, E_GREEN, E_ENCODING, E_LTC_TABLE, E_LIGHT_ELEV, E_NOPTS };
 static const cli_opt k_opts[E_NOPTS] = {
     {.name = "--out", .metavar = "DIR", .kind = CLI_OPT_STRING, .required = 1,
      .help = "output directory (created if missing): prefilter_eval.csv (every record) and "
@@ -91,6 +93,10 @@ static const cli_opt k_opts[E_NOPTS] = {
      .def = "a 64-elevation column fitted here at the base's alpha",
      .help = "isotropic GGX LTC table (an mfkit table file or the reference CSV layout) for the per-texel LTC "
              "truth (GGX tables only)"},
+    {.name = "--light-elevation-max", .metavar = "DEG", .kind = CLI_OPT_DOUBLE, .dlo = 0.0, .dhi = 90.0, .lo_open = 1,
+     .def = "75",
+     .help = "the lights' centres follow the view's mirror direction up to this elevation from the normal (90: "
+             "at every view, so the lights of grazing views sit on the horizon and partly below it)"},
 };
 static const cli_command k_eval_cmd = {
     .name = "prefilter-eval",
@@ -140,7 +146,6 @@ int cli_prefilter_eval(int argc, char **argv)
 #include <unistd.h>
 
 #define PE_MAX_LIGHTS 8
-#define PE_LIGHT_MAX_ELEV (75.0 * MF_PI / 180.0)
 
 /* A level's .npy (mf_prefilter_read_npy), refused when a value is not finite. */
 static float *read_npy(const char *path, int rank, long *dims, char *msg, size_t msz)
@@ -243,10 +248,10 @@ typedef struct {
     mf_ltc ltc;
 } pe_setup;
 
-static mf_status record_setup(double theta, double hside, const float *m9, pe_setup *q)
+static mf_status record_setup(double theta, double hside, double lmax, const float *m9, pe_setup *q)
 {
     q->wo = mf_vec3_make(sin(theta), 0.0, cos(theta));
-    double tl = theta < PE_LIGHT_MAX_ELEV ? theta : PE_LIGHT_MAX_ELEV;
+    double tl = theta < lmax ? theta : lmax;
     q->c = mf_vec3_make(-sin(tl), 0.0, cos(tl)), q->e1 = mf_vec3_make(cos(tl), 0.0, sin(tl));
     q->e2 = mf_vec3_make(0.0, 1.0, 0.0);
     mf_vec3 c = q->c, e1 = q->e1, e2 = q->e2;
@@ -263,11 +268,11 @@ static mf_status record_setup(double theta, double hside, const float *m9, pe_se
 
 static int eval_record(const mf_brdf_model *ggx, const pe_itab *itab, double alpha, const double *nrm, int count,
                        double theta,
-                       double hside, const float *m9, float magnitude, int samples, uint64_t seed, pe_rec *r,
-                       char *msg, size_t msz)
+                       double hside, double lmax, const float *m9, float magnitude, int samples, uint64_t seed,
+                       pe_rec *r, char *msg, size_t msz)
 {
     pe_setup su;
-    if (record_setup(theta, hside, m9, &su) != MF_OK) {
+    if (record_setup(theta, hside, lmax, m9, &su) != MF_OK) {
         snprintf(msg, msz, "a stored LTC matrix is singular");
         return CLI_EXIT_USAGE;
     }
@@ -365,11 +370,11 @@ static int eval_record(const mf_brdf_model *ggx, const pe_itab *itab, double alp
  * normal with the same geometric horizon) and LEADR's diffuse (Monte Carlo over the light; est[2] and
  * r->se its standard error).  The light is eval_record's.  est[0] mfkit, est[1] naive, est[2] leadr. */
 static int eval_record_lambert(const mf_brdf_model *leadr, const double *nrm, int count, double theta, double hside,
-                               const float *m9, float magnitude, int samples, uint64_t seed, pe_rec *r, char *msg,
-                               size_t msz)
+                               double lmax, const float *m9, float magnitude, int samples, uint64_t seed, pe_rec *r,
+                               char *msg, size_t msz)
 {
     pe_setup su;
-    if (record_setup(theta, hside, m9, &su) != MF_OK) {
+    if (record_setup(theta, hside, lmax, m9, &su) != MF_OK) {
         snprintf(msg, msz, "a stored LTC matrix is singular");
         return CLI_EXIT_USAGE;
     }
@@ -503,6 +508,7 @@ static int pe_main(int argc, char **argv)
                                 "footprint's BRDF)", samples);
     long max_texels = v[E_TEXELS].set ? v[E_TEXELS].i : 16;
     uint64_t seed = v[E_SEED].set ? (uint64_t)v[E_SEED].i : 1;
+    const double lmax = (v[E_LIGHT_ELEV].set ? v[E_LIGHT_ELEV].d : 75.0) * MF_PI / 180.0;
 
     char msg[8800], path[4200];
     size_t jl;
@@ -693,10 +699,10 @@ static int pe_main(int argc, char **argv)
                     for (int l = 0; l < nlights; ++l) {
                         pe_rec r;
                         uint64_t rs = seed * 0x9e3779b97f4a7c15ull + ((((uint64_t)lev * 4096 + t) * 256 + a) * 256 + b) * 8 + l;
-                        rc = lambert ? eval_record_lambert(leadr, foot, count, theta, hs[l], lm + 9 * idx, mg[idx], samples,
-                                                           rs, &r, msg, sizeof msg)
-                                     : eval_record(ggx, &itab, alpha, foot, count, theta, hs[l], lm + 9 * idx, mg[idx],
-                                                   samples, rs, &r, msg, sizeof msg);
+                        rc = lambert ? eval_record_lambert(leadr, foot, count, theta, hs[l], lmax, lm + 9 * idx, mg[idx],
+                                                           samples, rs, &r, msg, sizeof msg)
+                                     : eval_record(ggx, &itab, alpha, foot, count, theta, hs[l], lmax, lm + 9 * idx,
+                                                   mg[idx], samples, rs, &r, msg, sizeof msg);
                         if (rc) {
                             cli_error(k_cmd, "%s: level %d texel (%d, %d): %s", dir, lev, col, row, msg);
                             break;
