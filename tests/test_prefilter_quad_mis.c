@@ -20,9 +20,9 @@
  *      estimator before, 2^20 points), |a - b| <= z sqrt(se_a^2 + se_b^2).
  *   4. Efficiency, the reason for the estimator: a single normal at alpha 0.01 under a light of half
  *      side 0.8 about the mirror direction, 4096 points: the relative standard error must be below
- *      0.02 (measured 0.0032 to 0.0040 at 30, 60 and 70 deg); uniform points alone read 0.43 to 0.52 there.  At alpha 1e-4 the whole
- *      lobe lies inside the light, so the estimate must equal the GGX albedo at that view
- *      (mf_prefilter_mix_albedo, its err added to delta).
+ *      0.02 (measured 0.0032 to 0.0040 at 30, 60 and 70 deg); uniform points alone read 0.43 to 0.52
+ *      there.  At alpha 1e-4 the whole lobe lies inside the light, so the estimate must equal the GGX
+ *      albedo at that view (mf_prefilter_mix_albedo, its err added to delta).
  *   5. Degenerate input: a light wholly below the horizon, a view below it, h = 0: weight 0.
  *
  * How it fails (checked when the test was written): with p_M's factor 1/2 dropped (w = 1 / (p_L / 2
@@ -265,7 +265,8 @@ static void test_sharp(void)
         uniform_estimate(&mix, &p, wo, &q, 4096, &rng, &um, &use);
         printf("alpha 0.01, view %.0f deg, light 0.8: MIS %.5f (rel. se %.4f), uniform %.5f (rel. se %.4f)\n",
                th * 180.0 / MF_PI, mean, se / mean, um, use / um);
-        CHECKF(mean > 0.0 && se / mean < 0.02, "relative standard error %.4g (bound 0.02)", mean > 0.0 ? se / mean : 1.0);
+        CHECKF(mean > 0.0 && se / mean < 0.02, "relative standard error %.4g (bound 0.02)",
+               mean > 0.0 ? se / mean : 1.0);
         /* alpha 1e-4: the lobe lies wholly inside the light, so the integral is the albedo (delta: its
          * error estimate plus 1e-6 for the lobe's tail outside the light: GGX's D puts alpha^2 / (alpha^2
          * + tan^2 t) of its mass beyond a half-vector angle t, below 1e-7 at the light's edge, t >= 0.3) */

@@ -63,7 +63,8 @@ static const cli_opt k_opts[P_NOPTS] = {
      .help = "output directory (created if missing)"},
     {.name = "--roughness", .metavar = "A", .kind = CLI_OPT_DOUBLE, .dlo = 0.0, .dhi = 1.0, .lo_open = 1, .def = "0.1",
      .help = "base GGX roughness alpha (the fitter and gate are tuned at 0.1; at 0.05 the gate passes on the "
-             "shipped maps and fails on larger bump maps, at 0.03 it fails: docs/prefilter.md, \"Fitter revision 11\")"},
+             "shipped maps and fails on larger bump maps, at 0.03 it fails: docs/prefilter.md, "
+             "\"Fitter revision 11\")"},
     {.name = "--views", .metavar = "TxP", .kind = CLI_OPT_STRING, .def = "8x16 (ggx), 2x4 (lambert)",
      .help = "elevations over [0, 0.999 pi/2] x azimuths over [0, 2 pi)"},
     {.name = "--green", .kind = CLI_OPT_ENUM, .choices = k_green_names, .def = "up",

@@ -106,8 +106,8 @@ static const cli_command k_eval_cmd = {
     .description =
         "Shading error of the prefiltered lobes (magnitude x LTC integral over square lights) against the\n"
         "ground truth (the footprint average of the exact base-GGX integral, Monte Carlo with its standard\n"
-        "error: light and BRDF samples, balance heuristic) and against the thesis' per-texel LTC shading, beside the baselines naive (mean normal),\n"
-        "Toksvig (mean normal, widened roughness) and LEADR.\n"
+        "error: light and BRDF samples, balance heuristic) and against the thesis' per-texel LTC shading,\n"
+        "beside the baselines naive (mean normal), Toksvig (mean normal, widened roughness) and LEADR.\n"
         "A diffuse (Lambert) table (mfkit prefilter's DIR/diffuse, or --base lambert) is compared with the exact\n"
         "truth (the footprint average of each texel's Lambert integral over the light, in closed form), beside\n"
         "naive (Lambert at the mean normal) and LEADR's diffuse; its files have their own columns.\n"
@@ -699,8 +699,8 @@ static int pe_main(int argc, char **argv)
                     for (int l = 0; l < nlights; ++l) {
                         pe_rec r;
                         uint64_t rs = seed * 0x9e3779b97f4a7c15ull + ((((uint64_t)lev * 4096 + t) * 256 + a) * 256 + b) * 8 + l;
-                        rc = lambert ? eval_record_lambert(leadr, foot, count, theta, hs[l], lmax, lm + 9 * idx, mg[idx],
-                                                           samples, rs, &r, msg, sizeof msg)
+                        rc = lambert ? eval_record_lambert(leadr, foot, count, theta, hs[l], lmax, lm + 9 * idx,
+                                                           mg[idx], samples, rs, &r, msg, sizeof msg)
                                      : eval_record(ggx, &itab, alpha, foot, count, theta, hs[l], lmax, lm + 9 * idx,
                                                    mg[idx], samples, rs, &r, msg, sizeof msg);
                         if (rc) {
@@ -717,8 +717,8 @@ static int pe_main(int argc, char **argv)
                             continue;
                         }
                         fprintf(fr,
-                                "%d,%d,%d,%d,%.17g,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,"
-                                "%.17g\n",
+                                "%d,%d,%d,%d,%.17g,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,"
+                                "%.17g,%.17g,%.17g\n",
                                 lev, row, col, a, theta, b, phi, hs[l], r.truth, r.se, r.est[0], r.est[1], r.est[2],
                                 r.est[3], r.truth_ltc, r.dse[1], r.dse[2], r.dse[3]);
                         for (int k = 0; k < 4; ++k) {

@@ -144,7 +144,8 @@ typedef struct mf_ltcfit_aniso_options {
                                  * family (mf_ltcfit_aniso_entry_fit_general, _mirrored, _mirrored_two,
                                  * _mirrored_multi: the prefilter's fits) gets MF_LTCFIT_ANISO_LADDER more
                                  * lights, squares at distance 1 centred on the view's mirror direction about
-                                 * the normal (not clamped: since prefilter revision 11) whose half sides run geometrically
+                                 * the normal (at every elevation since prefilter revision 11; before,
+                                 * clamped to 75 deg) whose half sides run geometrically
                                  * from ladder_alpha / 4 to 10 ladder_alpha (a base lobe's roughness: lights
                                  * that resolve a mixture of base lobes whose own spread sizes every other
                                  * light; mf_ltcfit_aniso.c, "The ladder").  The

@@ -207,7 +207,8 @@ mf_status mf_prefilter_mix_albedo(const mf_prefilter_mix *m, const mf_brdf_param
  * and where g is the mixture's f cos its variance is at most about twice that of the better strategy:
  * uniform points alone (the estimator before) have a variance that grows as the lobe narrows (alpha
  * 0.01 under a light of half side 0.8 about the mirror direction: relative standard error 0.43 to 0.52
- * at 4096 points against 0.0032 to 0.0040 here; tests/test_prefilter_quad_mis.c).  u: two uniform numbers in [0, 1). */
+ * at 4096 points against 0.0032 to 0.0040 here; tests/test_prefilter_quad_mis.c).  u: two uniform
+ * numbers in [0, 1). */
 typedef struct mf_prefilter_quad {
     mf_vec3 c, e1, e2;
     double h;
