@@ -11,6 +11,8 @@
  *      below the horizon (so the horizon cuts many): the estimate of the mixture's f cos against the
  *      exact footprint average of mf_prefilter_texel_lambert.  Exercises both strategies' densities:
  *      the Lambert sampler's directions are weighted by p_M, the light's by p_L.
+ *      1b: the same with squares at distance 0.5 to 5 whose planes are tilted against the line of sight
+ *      (the function takes any square light, as a scene's).
  *   2. g = 1 with GGX mixtures (alpha 1e-4 to 0.5, views up to 89.9 deg): the weights alone must sum
  *      to the light's solid angle, 4 asin(h^2 / (1 + h^2)) for a square of half side h at distance 1
  *      [the solid angle of a rectangle seen from its centre's normal], for lights wholly above the
@@ -161,6 +163,62 @@ static mf_prefilter_quad mirror_light(double th, double h, mf_vec3 *v)
     return light_quad(0.5 * MF_PI - tl, MF_PI, h, v);
 }
 
+/* 1b. The same for squares that do not face the shading point: centre at distance 0.5 to 5 in any
+ * direction above -10 deg, edges of a random orientation (so the light's plane is tilted against the
+ * line of sight, and the BRDF strategy's ray-plane distance t and |wi . n| differ from the facing
+ * case), half side 0.1 to 2.  Same bound. */
+static void test_lambert_tilted(void)
+{
+    const mf_brdf_model *lam = mf_brdf_model_find("lambert");
+    if (!lam)
+        return;
+    mf_pcg32 rng;
+    mf_pcg32_seed(&rng, mf_test_seed(20261207), 0);
+    double worst_z = 0.0;
+    int used = 0;
+    for (int cs = 0; cs < 60; ++cs) {
+        int count = 1 + (int)(mf_pcg32_next_double(&rng) * 4.0);
+        double nrm[3 * 4];
+        random_normals(&rng, count, 60.0, nrm);
+        double el = (-10.0 + 100.0 * mf_pcg32_next_double(&rng)) * MF_PI / 180.0;
+        double az = 2.0 * MF_PI * mf_pcg32_next_double(&rng), dist = 0.5 + 4.5 * mf_pcg32_next_double(&rng);
+        mf_prefilter_quad q;
+        q.c = mf_vec3_scale(mf_vec3_make(cos(el) * cos(az), cos(el) * sin(az), sin(el)), dist);
+        q.h = 0.1 + 1.9 * mf_pcg32_next_double(&rng);
+        mf_vec3 a = mf_vec3_normalize(mf_vec3_make(mf_pcg32_next_normal(&rng), mf_pcg32_next_normal(&rng),
+                                                   mf_pcg32_next_normal(&rng)));
+        mf_vec3 b = mf_vec3_make(mf_pcg32_next_normal(&rng), mf_pcg32_next_normal(&rng), mf_pcg32_next_normal(&rng));
+        q.e1 = a;
+        q.e2 = mf_vec3_normalize(mf_vec3_sub(b, mf_vec3_scale(a, mf_vec3_dot(a, b))));
+        mf_vec3 v[4];
+        static const double sx[4] = {-1, 1, 1, -1}, sy[4] = {-1, -1, 1, 1};
+        for (int k = 0; k < 4; ++k)
+            v[k] = mf_vec3_add(q.c, mf_vec3_add(mf_vec3_scale(q.e1, q.h * sx[k]), mf_vec3_scale(q.e2, q.h * sy[k])));
+        /* the square must not contain the shading point's line through it edge-on (|c . n| tiny) */
+        if (fabs(mf_vec3_dot(q.c, mf_vec3_cross(q.e1, q.e2))) < 0.05 * dist)
+            continue;
+        double exact = 0.0;
+        for (int k = 0; k < count; ++k)
+            exact += mf_prefilter_texel_lambert(mf_vec3_make(nrm[3 * k], nrm[3 * k + 1], nrm[3 * k + 2]), v, 4);
+        exact /= count;
+        mf_prefilter_mix mix;
+        if (mf_prefilter_mix_init(&mix, lam, nrm, count) != MF_OK) {
+            CHECKF(0, "case %d: mf_prefilter_mix_init failed", cs);
+            continue;
+        }
+        mf_brdf_params p = mf_brdf_params_iso(1.0);
+        double mean, se;
+        mis_estimate(&mix, &p, mf_vec3_make(0.0, 0.0, 1.0), &q, 20000, 0, &rng, &mean, &se);
+        mf_prefilter_mix_free(&mix);
+        CHECK_MC(mean, se, exact, Z_MC, 1e-12 + 1e-9 * exact);
+        ++used;
+        if (se > 0.0 && fabs(mean - exact) / se > worst_z)
+            worst_z = fabs(mean - exact) / se;
+    }
+    printf("lambert, tilted squares: %d cases, worst |z| %.2f\n", used, worst_z);
+    CHECKF(used >= 40, "tilted cases used %d (need >= 40)", used);
+}
+
 static void test_solid_angle(void)
 {
     const mf_brdf_model *ggx = mf_brdf_model_find("ggx");
@@ -308,6 +366,7 @@ static void test_degenerate(void)
 int main(void)
 {
     test_lambert_exact();
+    test_lambert_tilted();
     test_solid_angle();
     test_against_uniform();
     test_sharp();

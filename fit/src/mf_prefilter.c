@@ -678,7 +678,7 @@ double mf_prefilter_quad_mis_sample(const mf_prefilter_mix *m, const mf_brdf_par
     *wi = mf_vec3_make(0.0, 0.0, 1.0);
     if (!(wo.z > 0.0) || !(q->h > 0.0))
         return 0.0;
-    const mf_vec3 c = q->c, e1 = q->e1, e2 = q->e2;
+    const mf_vec3 c = q->c, e1 = q->e1, e2 = q->e2, n = mf_vec3_cross(e1, e2);
     const double h = q->h, area = 4.0 * h * h;
     double pl = 0.0; /* p_L(wi) per steradian, 0 off the light */
     mf_vec3 d;
@@ -687,22 +687,21 @@ double mf_prefilter_quad_mis_sample(const mf_prefilter_mix *m, const mf_brdf_par
         mf_vec3 x = mf_vec3_make(c.x + a * e1.x + b * e2.x, c.y + a * e1.y + b * e2.y, c.z + a * e1.z + b * e2.z);
         double r2 = x.x * x.x + x.y * x.y + x.z * x.z, rl = sqrt(r2);
         d = mf_vec3_make(x.x / rl, x.y / rl, x.z / rl);
-        double dc = fabs(d.x * c.x + d.y * c.y + d.z * c.z);
-        pl = r2 / (area * dc);
+        pl = r2 / (area * fabs(d.x * n.x + d.y * n.y + d.z * n.z));
     } else {
         double bp;
         d = mix_sample_texel(m, p, wo, u, &bp, m->kind == MF_PREFILTER_BASE_GGX ? view_cache(m, p, wo) : NULL);
         if (!(bp > 0.0) || !mf_vec3_isfinite(d))
             return 0.0;
-        double dc = d.x * c.x + d.y * c.y + d.z * c.z; /* the ray meets the light's plane at t = 1 / dc */
-        if (!(dc > 0.0))
+        double dn = d.x * n.x + d.y * n.y + d.z * n.z; /* the ray meets the light's plane at t = (c . n) / dn */
+        double t = (c.x * n.x + c.y * n.y + c.z * n.z) / dn;
+        if (!(t > 0.0) || !isfinite(t))
             return 0.0;
-        double t = 1.0 / dc;
         mf_vec3 x = mf_vec3_make(t * d.x - c.x, t * d.y - c.y, t * d.z - c.z);
         double a = x.x * e1.x + x.y * e1.y + x.z * e1.z, b = x.x * e2.x + x.y * e2.y + x.z * e2.z;
         if (!(fabs(a) <= h && fabs(b) <= h))
             return 0.0;
-        pl = t * t / (area * dc);
+        pl = t * t / (area * fabs(dn));
     }
     *wi = d;
     if (!(d.z > 0.0) || !(pl > 0.0) || !isfinite(pl))

@@ -190,15 +190,15 @@ void mf_prefilter_mix_free(mf_prefilter_mix *m);
 mf_status mf_prefilter_mix_albedo(const mf_prefilter_mix *m, const mf_brdf_params *p, mf_vec3 wo,
                                   mf_result *out) MF_WARN_UNUSED;
 
-/* Monte Carlo integrals of functions over a square light, for the evaluations' ground truth
- * (mfkit prefilter-eval, analysis/study_prefilter_cell).  The light: centre c (a unit vector; the
- * light lies in the plane through c orthogonal to it, facing the origin), unit edge directions e1, e2
- * orthogonal to c and to each other, half side h; what lies below the geometric horizon (wi.z <= 0)
- * counts 0.
+/* Monte Carlo integrals of functions over a square light, for the evaluations' ground truths
+ * (mfkit prefilter-eval, analysis/study_prefilter_cell, analysis/render_prefilter_scenes' truth_mc).
+ * The light, seen from the shading point at the origin: the square c + a e1 + b e2, |a|, |b| <= h, with
+ * c its centre (at any distance) and e1, e2 orthonormal edge directions (its plane's normal n = e1 x e2;
+ * either side is lit); what lies below the geometric horizon (wi.z <= 0) counts 0.
  *
  * Multiple importance sampling with the balance heuristic [Veach and Guibas 1995, "Optimally
  * combining sampling techniques for Monte Carlo rendering", Eq. 7 with n_1 = n_2]: strategy 0 draws a
- * uniform point of the light's area (density p_L(wi) = r^2 / (4 h^2 |wi . c|) per steradian, r the
+ * uniform point of the light's area (density p_L(wi) = r^2 / (4 h^2 |wi . n|) per steradian, r the
  * point's distance), strategy 1 draws from the mixture's sampler (density p_M, mf_prefilter_mix's
  * `pdf`).  mf_prefilter_quad_mis_sample returns w = 1 / (p_L(wi) / 2 + p_M(wi) / 2) where wi is above
  * the horizon and on the light, else 0, and *fcos the mixture's f cos at wi (0 where w is 0; one pass
