@@ -409,6 +409,112 @@ static void test_albedo_pyramid(void)
     CHECK(strstr(msg, "albedo base level 2") != NULL);
 }
 
+/* options.lobe (two lobes per entry).  A map of two normals in alternating columns: every footprint
+ * holds both at equal counts, its 2-means halves are the two normals, so half a's table (the larger
+ * n.x) must be the constant map of that normal at every level and view, with half its albedo and
+ * magnitude, and half b's the other normal's.  Tolerances: the fits' albedo inputs differ by rounding
+ * (the pyramid sums 4^l equal values, the half its texels' mean), so M is compared to 2e-6 (float
+ * storage 6e-8, the fit's response to an ulp of its magnitude target well below that) and the
+ * magnitudes and albedos to 1e-6 relative. */
+static void test_two_lobes(void)
+{
+    /* the split itself */
+    {
+        const double t = 0.3, c = cos(t), s = sin(t);
+        double nrm[5 * 3] = {-s, 0, c, s, 0, c, -s, 0, c, s, 0, c, -s, 0, c};
+        int side[5];
+        CHECK(mf_prefilter_split_two(nrm, 5, side) == 3); /* half b: the three -x normals */
+        CHECK(side[0] == 1 && side[1] == 0 && side[2] == 1 && side[3] == 0 && side[4] == 1);
+        double one[3 * 3] = {0, s, c, 0, s, c, 0, s, c};
+        CHECK(mf_prefilter_split_two(one, 3, side) == 0 && side[0] == 0 && side[1] == 0 && side[2] == 0);
+        double ys[4 * 3] = {0, -s, c, 0, s, c, 0, -s, c, 0, s, c}; /* equal x: the larger y is half a */
+        CHECK(mf_prefilter_split_two(ys, 4, side) == 2 && side[0] == 1 && side[1] == 0);
+    }
+    double n[4 * 4 * 3], na[4 * 4 * 3], nb[4 * 4 * 3];
+    const double tilt = 0.35;
+    fill(n, 4, 4, tilt, 2);
+    fill(na, 4, 4, tilt, 0);
+    fill(nb, 4, 4, -tilt, 0);
+    mf_prefilter_options o;
+    mf_prefilter_options_default(&o);
+    o.n_theta = 3, o.n_phi = 4, o.keep_albedo = 1;
+    char msg[256];
+    mf_prefilter_level *h[2], *c[2];
+    int nh[2], ncst[2];
+    for (int k = 0; k < 2; ++k) {
+        o.lobe = k + 1;
+        CHECK(mf_prefilter_run(n, 4, 4, &o, &h[k], &nh[k], msg, sizeof msg) == MF_OK);
+        o.lobe = 0;
+        CHECK(mf_prefilter_run(k ? nb : na, 4, 4, &o, &c[k], &ncst[k], msg, sizeof msg) == MF_OK);
+        CHECK(nh[k] == 2 && ncst[k] == 2);
+        double dm = 0.0, dmag = 0.0, dalb = 0.0;
+        for (int l = 0; l < 2; ++l) {
+            long ne = (long)h[k][l].width * h[k][l].height * o.n_theta * o.n_phi;
+            for (long e = 0; e < ne; ++e) {
+                for (int i = 0; i < 9; ++i)
+                    dm = fmax(dm, fabs(h[k][l].m[9 * e + i] - c[k][l].m[9 * e + i]));
+                dmag = fmax(dmag, fabs(h[k][l].magnitude[e] / (0.5 * c[k][l].magnitude[e]) - 1.0));
+                dalb = fmax(dalb, fabs(h[k][l].albedo[e] / (0.5 * c[k][l].albedo[e]) - 1.0));
+            }
+        }
+        if (!(dm <= 2e-6 && dmag <= 1e-6 && dalb <= 1e-6))
+            printf("two lobes, half %c: |M - M_const| %.3g, magnitude %.3g, albedo %.3g\n", "ab"[k], dm, dmag, dalb);
+        CHECK(dm <= 2e-6 && dmag <= 1e-6 && dalb <= 1e-6);
+        mf_prefilter_gate g; /* with the options: a half table's gate (energy and nan) */
+        mf_prefilter_gate_bounds_default(&g);
+        o.lobe = k + 1;
+        CHECK(mf_prefilter_gate_run_ref(h[k], nh[k], n, 4, 4, &o, &g) == MF_OK);
+        o.lobe = 0;
+        if (!(g.pass && g.half_table == 1))
+            printf("half %c gate: pass %d energy %.3g (%s) nan %ld half_table %d\n", "ab"[k], g.pass, g.worst_energy, g.where_energy, g.nan_entries, g.half_table);
+        CHECK(g.pass && g.pass_energy && g.pass_nan && g.half_table == 1);
+    }
+    /* a constant map has no split: half b is empty (identity, magnitude and albedo 0) */
+    mf_prefilter_level *e;
+    int ne;
+    o.lobe = 2;
+    CHECK(mf_prefilter_run(na, 4, 4, &o, &e, &ne, msg, sizeof msg) == MF_OK);
+    int empty = 1;
+    for (int l = 0; l < ne; ++l)
+        for (long q = 0; q < (long)e[l].width * e[l].height * o.n_theta * o.n_phi; ++q)
+            empty &= e[l].magnitude[q] == 0.0f && e[l].albedo[q] == 0.0f && e[l].m[9 * q] == 1.0f &&
+                     e[l].m[9 * q + 4] == 1.0f && e[l].m[9 * q + 8] == 1.0f && e[l].m[9 * q + 1] == 0.0f;
+    CHECK(empty);
+    mf_prefilter_gate g;
+    mf_prefilter_gate_bounds_default(&g);
+    CHECK(mf_prefilter_gate_run_ref(e, ne, na, 4, 4, &o, &g) == MF_OK && g.pass && g.half_table == 1);
+    mf_prefilter_levels_free(e, ne);
+    o.lobe = 3;
+    CHECK(mf_prefilter_run(na, 4, 4, &o, &e, &ne, msg, sizeof msg) == MF_ERR_DOMAIN && strstr(msg, "lobe 3"));
+    /* a random map: the halves' albedos sum to the whole footprint's (to float rounding) */
+    double r[8 * 8 * 3];
+    mf_pcg32 rng;
+    mf_pcg32_seed(&rng, 7, 1);
+    for (int t = 0; t < 64; ++t) {
+        double sx = 0.6 * (mf_pcg32_next_double(&rng) - 0.5), sy = 0.6 * (mf_pcg32_next_double(&rng) - 0.5);
+        double l = sqrt(sx * sx + sy * sy + 1.0);
+        r[3 * t] = sx / l, r[3 * t + 1] = sy / l, r[3 * t + 2] = 1.0 / l;
+    }
+    o.n_theta = 2, o.n_phi = 2, o.samples = 256;
+    mf_prefilter_level *w[3];
+    int nw[3];
+    for (int k = 0; k < 3; ++k) {
+        o.lobe = k;
+        CHECK(mf_prefilter_run(r, 8, 8, &o, &w[k], &nw[k], msg, sizeof msg) == MF_OK && nw[k] == 3);
+    }
+    double worst = 0.0;
+    for (int l = 0; l < 3; ++l)
+        for (long q = 0; q < (long)w[0][l].width * w[0][l].height * 4; ++q)
+            worst = fmax(worst, fabs((w[1][l].albedo[q] + w[2][l].albedo[q]) / w[0][l].albedo[q] - 1.0));
+    if (!(worst <= 1e-6))
+        printf("two lobes: halves' albedo sum vs the footprint's: %.3g\n", worst);
+    CHECK(worst <= 1e-6);
+    for (int k = 0; k < 3; ++k)
+        mf_prefilter_levels_free(w[k], nw[k]);
+    for (int k = 0; k < 2; ++k)
+        mf_prefilter_levels_free(h[k], nh[k]), mf_prefilter_levels_free(c[k], ncst[k]);
+}
+
 int main(void)
 {
     test_constant();
@@ -418,5 +524,6 @@ int main(void)
     test_gate();
     test_clusters();
     test_albedo_pyramid();
+    test_two_lobes();
     MF_TEST_MAIN_END();
 }

@@ -1096,28 +1096,25 @@ static mf_brdf_params base_params(const mf_prefilter_options *o)
     return mf_brdf_params_iso(o->base == MF_PREFILTER_BASE_LAMBERT ? 1.0 : o->alpha);
 }
 
-static mf_status albedo_texel(pjob *j, int t)
+/* The one-texel albedos of the unit normal n at every view: out[2 v], out[2 v + 1] the albedo and its
+ * error estimate (v = i_theta n_phi + i_phi). */
+static mf_status one_texel_albedo(const mf_prefilter_options *o, const mf_brdf_model *base, const double *n, double *out)
 {
-    const mf_prefilter_options *o = j->o;
-    int nv = o->n_theta * o->n_phi;
-    if (j->uniq[t] != t) /* a copy of an earlier texel's: filled after the pass */
-        return MF_OK;
     if (o->base == MF_PREFILTER_BASE_GGX) { /* the table of the one-texel rule (revision 3) */
-        const double *n = j->normals + 3 * (size_t)t;
         double r[9];
         min_rotation(n, r);
         for (int a = 0; a < o->n_theta; ++a)
             for (int b = 0; b < o->n_phi; ++b) {
-                size_t k = (size_t)t * nv + a * o->n_phi + b;
+                size_t k = (size_t)a * o->n_phi + b;
                 mf_status st = texel_albedo_table(o->alpha, n, r, view_dir(mf_prefilter_theta(o, a), mf_prefilter_phi(o, b)),
-                                                  &j->alb[2 * k], &j->alb[2 * k + 1]);
+                                                  &out[2 * k], &out[2 * k + 1]);
                 if (st != MF_OK)
                     return st;
             }
         return MF_OK;
     }
     mf_prefilter_mix one;
-    mf_status st = mf_prefilter_mix_init(&one, j->base, j->normals + 3 * (size_t)t, 1);
+    mf_status st = mf_prefilter_mix_init(&one, base, n, 1);
     if (st != MF_OK)
         return st;
     mf_brdf_params p = base_params(o);
@@ -1125,11 +1122,19 @@ static mf_status albedo_texel(pjob *j, int t)
         for (int b = 0; b < o->n_phi && st == MF_OK; ++b) {
             mf_result r;
             st = mf_prefilter_mix_albedo(&one, &p, view_dir(mf_prefilter_theta(o, a), mf_prefilter_phi(o, b)), &r);
-            j->alb[2 * ((size_t)t * nv + a * o->n_phi + b)] = r.val;
-            j->alb[2 * ((size_t)t * nv + a * o->n_phi + b) + 1] = r.err;
+            out[2 * ((size_t)a * o->n_phi + b)] = r.val;
+            out[2 * ((size_t)a * o->n_phi + b) + 1] = r.err;
         }
     mf_prefilter_mix_free(&one);
     return st;
+}
+
+static mf_status albedo_texel(pjob *j, int t)
+{
+    int nv = j->o->n_theta * j->o->n_phi;
+    if (j->uniq[t] != t) /* a copy of an earlier texel's: filled after the pass */
+        return MF_OK;
+    return one_texel_albedo(j->o, j->base, j->normals + 3 * (size_t)t, j->alb + 2 * (size_t)t * nv);
 }
 
 /* ---- clusters and mirror symmetry ------------------------------------------------------------- */
@@ -1308,6 +1313,74 @@ static int halfturn_symmetric(const double *nrm, const double *w, int n, qkey *k
     return memcmp(key, key + n, sizeof *key * (size_t)n) == 0;
 }
 
+static double dist2(const double *a, const double *b)
+{
+    return (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]);
+}
+
+int mf_prefilter_split_two(const double *n, int count, int *side)
+{
+    if (!n || !side || count < 1)
+        return 0;
+    double mean[3] = {0.0, 0.0, 0.0};
+    for (int q = 0; q < count; ++q) {
+        side[q] = 0;
+        for (int i = 0; i < 3; ++i)
+            mean[i] += n[3 * q + i];
+    }
+    for (int i = 0; i < 3; ++i)
+        mean[i] /= count;
+    int a = 0, b = 0;
+    double best = -1.0;
+    for (int q = 0; q < count; ++q)
+        if (dist2(n + 3 * q, mean) > best)
+            best = dist2(n + 3 * q, mean), a = q;
+    best = -1.0;
+    for (int q = 0; q < count; ++q)
+        if (dist2(n + 3 * q, n + 3 * a) > best)
+            best = dist2(n + 3 * q, n + 3 * a), b = q;
+    if (!(best > 0.0))
+        return 0;
+    double c[2][3] = {{n[3 * a], n[3 * a + 1], n[3 * a + 2]}, {n[3 * b], n[3 * b + 1], n[3 * b + 2]}};
+    int cnt[2] = {0, 0};
+    for (int round = 0; round < 50; ++round) {
+        int changed = 0;
+        double sum[2][3] = {{0, 0, 0}, {0, 0, 0}};
+        cnt[0] = cnt[1] = 0;
+        for (int q = 0; q < count; ++q) {
+            int sd = dist2(n + 3 * q, c[1]) < dist2(n + 3 * q, c[0]);
+            changed |= round == 0 || side[q] != sd;
+            side[q] = sd;
+            cnt[sd]++;
+            for (int i = 0; i < 3; ++i)
+                sum[sd][i] += n[3 * q + i];
+        }
+        if (cnt[0] == 0 || cnt[1] == 0)
+            break;
+        for (int k = 0; k < 2; ++k)
+            for (int i = 0; i < 3; ++i)
+                c[k][i] = sum[k][i] / cnt[k];
+        if (!changed)
+            break;
+    }
+    if (cnt[0] == 0 || cnt[1] == 0) {
+        for (int q = 0; q < count; ++q)
+            side[q] = 0;
+        return 0;
+    }
+    /* the order: half a has the larger mean x, then y, then z (c holds the final means) */
+    int swap = 0;
+    for (int i = 0; i < 3; ++i)
+        if (c[0][i] != c[1][i]) {
+            swap = c[1][i] > c[0][i];
+            break;
+        }
+    if (swap)
+        for (int q = 0; q < count; ++q)
+            side[q] = !side[q];
+    return swap ? cnt[0] : cnt[1];
+}
+
 /* ---- one footprint ---------------------------------------------------------------------------- */
 
 /* The mass of the LTC M above the horizon: the clamped cosine over the half-space (M^T z).w > 0,
@@ -1452,6 +1525,53 @@ static int level1_samples(const mf_prefilter_options *o)
     return n < 64 ? 64 : n;
 }
 
+/* options.lobe: keeps in nrm (compacted, in their order) the texels of the selected half of the
+ * footprint's 2-means split (mf_prefilter_split_two; half a: all of them when it does not split, half b
+ * none), *nsel their count, and sets alb (2 per view) to the mean of their one-texel albedos and error
+ * estimates: the albedo of the half's own mixture.  Texels with bitwise equal normals share one
+ * computation (the normals are sorted for it, so the sums' order does not depend on the texels'). */
+static mf_status half_select(const mf_prefilter_options *o, const mf_brdf_model *base, double *nrm, int n,
+                             double *alb, int *nsel)
+{
+    int nv = o->n_theta * o->n_phi;
+    int *side = malloc(sizeof(int) * (size_t)n);
+    if (!side)
+        return MF_ERR_ALLOC;
+    int want = o->lobe - 1, m = 0;
+    mf_prefilter_split_two(nrm, n, side);
+    for (int q = 0; q < n; ++q)
+        if (side[q] == want)
+            memmove(nrm + 3 * m++, nrm + 3 * q, sizeof(double) * 3);
+    free(side);
+    *nsel = m;
+    if (!m)
+        return MF_OK;
+    wnormal *srt = malloc(sizeof *srt * (size_t)m);
+    double *one = malloc(sizeof(double) * 2 * (size_t)nv);
+    mf_status st = srt && one ? MF_OK : MF_ERR_ALLOC;
+    if (st == MF_OK) {
+        for (int q = 0; q < m; ++q) {
+            memcpy(srt[q].v, nrm + 3 * q, sizeof(double) * 3);
+            srt[q].v[3] = 0.0;
+        }
+        qsort(srt, (size_t)m, sizeof *srt, wnormal_cmp);
+        memset(alb, 0, sizeof(double) * 2 * (size_t)nv);
+        for (int q = 0; q < m && st == MF_OK;) {
+            int e = q;
+            while (e < m && !memcmp(srt[e].v, srt[q].v, sizeof(double) * 3))
+                ++e;
+            st = one_texel_albedo(o, base, srt[q].v, one);
+            for (int i = 0; i < 2 * nv && st == MF_OK; ++i)
+                alb[i] += (e - q) * one[i];
+            q = e;
+        }
+        for (int i = 0; i < 2 * nv; ++i)
+            alb[i] /= m;
+    }
+    free(srt), free(one);
+    return st;
+}
+
 /* One footprint: its (clustered) normals; theta = 0 fitted once (the view along the normal does not
  * depend on phi: the lobe at phi is the phi = 0 lobe rotated, M_phi = R_z(-phi) M_0 R_z(phi)); for
  * every phi the normals in the view-azimuth-aligned frame, their mirror symmetry y -> -y if they
@@ -1500,11 +1620,34 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
     qkey *key = NULL;
     mf_status st = tex && cn && cw && alb && res ? MF_OK : MF_ERR_ALLOC;
     int nc = 0;
+    /* share: the part of the footprint's texels this table fits (options.lobe: a half; 1 otherwise); the
+     * fits see the half's own mixture (its albedos alb, the mean over its texels), the stored albedos
+     * and magnitudes are scaled by share (store_alb) */
+    double share = 1.0;
+    size_t base_idx = ((size_t)row * lv->width + col) * nv;
     if (st == MF_OK) {
         int k = 0;
         for (int y = row * fh; y < (row + 1) * fh; ++y)
             for (int x = col * fw; x < (col + 1) * fw; ++x, ++k)
                 memcpy(tex + 3 * k, j->normals + 3 * ((size_t)y * j->width + x), 3 * sizeof(double));
+        if (o->lobe) {
+            int nsel = 0;
+            st = half_select(o, j->base, tex, nfoot, alb, &nsel);
+            if (st == MF_OK && nsel == 0) { /* half b of a footprint that does not split: empty */
+                const double id[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, zero[MF_LTCFIT_ANISO_NPARAMS] = {0};
+                mf_ltcfit_aniso_entry e0;
+                memset(&e0, 0, sizeof e0);
+                e0.converged = 1;
+                for (int v = 0; v < nv; ++v)
+                    store(j, lv, base_idx + v, id, zero, 0.0, 0.0, &e0, 1);
+                free(tex), free(cn), free(cw), free(alb), free(res);
+                return MF_OK;
+            }
+            share = (double)nsel / nfoot;
+            nfoot = nsel;
+        }
+    }
+    if (st == MF_OK) {
         int uniform = 1;
         for (int i = 1; i < nfoot && uniform; ++i)
             uniform = tex[3 * i] == tex[0] && tex[3 * i + 1] == tex[1] && tex[3 * i + 2] == tex[2];
@@ -1522,8 +1665,9 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
             nc = nfoot;
         }
         /* the magnitudes: the exact mixture of the texels' albedos (not of the clusters'), from the
-         * level's albedo pyramid (albedo_reduce) */
-        memcpy(alb, j->lalb[level - 1] + 2 * ((size_t)row * lv->width + col) * nv, sizeof(double) * 2 * (size_t)nv);
+         * level's albedo pyramid (albedo_reduce); a half's from its texels (half_select) */
+        if (!o->lobe)
+            memcpy(alb, j->lalb[level - 1] + 2 * ((size_t)row * lv->width + col) * nv, sizeof(double) * 2 * (size_t)nv);
         /* A negative albedo, which the fit refuses as outside its domain: the one-texel albedo table's
          * quadrature does not resolve the base lobe (alpha 0.002 on make_bump.py's map: -0.0104 at the
          * grazing view, estimated error 0.025).  Said here, naming the footprint, view and roughness. */
@@ -1553,7 +1697,6 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
         if (!rn || !rw || !un || !uw || !key)
             st = MF_ERR_ALLOC;
     }
-    size_t base_idx = ((size_t)row * lv->width + col) * nv;
     /* theta = 0: once, at phi = 0.  Its symmetries only on the fine MF_PREFILTER_MIRROR_TOL grid: this
      * one lobe, conjugated, serves every azimuth, so it is continuous in phi by construction, and the
      * free fit of an 8-bit groove is the better one (demo map, 4 x 8 views, levels 2-4, with the rows'
@@ -1595,7 +1738,7 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
                         m[3 * r + 2] = t[3 * r + 2];
                     }
                     int v = b; /* i_theta = 0 */
-                    store(j, lv, base_idx + v, b ? m : e.m, e.lobe, alb[2 * v], alb[2 * v + 1], &e, 1);
+                    store(j, lv, base_idx + v, b ? m : e.m, e.lobe, share * alb[2 * v], share * alb[2 * v + 1], &e, 1);
                 }
             }
             mf_prefilter_mix_free(&mix);
@@ -1614,7 +1757,7 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
                 for (int i = 0; i < 9; ++i)
                     m[i] = lv->m[9 * (base_idx + u) + i];
                 store(j, lv, base_idx + v, m, j->lobes[level - 1] + MF_LTCFIT_ANISO_NPARAMS * (base_idx + u),
-                      alb[2 * v], alb[2 * v + 1], &e0, 1);
+                      share * alb[2 * v], share * alb[2 * v + 1], &e0, 1);
             }
             continue;
         }
@@ -1669,7 +1812,7 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
                 st = MF_ERR_INTERNAL;
                 break;
             }
-            store(j, lv, base_idx + v, e.m, e.lobe, alb[2 * v], alb[2 * v + 1], &e, 1);
+            store(j, lv, base_idx + v, e.m, e.lobe, share * alb[2 * v], share * alb[2 * v + 1], &e, 1);
             res[v] = e.residual;
             prev = j->lobes[level - 1] + MF_LTCFIT_ANISO_NPARAMS * (base_idx + v);
         }
@@ -1844,6 +1987,8 @@ static mf_status check_run(const double *normals, int width, int height, const m
         return FAIL("cluster cell %g not in [0, 4]", o->cluster_cell);
     if (o->level1_shift < 0 || o->level1_shift > 8)
         return FAIL("level1_shift %d not in 0..8", o->level1_shift);
+    if (o->lobe < 0 || o->lobe > 2)
+        return FAIL("lobe %d not in 0..2", o->lobe);
     if (!is_pow2(width) || !is_pow2(height) || (width == 1 && height == 1) || width > 4096 || height > 4096)
         return FAIL("map size %d x %d: width and height must be powers of two, 1..4096, not both 1", width, height);
     for (long t = 0; t < (long)width * height; ++t) {

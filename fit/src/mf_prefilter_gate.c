@@ -305,6 +305,7 @@ struct mf_prefilter_gate_stream {
      * blocks, owned by the stream; xscr: this stream's or part's own block) */
     double *xscr_all, *xscr;
     int threads;           /* o->threads (1 without o), at most GS_MAX_THREADS */
+    int half;              /* o->lobe != 0: a half table's gate (mf_prefilter_gate.half_table) */
     struct gs_part *parts; /* threads of them, reused for every row */
     /* the gate across tiles (docs/prefilter.md, "The gate across ranks"), mode:
      *   0 the whole gate;
@@ -406,6 +407,7 @@ static mf_status gs_begin(const mf_prefilter_level *shapes, int nlevels, const d
     if (o)
         s->o = *o;
     s->lambert = s->ref && o->base == MF_PREFILTER_BASE_LAMBERT;
+    s->half = o && o->lobe != 0;
     s->k_energy = s->k_level = s->k_view = s->k_texel = UINT64_MAX;
     s->k_cont_texel = s->k_cont_view = s->k_cont_grazing = s->k_cont_cross = s->k_cont_excess = UINT64_MAX;
     s->k_cont_owner = s->k_cont_owner_view = s->k_cont_dominated = UINT64_MAX;
@@ -1170,6 +1172,9 @@ mf_status mf_prefilter_gate_stream_end(mf_prefilter_gate_stream *s)
         if (g->owner_theta_gated)
             g->pass = g->pass && g->pass_cont_owner_theta;
     }
+    g->half_table = s->half;
+    if (s->half)
+        g->pass = g->pass_energy && g->pass_nan;
     mf_prefilter_gate_stream_free(s);
     return MF_OK;
 }

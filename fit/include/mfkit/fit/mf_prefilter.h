@@ -271,6 +271,15 @@ typedef struct mf_prefilter_options {
                             max(64, samples >> level1_shift) directions (default 2 for GGX: 1024 of 4096,
                             revision 7; 0 for Lambert and the diffuse defaults: samples); 0..8.
                             docs/prefilter_log.md, "Speed of revision 7" */
+    int lobe;            /* 0 (the default): each entry's lobe is fitted to the whole footprint's effective
+                            BRDF.  1 or 2: to the part of it of one half of the footprint's texels, half a
+                            (1) or half b (2) of the 2-means split of its normals (mf_prefilter_split_two),
+                            so that the two tables' lobes sum to a two-lobe table: the entry's magnitude and
+                            albedo are the half's share, (1/N) sum over the half's texels of their albedos
+                            (the two halves' albedos sum to the footprint's), and its M is the fit of the
+                            half's own mixture (its texels at equal weights).  A footprint with one distinct
+                            normal has no split: half a is all of it, half b empty (M the identity,
+                            magnitude and albedo 0).  docs/prefilter.md, "Two lobes per entry" */
 } mf_prefilter_options;
 
 #define MF_PREFILTER_LIGHTS_LADDER 0
@@ -434,6 +443,11 @@ typedef struct mf_prefilter_gate {
     double max_cont_owner_theta, worst_cont_owner_theta, worst_cont_dominated_theta;
     int pass_cont_owner_theta, owner_theta_gated;
     char where_cont_owner_theta[128], where_cont_dominated_theta[128];
+    /* 1 for a table of one half of two lobes (options.lobe 1 or 2): pass is energy and nan alone.  The
+     * level check (a parent's half is not the union of its children's halves: each level splits its own
+     * footprints) and every check against the reference (the whole footprint's: a half shades part of
+     * it) are computed and reported, not gated. */
+    int half_table;
 } mf_prefilter_gate;
 
 /* Sets the default bounds and clears the results. */
@@ -619,6 +633,16 @@ mf_status mf_prefilter_gate_stream_merge(mf_prefilter_gate_stream *s, const mf_p
  * stores only these in its tile files (docs/prefilter.md, "The gate across ranks").  Returns 0 for
  * arguments out of range. */
 int mf_prefilter_gate_ref_cols(int tw, int th, int y, int c[4]);
+
+/* The 2-means split of mf_prefilter_options.lobe: count unit normals (xyz) into two halves, side[q] = 0
+ * (half a) or 1 (half b); returns the size of half b, 0 when the normals do not split (one distinct
+ * normal: every side 0).  Lloyd's iteration in R^3 from the normal farthest from the mean and the normal
+ * farthest from that (the first such in the given order), at most 50 rounds; it depends only on the
+ * normals and their order (a footprint's texels are taken row by row, so not on the tiling).  The
+ * halves' order: half a is the one whose normals' mean has the larger x, then y, then z (on an exact
+ * tie, the first-found cluster), so a groove's facets keep their tables across texels and levels
+ * (a split along y has a seam where the order flips: any rule on an unoriented axis has one). */
+int mf_prefilter_split_two(const double *normals, int count, int *side);
 
 /* The view of table index (i_theta, i_phi). */
 double mf_prefilter_theta(const mf_prefilter_options *o, int i);
