@@ -57,7 +57,7 @@ static const char *const k_green_names[] = {"up", "down", NULL};
 static const char *const k_encoding_names[] = {"auto", "unorm", "raw", NULL};
 static const char *const k_base_names[] = {"ggx", "lambert", "both", NULL};
 
-enum { P_OUT, P_ROUGHNESS, P_VIEWS, P_GREEN, P_ENCODING, P_TOLERANCE, P_THREADS, P_SAMPLES, P_TILE, P_MAX_TILES, P_BASE, P_NO_KEEP_ALBEDO, P_FORCE, P_DIFFUSE_VIEWS, P_QUIET, P_SEED, P_NOPTS };
+enum { P_OUT, P_ROUGHNESS, P_VIEWS, P_GREEN, P_ENCODING, P_TOLERANCE, P_THREADS, P_SAMPLES, P_TILE, P_MAX_TILES, P_BASE, P_NO_KEEP_ALBEDO, P_FORCE, P_DIFFUSE_VIEWS, P_QUIET, P_SEED, P_LOBES, P_NOPTS };
 static const cli_opt k_opts[P_NOPTS] = {
     {.name = "--out", .metavar = "DIR", .kind = CLI_OPT_STRING, .required = 1,
      .help = "output directory (created if missing)"},
@@ -94,6 +94,10 @@ static const cli_opt k_opts[P_NOPTS] = {
     {.name = "--quiet", .kind = CLI_OPT_FLAG, .help = "no progress on stderr (shown only on a terminal anyway)"},
     {.name = "--seed", .metavar = "S", .kind = CLI_OPT_U64, .def = "1",
      .help = "scramble of the fits' direction sets (both tables; recorded in the manifest and checkpoint)"},
+    {.name = "--lobes", .metavar = "N", .kind = CLI_OPT_INT, .lo = 1, .hi = 2, .def = "1",
+     .help = "2: also two lobes per entry for the specular table, DIR/lobe_a and DIR/lobe_b (the 2-means halves "
+             "of each footprint's normals; a renderer sums their shading), each a table of the same files "
+             "(docs/prefilter.md, \"Two lobes per entry\"); about 2x the specular fitting time"},
 };
 static const cli_command k_prefilter_cmd = {
     .name = "prefilter",
@@ -116,7 +120,9 @@ static const cli_command k_prefilter_cmd = {
         "against children) runs before anything is written: on failure, exit 1 and nothing written unless\n"
         "--force.  Works tile by tile with a checkpoint in DIR/.prefilter-work: rerunning an\n"
         "interrupted command resumes it.  Under mpirun (MFKIT_WITH_MPI builds) the ranks share the tiles\n"
-        "and write the same bits as one process.\n",
+        "and write the same bits as one process.  --lobes 2 adds the two-lobe specular table: DIR/lobe_a and\n"
+        "DIR/lobe_b, one table per half of each footprint's 2-means split of its normals; a renderer shades both\n"
+        "and sums (their gates check energy and NaN; the one-lobe table keeps the whole gate).\n",
     .opts = k_opts,
     .nopts = P_NOPTS,
     .epilog = "exit status: 0 success, 1 gate failed, 2 usage or input error, 3 I/O error, 4 fit failure,\n"
@@ -1017,13 +1023,22 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
         lobes += stats[l].lobes, nonfinite += stats[l].nonfinite, magneg += stats[l].magnitude_neg,
             worst_alb = fmax(worst_alb, stats[l].worst_albedo_err);
     int gate_ok = nonfinite == 0 && magneg == 0 && g.pass;
+    /* a half table of two lobes (--lobes 2): its gate is energy and NaN (mf_prefilter_gate.half_table) */
+#define PF_VERDICT(p) ((p) ? "ok" : o->lobe ? "above it, not gated for a half table" : "FAIL")
+    if (ok && o->lobe)
+        fprintf(stderr,
+                "mfkit prefilter: half %c of two lobes: gated on energy and NaN; the level and continuity checks are "
+                "reported only (a half shades part of its footprint, and each level splits its own footprints)\n",
+                "ab"[o->lobe - 1]);
     if (ok) {
         fprintf(stderr,
                 "mfkit prefilter: gate %s: energy %.4g (bound %.3g) %s, non-finite %ld %s, negative magnitudes %ld, "
                 "level %.4g (bound %.3g) %s; reported only: view spike %.4g (%.3g), texel spike %.4g (%.3g)\n",
                 gate_ok ? "passed" : "FAILED", g.worst_energy, g.max_energy, g.pass_energy ? "ok" : "FAIL",
                 g.nan_entries + nonfinite, g.pass_nan && !nonfinite ? "ok" : "FAIL", magneg, g.worst_level, g.max_level,
-                g.pass_level ? "ok" : "FAIL", g.worst_view_spike, g.max_view_spike, g.worst_texel_spike, g.max_texel_spike);
+                PF_VERDICT(g.pass_level), g.worst_view_spike, g.max_view_spike, g.worst_texel_spike, g.max_texel_spike);
+    }
+    if (ok && !o->lobe) { /* the checks against the reference (a half table's: in its manifest, not gated) */
         if (g.cont_gated)
             fprintf(stderr,
                     "mfkit prefilter: continuity against the reference: texel spike %.4g, view spike %.4g, grazing views "
@@ -1062,11 +1077,11 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
         if (g.cont_gated && !(g.pass_cont_texel && g.pass_cont_view && g.pass_cont_grazing))
             fprintf(stderr, "mfkit prefilter: worst continuity at %s\n",
                     !g.pass_cont_texel ? g.where_cont_texel : !g.pass_cont_view ? g.where_cont_view : g.where_cont_grazing);
-        if (!g.pass_energy)
-            fprintf(stderr, "mfkit prefilter: worst energy at %s\n", g.where_energy);
-        if (!g.pass_level)
-            fprintf(stderr, "mfkit prefilter: worst level at %s\n", g.where_level);
     }
+    if (ok && !g.pass_energy)
+        fprintf(stderr, "mfkit prefilter: worst energy at %s\n", g.where_energy);
+    if (ok && !g.pass_level && !o->lobe)
+        fprintf(stderr, "mfkit prefilter: worst level at %s\n", g.where_level);
     if (ok) {
         b.len = 0;
         write_glsl(&b, o);
@@ -1136,10 +1151,22 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
                           li + 1 < nl ? "," : "");
         }
         mf_buf_printf(&b, "  ],\n  \"lobes\": %ld,\n", lobes);
+        if (o->lobe)
+            mf_buf_printf(&b,
+                          "  \"two_lobes\": {\"half\": \"%c\", \"other\": \"../lobe_%c\", \"one_lobe\": \"..\", \"split\": "
+                          "\"each footprint's normals by 2-means (mf_prefilter_split_two), half a the larger mean n.x (then "
+                          "n.y, n.z); albedo and magnitude are the half's share, so the two halves' shadings sum to the "
+                          "footprint's; half b of a footprint with one distinct normal: identity, magnitude 0\", "
+                          "\"gate\": \"energy and NaN gated; level and continuity reported only\"},\n",
+                          "ab"[o->lobe - 1], "ba"[o->lobe - 1]);
         mf_buf_printf(&b,
-                      "  \"gate\": {\"passed\": %s, \"forced\": %s, \"function\": \"mf_prefilter_gate_run_ref\",\n"
+                      "  \"gate\": {\"passed\": %s, \"forced\": %s, \"function\": \"mf_prefilter_gate_run_ref\",%s\n"
                       "    \"energy\": {\"passed\": %s, \"worst\": %.6g, \"bound\": %.6g, \"where\": ",
-                      gate_ok ? "true" : "false", !gate_ok && A->force ? "true" : "false", g.pass_energy ? "true" : "false",
+                      gate_ok ? "true" : "false", !gate_ok && A->force ? "true" : "false",
+                      o->lobe ? " \"half_table\": \"gated on energy and nan alone; every other check is reported only "
+                                "(its passed flags are not part of passed)\","
+                              : "",
+                      g.pass_energy ? "true" : "false",
                       g.worst_energy, g.max_energy);
         mf_json_string(&b, g.where_energy);
         mf_buf_printf(&b, ", \"measures\": \"|magnitude (1 + n.z) / 2 / albedo - 1|, n = M^T z / |M^T z|\"},\n"
@@ -1246,6 +1273,7 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
                 lobes, A->ntiles, resumed, A->ranks, A->ranks > 1 ? "s" : "", o->threads, o->threads > 1 ? "s" : "", secs,
                 lobes ? 1e3 * secs / lobes : 0.0, aw, ac, lobes ? 1e6 * ac / lobes : 0.0);
     }
+#undef PF_VERDICT
     mf_buf_free(&b);
     free(gl); /* shapes only: no arrays */
     free(files), free(stats);
@@ -1397,6 +1425,9 @@ static int pf_main(int argc, char **argv, const pf_mpi *mpi)
     int base = v[P_BASE].set ? (int)v[P_BASE].i : 2; /* 0 ggx, 1 lambert, 2 both */
     if (base == 1 && v[P_ROUGHNESS].set)
         return cli_error(k_cmd, "--roughness: the Lambert base has no roughness (--base lambert)");
+    int nlobes = v[P_LOBES].set ? (int)v[P_LOBES].i : 1;
+    if (base == 1 && nlobes == 2)
+        return cli_error(k_cmd, "--lobes 2: two lobes are fitted for the specular (GGX) table only, not with --base lambert");
     if (base != 2 && v[P_DIFFUSE_VIEWS].set)
         return cli_error(k_cmd, "--diffuse-views: only with --base both (--views sets the one table's views)");
     int T = v[P_TILE].set ? (int)v[P_TILE].i : 64;
@@ -1430,18 +1461,29 @@ static int pf_main(int argc, char **argv, const pf_mpi *mpi)
         if (rc)
             return rc;
     }
-    /* both: the specular table first (in DIR), then the diffuse one (DIR/diffuse); a table that stops
-     * (gate failure, --max-tiles, interruption, error) ends the run, and a rerun resumes */
-    if (base != 2)
-        return pf_table(v, input, dir, base == 1, o[base], T, max_tiles, green_down, encoding, 0, mpi);
-    /* the specular checkpoint stays until the diffuse table is written: a rerun after an interrupted
-     * diffuse table only reassembles the specular one (the same bits) */
-    int rc = pf_table(v, input, dir, 0, o[0], T, max_tiles, green_down, encoding, 1, mpi);
-    if (rc)
-        return rc;
-    rc = pf_table(v, input, sub, 1, o[1], T, max_tiles, green_down, encoding, 0, mpi);
-    if (!rc && mpi->rank == 0)
-        pf_remove_work(dir);
+    /* the tables in order: the specular one (DIR), with --lobes 2 its halves (DIR/lobe_a, DIR/lobe_b), then the
+     * diffuse one (DIR/diffuse); a table that stops (gate failure, --max-tiles, interruption, error) ends the
+     * run, and a rerun resumes.  Every checkpoint but the last table's stays until the last table is written:
+     * a rerun after a stop in a later table only reassembles the earlier ones (the same bits) */
+    char la[4200], lb[4200];
+    snprintf(la, sizeof la, "%s/lobe_a", dir);
+    snprintf(lb, sizeof lb, "%s/lobe_b", dir);
+    const char *tdir[4];
+    int tlam[4], tlobe[4], nt = 0;
+    if (base != 1)
+        tdir[nt] = dir, tlam[nt] = 0, tlobe[nt++] = 0;
+    for (int k = 1; k <= 2 && nlobes == 2; ++k)
+        tdir[nt] = k == 1 ? la : lb, tlam[nt] = 0, tlobe[nt++] = k;
+    if (base != 0)
+        tdir[nt] = base == 1 ? dir : sub, tlam[nt] = 1, tlobe[nt++] = 0;
+    int rc = 0;
+    for (int t = 0; t < nt && !rc; ++t) {
+        mf_prefilter_options ot = o[tlam[t]];
+        ot.lobe = tlobe[t];
+        rc = pf_table(v, input, tdir[t], tlam[t], ot, T, max_tiles, green_down, encoding, t + 1 < nt, mpi);
+    }
+    for (int t = 0; t + 1 < nt && !rc && mpi->rank == 0; ++t)
+        pf_remove_work(tdir[t]);
     return rc;
 }
 
@@ -1527,6 +1569,8 @@ static int pf_table(const cli_val *v, const char *input, const char *dir, int la
                       "keep_albedo %d\nalpha %.17g\nviews %d x %d\nsamples %d\nmax_iterations %d\nseed %llu\ntile %d\n",
                       sizeof(mf_prefilter_gate_part), MF_PREFILTER_REVISION, W, H, (unsigned long long)h, lambert ? "lambert" : "ggx", o.keep_albedo, o.alpha, o.n_theta, o.n_phi, o.samples,
                       o.max_iterations, (unsigned long long)o.seed, T);
+        if (o.lobe)
+            mf_buf_printf(&key, "lobe %d\n", o.lobe);
         unsigned char *old = NULL;
         size_t oldlen = 0;
         int missing = 0;
@@ -1619,7 +1663,7 @@ static int pf_table(const cli_val *v, const char *input, const char *dir, int la
     q.o = o;
     q.o.threads = o.threads / workers > 0 ? o.threads / workers : 1;
     pf_progress prog = {.show = !g_pf_quiet && mpi->rank == 0 && isatty(fileno(stderr)),
-                        .what = lambert ? "diffuse" : "specular"};
+                        .what = lambert ? "diffuse" : o.lobe == 1 ? "specular, half a" : o.lobe == 2 ? "specular, half b" : "specular"};
     atomic_init(&prog.done, 0);
     atomic_init(&prog.last_ms, -1000);
     clock_gettime(CLOCK_MONOTONIC, &prog.t0);

@@ -70,7 +70,7 @@ static const char *const k_cmd = "prefilter-eval";
 static const char *const k_green_names[] = {"up", "down", NULL};
 static const char *const k_encoding_names[] = {"auto", "unorm", "raw", NULL};
 
-enum { E_OUT, E_LIGHTS, E_SAMPLES, E_TEXELS, E_SEED, E_MAP, E_GREEN, E_ENCODING, E_LTC_TABLE, E_LIGHT_ELEV, E_NOPTS };
+enum { E_OUT, E_LIGHTS, E_SAMPLES, E_TEXELS, E_SEED, E_MAP, E_GREEN, E_ENCODING, E_LTC_TABLE, E_LIGHT_ELEV, E_LOBES, E_NOPTS };
 static const cli_opt k_opts[E_NOPTS] = {
     {.name = "--out", .metavar = "DIR", .kind = CLI_OPT_STRING, .required = 1,
      .help = "output directory (created if missing): prefilter_eval.csv (every record) and "
@@ -97,6 +97,9 @@ static const cli_opt k_opts[E_NOPTS] = {
      .def = "75",
      .help = "the lights' centres follow the view's mirror direction up to this elevation from the normal (90: "
              "at every view, so the lights of grazing views sit on the horizon and partly below it)"},
+    {.name = "--lobes", .metavar = "N", .kind = CLI_OPT_INT, .lo = 1, .hi = 2, .def = "1",
+     .help = "2: mfkit's shading is the sum of the two-lobe tables PREFILTER_DIR/lobe_a and lobe_b (mfkit prefilter "
+             "--lobes 2) instead of the one-lobe table (GGX tables only)"},
 };
 static const cli_command k_eval_cmd = {
     .name = "prefilter-eval",
@@ -111,7 +114,8 @@ static const cli_command k_eval_cmd = {
         "A diffuse (Lambert) table (mfkit prefilter's DIR/diffuse, or --base lambert) is compared with the exact\n"
         "truth (the footprint average of each texel's Lambert integral over the light, in closed form), beside\n"
         "naive (Lambert at the mean normal) and LEADR's diffuse; its files have their own columns.\n"
-        "Reads PREFILTER_DIR/prefilter.json, ltc_mip<k>.npy, magnitude_mip<k>.npy and the normal map.\n"
+        "Reads PREFILTER_DIR/prefilter.json, ltc_mip<k>.npy, magnitude_mip<k>.npy and the normal map (with\n"
+        "--lobes 2 also those of PREFILTER_DIR/lobe_a and lobe_b, whose summed shading is mfkit's).\n"
         "Prints one line per level: each method's mean MSE over the level's cells (light x elevation), the\n"
         "cells where mfkit's lobes beat every baseline, and whether their level mean does.\n",
     .opts = k_opts,
@@ -268,8 +272,8 @@ static mf_status record_setup(double theta, double hside, double lmax, const flo
 
 static int eval_record(const mf_brdf_model *ggx, const pe_itab *itab, double alpha, const double *nrm, int count,
                        double theta,
-                       double hside, double lmax, const float *m9, float magnitude, int samples, uint64_t seed,
-                       pe_rec *r, char *msg, size_t msz)
+                       double hside, double lmax, const float *m9, float magnitude, const float *const *two,
+                       const float *two_mag, int samples, uint64_t seed, pe_rec *r, char *msg, size_t msz)
 {
     pe_setup su;
     if (record_setup(theta, hside, lmax, m9, &su) != MF_OK) {
@@ -280,6 +284,17 @@ static int eval_record(const mf_brdf_model *ggx, const pe_itab *itab, double alp
     const mf_polygon poly = su.poly;
     const mf_ltc ltc = su.ltc;
     r->est[M_MFKIT] = (double)magnitude * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
+    if (two) { /* --lobes 2: the sum of the two halves' lobes instead */
+        r->est[M_MFKIT] = 0.0;
+        for (int k = 0; k < 2; ++k) {
+            pe_setup sk;
+            if (record_setup(theta, hside, lmax, two[k], &sk) != MF_OK) {
+                snprintf(msg, msz, "a stored LTC matrix of lobe_%c is singular", "ab"[k]);
+                return CLI_EXIT_USAGE;
+            }
+            r->est[M_MFKIT] += (double)two_mag[k] * mf_ltc_integrate_polygon(&sk.ltc, &poly, MF_POLYGON_TWO_SIDED);
+        }
+    }
 
     /* the thesis' reference: the footprint average of the per-texel LTC shading */
     double sl = 0.0;
@@ -536,6 +551,21 @@ static int pe_main(int argc, char **argv)
     free(js);
     if (lambert && v[E_LTC_TABLE].set)
         return cli_error(k_cmd, "--ltc-table: only for a GGX table (%s is a Lambert table)", dir);
+    int two_lobes = v[E_LOBES].set && v[E_LOBES].i == 2;
+    if (two_lobes && lambert)
+        return cli_error(k_cmd, "--lobes 2: two-lobe tables are specular (GGX) only (%s is a Lambert table)", dir);
+    for (int k = 0; k < 2 && two_lobes; ++k) { /* the halves' manifests: written by mfkit prefilter --lobes 2 */
+        char hp[4300], want[64];
+        snprintf(hp, sizeof hp, "%s/lobe_%c/prefilter.json", dir, "ab"[k]);
+        char *hj = mf_prefilter_read_file(hp, &jl, msg, sizeof msg);
+        if (!hj)
+            return cli_error(k_cmd, "--lobes 2: %s (run mfkit prefilter --lobes 2)", msg), CLI_EXIT_IO;
+        snprintf(want, sizeof want, "\"two_lobes\": {\"half\": \"%c\"", "ab"[k]);
+        int good = strstr(hj, want) != NULL;
+        free(hj);
+        if (!good)
+            return cli_error(k_cmd, "--lobes 2: %s is not half %c of a two-lobe table", hp, "ab"[k]);
+    }
 
     /* the normal map, decoded as mfkit prefilter does */
     mf_image img;
@@ -547,7 +577,7 @@ static int pe_main(int argc, char **argv)
     }
     int rc = 0;
     double *normals = NULL, *foot = NULL;
-    float *lm = NULL, *mg = NULL;
+    float *lm = NULL, *mg = NULL, *tm[2] = {NULL, NULL}, *tg[2] = {NULL, NULL};
     FILE *fr = NULL, *fs = NULL;
     pe_acc *acc = NULL;
     char levtxt[8192] = ""; /* the level lines (print_level) */
@@ -671,6 +701,21 @@ static int pe_main(int argc, char **argv)
                            W, H, lev, lw, lh);
             break;
         }
+        for (int k = 0; k < 2 && two_lobes && rc == 0; ++k) {
+            long d2[6], dm2[4];
+            snprintf(path, sizeof path, "%s/lobe_%c/ltc_mip%d.npy", dir, "ab"[k], lev);
+            tm[k] = read_npy(path, 6, d2, msg, sizeof msg);
+            if (tm[k]) {
+                snprintf(path, sizeof path, "%s/lobe_%c/magnitude_mip%d.npy", dir, "ab"[k], lev);
+                tg[k] = read_npy(path, 4, dm2, msg, sizeof msg);
+            }
+            if (!tm[k] || !tg[k])
+                rc = CLI_EXIT_IO, cli_error(k_cmd, "%s", msg);
+            else if (memcmp(d, d2, sizeof d) || memcmp(dm, dm2, sizeof dm))
+                rc = cli_error(k_cmd, "%s/lobe_%c: level %d's shape differs from %s's", dir, "ab"[k], lev, dir);
+        }
+        if (rc)
+            break;
         mf_prefilter_options o;
         mf_prefilter_options_default(&o);
         o.n_theta = (int)d[2], o.n_phi = (int)d[3];
@@ -702,7 +747,9 @@ static int pe_main(int argc, char **argv)
                         rc = lambert ? eval_record_lambert(leadr, foot, count, theta, hs[l], lmax, lm + 9 * idx,
                                                            mg[idx], samples, rs, &r, msg, sizeof msg)
                                      : eval_record(ggx, &itab, alpha, foot, count, theta, hs[l], lmax, lm + 9 * idx,
-                                                   mg[idx], samples, rs, &r, msg, sizeof msg);
+                                                   mg[idx], two_lobes ? (const float *const[2]){tm[0] + 9 * idx, tm[1] + 9 * idx} : NULL,
+                                                   two_lobes ? (const float[2]){tg[0][idx], tg[1][idx]} : NULL,
+                                                   samples, rs, &r, msg, sizeof msg);
                         if (rc) {
                             cli_error(k_cmd, "%s: level %d texel (%d, %d): %s", dir, lev, col, row, msg);
                             break;
@@ -765,6 +812,8 @@ static int pe_main(int argc, char **argv)
             print_level(lev, lambert, acc, nlights * o.n_theta, levtxt, sizeof levtxt);
         free(lm), lm = NULL;
         free(mg), mg = NULL;
+        for (int k = 0; k < 2; ++k)
+            free(tm[k]), free(tg[k]), tm[k] = tg[k] = NULL;
     }
 done:
     if (fr && fclose(fr) != 0 && rc == 0)
@@ -780,12 +829,15 @@ done:
     if (rc != 0 && created)
         rmdir(out);
     free(acc), free(lm), free(mg), free(normals), free(foot);
+    for (int k = 0; k < 2; ++k)
+        free(tm[k]), free(tg[k]);
     if (have_itab)
         mf_table_free(&itab.t);
     mf_image_free(&img);
     mf_image_info_free(&info);
     if (rc == 0)
-        printf("%swrote %s and %s\n", levtxt, rpath, spath);
+        printf("%s%swrote %s and %s\n", two_lobes ? "mfkit: the two-lobe table (lobe_a + lobe_b)\n" : "", levtxt, rpath,
+               spath);
     return rc;
 }
 
