@@ -469,6 +469,36 @@ static void test_two_lobes(void)
             printf("half %c gate: pass %d energy %.3g (%s) nan %ld half_table %d\n", "ab"[k], g.pass, g.worst_energy, g.where_energy, g.nan_entries, g.half_table);
         CHECK(g.pass && g.pass_energy && g.pass_nan && g.half_table == 1);
     }
+    /* the two halves gated as one table (mf_prefilter_gate_run_pair): every check on the sum of the lobes.
+     * Each half is exactly one normal's lobe, so the sum follows the footprint and passes; the level check,
+     * which one lobe per entry cannot pass tightly on this map, reads near 0 (bound: a tenth of the one-lobe
+     * table's).  A half's magnitude zeroed at one entry must fail the energy check there. */
+    {
+        mf_prefilter_level *w1;
+        int nw1;
+        CHECK(mf_prefilter_run(n, 4, 4, &o, &w1, &nw1, msg, sizeof msg) == MF_OK);
+        mf_prefilter_gate g1, g2;
+        mf_prefilter_gate_bounds_default(&g1);
+        mf_prefilter_gate_bounds_default(&g2);
+        CHECK(mf_prefilter_gate_run_ref(w1, nw1, n, 4, 4, &o, &g1) == MF_OK);
+        CHECK(mf_prefilter_gate_run_pair(h[0], h[1], nh[0], n, 4, 4, &o, &g2) == MF_OK);
+        printf("two lobes, pair gate: pass %d, energy %.3g, level %.3g (one lobe: %.3g), own fit %.3g, excess %.3g, "
+               "largest error %.3g (one lobe: %.3g)\n",
+               g2.pass, g2.worst_energy, g2.worst_level, g1.worst_level, g2.worst_cont_owner, g2.worst_cont_excess,
+               g2.worst_ref_error, g1.worst_ref_error);
+        CHECK(g2.pass && g2.half_table == 0 && g2.worst_energy <= 1e-5);
+        CHECK(g2.worst_level <= 0.1 * g1.worst_level && g2.worst_ref_error < g1.worst_ref_error);
+        float keep = h[1][0].magnitude[5];
+        h[1][0].magnitude[5] = 0.0f;
+        mf_prefilter_gate_bounds_default(&g2);
+        CHECK(mf_prefilter_gate_run_pair(h[0], h[1], nh[0], n, 4, 4, &o, &g2) == MF_OK);
+        CHECK(!g2.pass && !g2.pass_energy && g2.worst_energy > 0.3);
+        h[1][0].magnitude[5] = keep;
+        o.lobe = 1;
+        CHECK(mf_prefilter_gate_run_pair(h[0], h[1], nh[0], n, 4, 4, &o, &g2) == MF_ERR_DOMAIN);
+        o.lobe = 0;
+        mf_prefilter_levels_free(w1, nw1);
+    }
     /* a constant map has no split: half b is empty (identity, magnitude and albedo 0) */
     mf_prefilter_level *e;
     int ne;

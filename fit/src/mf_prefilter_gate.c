@@ -59,16 +59,22 @@ static void gate_lights(double theta, mf_polygon *out)
     }
 }
 
-/* magnitude * the LTC integral of each gate light; NAN where the matrix is not invertible. */
-static void gate_shade(const float *m9, float mag, const mf_polygon *lights, double *s)
+/* magnitude * the LTC integral of each gate light, summed over the entry's nl lobes (9 floats of m and
+ * one magnitude each: two for a two-lobe table, mf_prefilter_gate_stream_set_lobes); NAN where a
+ * matrix is not invertible. */
+static void gate_shade(const float *m9, const float *mag, int nl, const mf_polygon *lights, double *s)
 {
-    mf_mat3 m;
-    for (int i = 0; i < 9; ++i)
-        m.m[i / 3][i % 3] = m9[i];
-    mf_ltc ltc;
-    int ok = mf_ltc_init(&ltc, m) == MF_OK;
     for (int k = 0; k < GATE_NLIGHTS; ++k)
-        s[k] = ok ? mag * mf_ltc_integrate_polygon(&ltc, &lights[k], MF_POLYGON_ONE_SIDED) : NAN;
+        s[k] = 0.0;
+    for (int j = 0; j < nl; ++j) {
+        mf_mat3 m;
+        for (int i = 0; i < 9; ++i)
+            m.m[i / 3][i % 3] = m9[9 * j + i];
+        mf_ltc ltc;
+        int ok = mf_ltc_init(&ltc, m) == MF_OK;
+        for (int k = 0; k < GATE_NLIGHTS; ++k)
+            s[k] += ok ? mag[j] * mf_ltc_integrate_polygon(&ltc, &lights[k], MF_POLYGON_ONE_SIDED) : NAN;
+    }
 }
 
 /* Own fit across elevations: the lobe's shading (magnitude * LTC integral, as gate_shade) of the three
@@ -77,17 +83,23 @@ static void gate_shade(const float *m9, float mag, const mf_polygon *lights, dou
  * the normal are the same at every elevation (gate_lights), so their shading is S's own. */
 #define GATE_MIRROR 3
 
-static void gate_shade_theta(const float *m9, float mag, const mf_polygon *lo, const mf_polygon *hi, double *x)
+static void gate_shade_theta(const float *m9, const float *mag, int nl, const mf_polygon *lo, const mf_polygon *hi,
+                             double *x)
 {
-    mf_mat3 m;
-    for (int i = 0; i < 9; ++i)
-        m.m[i / 3][i % 3] = m9[i];
-    mf_ltc ltc;
-    int ok = mf_ltc_init(&ltc, m) == MF_OK;
-    for (int q = 0; q < 2; ++q) {
-        const mf_polygon *L = q ? hi : lo;
-        for (int k = 0; k < GATE_MIRROR; ++k)
-            x[GATE_MIRROR * q + k] = L && ok ? mag * mf_ltc_integrate_polygon(&ltc, &L[k], MF_POLYGON_ONE_SIDED) : NAN;
+    for (int k = 0; k < 2 * GATE_MIRROR; ++k)
+        x[k] = 0.0;
+    for (int j = 0; j < nl; ++j) {
+        mf_mat3 m;
+        for (int i = 0; i < 9; ++i)
+            m.m[i / 3][i % 3] = m9[9 * j + i];
+        mf_ltc ltc;
+        int ok = mf_ltc_init(&ltc, m) == MF_OK;
+        for (int q = 0; q < 2; ++q) {
+            const mf_polygon *L = q ? hi : lo;
+            for (int k = 0; k < GATE_MIRROR; ++k)
+                x[GATE_MIRROR * q + k] +=
+                    L && ok ? mag[j] * mf_ltc_integrate_polygon(&ltc, &L[k], MF_POLYGON_ONE_SIDED) : NAN;
+        }
     }
 }
 
@@ -306,6 +318,7 @@ struct mf_prefilter_gate_stream {
     double *xscr_all, *xscr;
     int threads;           /* o->threads (1 without o), at most GS_MAX_THREADS */
     int half;              /* o->lobe != 0: a half table's gate (mf_prefilter_gate.half_table) */
+    int nlobes;            /* lobes per entry in the rows fed (mf_prefilter_gate_stream_set_lobes; 1) */
     struct gs_part *parts; /* threads of them, reused for every row */
     /* the gate across tiles (docs/prefilter.md, "The gate across ranks"), mode:
      *   0 the whole gate;
@@ -408,6 +421,7 @@ static mf_status gs_begin(const mf_prefilter_level *shapes, int nlevels, const d
         s->o = *o;
     s->lambert = s->ref && o->base == MF_PREFILTER_BASE_LAMBERT;
     s->half = o && o->lobe != 0;
+    s->nlobes = 1;
     s->k_energy = s->k_level = s->k_view = s->k_texel = UINT64_MAX;
     s->k_cont_texel = s->k_cont_view = s->k_cont_grazing = s->k_cont_cross = s->k_cont_excess = UINT64_MAX;
     s->k_cont_owner = s->k_cont_owner_view = s->k_cont_dominated = UINT64_MAX;
@@ -680,7 +694,8 @@ static void gs_own_fit_theta(mf_prefilter_gate_stream *s, int li, int row, int c
     for (int a = 0; a < nt; ++a)
         for (int b = 0; b < np; ++b) {
             size_t i = c0 + (size_t)a * np + b;
-            gate_shade_theta(m + 9 * i, magnitude[i], a > 0 ? s->lights + GATE_NLIGHTS * (a - 1) : NULL,
+            gate_shade_theta(m + 9 * s->nlobes * i, magnitude + s->nlobes * i, s->nlobes,
+                             a > 0 ? s->lights + GATE_NLIGHTS * (a - 1) : NULL,
                              a + 1 < nt ? s->lights + GATE_NLIGHTS * (a + 1) : NULL, X + 2 * GATE_MIRROR * (i - c0));
         }
     for (int a = 0; a < nt; ++a)
@@ -845,29 +860,37 @@ static void gs_row_cols(mf_prefilter_gate_stream *s, int level_index, int row, c
     for (size_t i = i0; i < i1; ++i) {
         int col = (int)(i / nv), a = (int)(i / np % nt), b = (int)(i % np), gcol = L->gox + col;
         size_t e = (size_t)grow * L->growlen + (size_t)L->gox * nv + i;
-        const float *mi = m + 9 * i;
+        const int nl = s->nlobes;
+        const float *mi = m + 9 * nl * i, *mg = magnitude + nl * i;
         if (region) {
-            A[i] = albedo ? albedo[i] : magnitude[i];
+            A[i] = albedo ? albedo[i] : mg[0];
             if (top || (!s->whole && gs_ring(L, row, col)))
-                gate_shade(mi, magnitude[i], s->lights + GATE_NLIGHTS * a, S + GATE_NLIGHTS * i);
+                gate_shade(mi, mg, nl, s->lights + GATE_NLIGHTS * a, S + GATE_NLIGHTS * i);
             continue;
         }
-        float mag = magnitude[i];
-        int bad = !isfinite(mag) || !(mag >= 0.0f);
-        for (int q = 0; q < 9; ++q)
+        float mag = mg[0];
+        int bad = 0;
+        for (int j = 0; j < nl; ++j)
+            bad |= !isfinite(mg[j]) || !(mg[j] >= 0.0f);
+        for (int q = 0; q < 9 * nl; ++q)
             bad |= !isfinite(mi[q]);
-        double n2 = (double)mi[6] * mi[6] + (double)mi[7] * mi[7] + (double)mi[8] * mi[8];
         A[i] = albedo ? albedo[i] : mag;
         if (!bad) {
             /* the lobe's albedo: magnitude * its mass above the horizon, (1 + n.z) / 2 with
-             * n = M^T z / |M^T z| (the clamped cosine over the half-space (M^T z).w > 0) */
-            double frac = 0.5 * (1.0 + mi[8] / sqrt(n2));
+             * n = M^T z / |M^T z| (the clamped cosine over the half-space (M^T z).w > 0); two lobes: the
+             * sum of theirs against the entry's albedo */
+            double la = 0.0;
+            for (int j = 0; j < nl; ++j) {
+                const float *mj = mi + 9 * j;
+                double n2 = (double)mj[6] * mj[6] + (double)mj[7] * mj[7] + (double)mj[8] * mj[8];
+                la += mg[j] * (0.5 * (1.0 + mj[8] / sqrt(n2)));
+            }
             double alb = albedo ? albedo[i] : mag;
-            gs_worst(alb > 0.0 ? fabs(mag * frac / alb - 1.0) : fabs(mag * frac), &g->worst_energy, &s->k_energy,
+            gs_worst(alb > 0.0 ? fabs(la / alb - 1.0) : fabs(la), &g->worst_energy, &s->k_energy,
                      gs_key(level_index, e, 0, 0), g->where_energy, sizeof g->where_energy, "energy", L->level, grow,
                      gcol, a, b);
         }
-        gate_shade(mi, mag, s->lights + GATE_NLIGHTS * a, S + GATE_NLIGHTS * i);
+        gate_shade(mi, mg, nl, s->lights + GATE_NLIGHTS * a, S + GATE_NLIGHTS * i);
         for (int k = 0; k < GATE_NLIGHTS; ++k)
             bad |= !isfinite(S[GATE_NLIGHTS * i + k]);
         g->nan_entries += bad;
@@ -1090,6 +1113,17 @@ static void gs_split(mf_prefilter_gate_stream *s, int n, int task, int li, int r
     gs_parts_run(s, s->parts, n);
 }
 
+mf_status mf_prefilter_gate_stream_set_lobes(mf_prefilter_gate_stream *s, int nlobes)
+{
+    if (!s || nlobes < 1 || nlobes > 2 || s->half || s->mode != 0)
+        return MF_ERR_DOMAIN;
+    for (int l = 0; l < s->nl; ++l)
+        if (s->L[l].fed)
+            return MF_ERR_DOMAIN;
+    s->nlobes = nlobes;
+    return MF_OK;
+}
+
 mf_status mf_prefilter_gate_stream_row(mf_prefilter_gate_stream *s, int level_index, int row, const float *m,
                                        const float *magnitude, const float *albedo)
 {
@@ -1105,6 +1139,8 @@ mf_status mf_prefilter_gate_stream_row_ref(mf_prefilter_gate_stream *s, int leve
         return MF_ERR_DOMAIN;
     if (s->ref && !ref && (s->mode == 1 || (s->mode == 2 && level_index < s->nreg)))
         return MF_ERR_DOMAIN; /* the region levels' R comes with their rows */
+    if (s->nlobes > 1 && !albedo)
+        return MF_ERR_DOMAIN; /* two lobes: the entries' albedos come with their rows */
     gs_level *L = &s->L[level_index];
     /* one part per thread, at least one column each; one thread works on the stream itself */
     const int n = s->threads < L->w ? s->threads : L->w;
@@ -1215,6 +1251,53 @@ mf_status mf_prefilter_gate_run_ref(const mf_prefilter_level *levels, int nlevel
     if (!levels || nlevels < 1 || !g || !normals || !o || width < 1 || height < 1)
         return MF_ERR_DOMAIN;
     return gate_levels(levels, nlevels, normals, width, height, o, g);
+}
+
+void mf_prefilter_gate_pair_row(const float *ma, const float *ga, const float *aa, const float *mb, const float *gb,
+                                const float *ab, size_t n, float *m, float *mag, float *alb)
+{
+    for (size_t i = 0; i < n; ++i) {
+        memcpy(m + 18 * i, ma + 9 * i, sizeof(float) * 9);
+        memcpy(m + 18 * i + 9, mb + 9 * i, sizeof(float) * 9);
+        mag[2 * i] = ga[i], mag[2 * i + 1] = gb[i];
+        alb[i] = (float)((double)aa[i] + (double)ab[i]);
+    }
+}
+
+mf_status mf_prefilter_gate_run_pair(const mf_prefilter_level *la, const mf_prefilter_level *lb, int nlevels,
+                                     const double *normals, int width, int height, const mf_prefilter_options *o,
+                                     mf_prefilter_gate *g)
+{
+    if (!la || !lb || nlevels < 1 || !g || !normals || !o || o->lobe != 0 || width < 1 || height < 1)
+        return MF_ERR_DOMAIN;
+    for (int l = 0; l < nlevels; ++l)
+        if (la[l].width != lb[l].width || la[l].height != lb[l].height || la[l].n_theta != lb[l].n_theta ||
+            la[l].n_phi != lb[l].n_phi || !la[l].m || !lb[l].m || !la[l].albedo || !lb[l].albedo)
+            return MF_ERR_DOMAIN;
+    mf_prefilter_gate_stream *s;
+    mf_status st = mf_prefilter_gate_stream_begin(la, nlevels, normals, width, height, o, g, &s);
+    if (st != MF_OK)
+        return st;
+    st = mf_prefilter_gate_stream_set_lobes(s, 2);
+    size_t most = 0;
+    for (int l = 0; l < nlevels; ++l)
+        most = (size_t)la[l].width * la[l].n_theta * la[l].n_phi > most ? (size_t)la[l].width * la[l].n_theta * la[l].n_phi : most;
+    float *m = malloc(sizeof(float) * 18 * most), *mag = malloc(sizeof(float) * 2 * most), *alb = malloc(sizeof(float) * most);
+    if (st == MF_OK && (!m || !mag || !alb))
+        st = MF_ERR_ALLOC;
+    int l, r;
+    while (st == MF_OK && mf_prefilter_gate_stream_next(s, &l, &r)) {
+        size_t n = (size_t)la[l].width * la[l].n_theta * la[l].n_phi, off = (size_t)r * n;
+        mf_prefilter_gate_pair_row(la[l].m + 9 * off, la[l].magnitude + off, la[l].albedo + off, lb[l].m + 9 * off,
+                                   lb[l].magnitude + off, lb[l].albedo + off, n, m, mag, alb);
+        st = mf_prefilter_gate_stream_row(s, l, r, m, mag, alb);
+    }
+    free(m), free(mag), free(alb);
+    if (st != MF_OK) {
+        mf_prefilter_gate_stream_free(s);
+        return st;
+    }
+    return mf_prefilter_gate_stream_end(s);
 }
 
 /* ---- the reference of a region tile, computed where the tile is fitted ------------------------ */

@@ -585,6 +585,24 @@ mf_status mf_prefilter_gate_stream_row_ref(mf_prefilter_gate_stream *s, int leve
                                            const float *magnitude, const float *albedo,
                                            const double *ref) MF_WARN_UNUSED;
 mf_status mf_prefilter_gate_stream_end(mf_prefilter_gate_stream *s) MF_WARN_UNUSED;
+/* Two lobes per entry (the two-lobe table of options.lobe 1 and 2, gated as one table): called after
+ * begin (a whole gate, not a region stream nor a half table's: options.lobe 0) and before the first row,
+ * nlobes 2 makes every row's m hold 18 floats per entry (half a's M, then half b's), its magnitude 2 (a's,
+ * b's) and its albedo (required) the entry's, the halves' sum.  Every check then reads the entry's
+ * shading as the sum of its lobes' (energy: the sum of the lobes' albedos against the entry's), so the
+ * level check and the checks against the reference judge the two-lobe table as they judge one lobe.
+ * MF_ERR_DOMAIN otherwise. */
+mf_status mf_prefilter_gate_stream_set_lobes(mf_prefilter_gate_stream *s, int nlobes) MF_WARN_UNUSED;
+/* One row of a two-lobe table from its halves' rows (n entries each): m (18 n), mag (2 n), alb (n; the sum
+ * of the halves', rounded once to float). */
+void mf_prefilter_gate_pair_row(const float *ma, const float *ga, const float *aa, const float *mb, const float *gb,
+                                const float *ab, size_t n, float *m, float *mag, float *alb);
+/* The gate of a two-lobe table held whole: the levels of its halves a and b (mf_prefilter_run with
+ * options.lobe 1 and 2; o: their options with lobe 0), fed with set_lobes 2.  MF_ERR_DOMAIN on levels of
+ * different shapes or without albedos. */
+mf_status mf_prefilter_gate_run_pair(const mf_prefilter_level *la, const mf_prefilter_level *lb, int nlevels,
+                                     const double *normals, int width, int height, const mf_prefilter_options *o,
+                                     mf_prefilter_gate *g) MF_WARN_UNUSED;
 void mf_prefilter_gate_stream_free(mf_prefilter_gate_stream *s);
 
 /* The gate's reference R where a region is fitted: for levels 1 .. nlevels of the width x height
