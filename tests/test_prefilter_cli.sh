@@ -166,4 +166,46 @@ ok '[ $rc1 -eq 0 ] && [ $rc2 -eq 0 ] && cmp -s "$tmp/s1/ltc_mip1.npy" "$tmp/pg/l
     ! cmp -s "$tmp/s2/ltc_mip1.npy" "$tmp/s1/ltc_mip1.npy" && grep -q "\"seed\": 2" "$tmp/s2/prefilter.json"' \
    "--seed 1 is the default, --seed 2 changes the lobes and is recorded (rc $rc1, $rc2)"
 
+# --lobes 2 on the shipped bump map (2 x 2 views, 256 directions; about 3 s of CPU): the halves DIR/lobe_a and
+# DIR/lobe_b, their albedos summing to the one-lobe table's (float32 storage: 1e-6 relative; an empty half
+# b, where a footprint holds one normal, has albedo and magnitude 0 and the identity), each half's
+# magnitudes keeping its albedo (1e-5, as above), both manifests naming their half and the two-lobe gate's
+# result (passed), and its report printed; with --base lambert it is refused.
+"$mfkit" prefilter "$src/tests/data/normalmaps/bump_16.png" --base ggx --views 2x2 --samples 256 --lobes 2 --threads 2 \
+    --out "$tmp/two" >"$tmp/two.log" 2>&1; rc=$?
+chk=$(/usr/bin/python3 - "$tmp/two" <<'PY'
+import sys, json, numpy as np
+d = sys.argv[1]
+bad, ws, wk = [], 0.0, 0.0
+for k in range(1, 5):
+    a = np.load(f"{d}/albedo_mip{k}.npy").astype(np.float64)
+    h = [np.load(f"{d}/lobe_{x}/albedo_mip{k}.npy").astype(np.float64) for x in "ab"]
+    ws = max(ws, float(np.max(np.abs((h[0] + h[1]) / a - 1))))
+    for x in "ab":
+        m = np.load(f"{d}/lobe_{x}/ltc_mip{k}.npy").astype(np.float64); g = np.load(f"{d}/lobe_{x}/magnitude_mip{k}.npy")
+        al = np.load(f"{d}/lobe_{x}/albedo_mip{k}.npy")
+        c = m[..., 2, :]; nz = c[..., 2] / np.linalg.norm(c, axis=-1)
+        full = al > 0
+        wk = max(wk, float(np.max(np.abs(g[full] * np.maximum((1 + nz[full]) / 2, 0.5) / al[full] - 1))))
+        empty = ~full
+        if np.any(g[empty] != 0) or np.any(m[empty] != np.eye(3)):
+            bad.append(f"lobe_{x} level {k}: an empty entry is not the identity with magnitude 0")
+if ws > 1e-6: bad.append(f"halves' albedo sum / albedo - 1 up to {ws:.3g}")
+if wk > 1e-5: bad.append(f"a half's lobe albedo / albedo - 1 up to {wk:.3g}")
+for x, y in (("a", "b"), ("b", "a")):
+    j = json.load(open(f"{d}/lobe_{x}/prefilter.json"))
+    if j.get("two_lobes", {}).get("half") != x or j["two_lobes"].get("other") != "../lobe_" + y:
+        bad.append(f"lobe_{x}: two_lobes {j.get('two_lobes')}")
+    if not (j["gate"]["passed"] and j.get("two_lobe_gate", {}).get("passed") is True):
+        bad.append(f"lobe_{x}: gate {j['gate']['passed']}, two_lobe_gate {j.get('two_lobe_gate')}")
+print("ok" if not bad else "; ".join(bad))
+PY
+)
+ok '[ $rc -eq 0 ] && [ "$chk" = ok ] && grep -q "two-lobe gate (the sum of lobe_a.s and lobe_b.s lobes) passed" "$tmp/two.log" && [ ! -e "$tmp/two/lobe_a/.prefilter-work" ] && [ ! -e "$tmp/two/.prefilter-work" ]' \
+   "--lobes 2: the halves sum to the footprint's albedo, keep their own, carry the two-lobe gate; no checkpoint left (rc=$rc): $chk: $(grep two-lobe "$tmp/two.log")"
+expect_error "--lobes 2 with --base lambert refused" 2 "\-\-lobes 2: two lobes are fitted for the specular" \
+   prefilter "$map" --base lambert --lobes 2 --out "$tmp/bad9"
+ok '[ ! -e "$tmp/bad9" ]' "--lobes 2 with --base lambert: no output directory"
+expect_error "--lobes 3 refused" 2 "\-\-lobes" prefilter "$map" --lobes 3 --out "$tmp/bad10"
+
 finish test_prefilter_cli

@@ -19,6 +19,8 @@
 #   - on make_bump.py's 32 x 32 map (3 x 4 views, 256 samples, about 4 s of CPU a run), --tile 16 (region
 #     tiles with inner entries, whose reference the tile files leave out) and --tile 32 give the same
 #     files and gate record;
+#   - --lobes 2 (the two-lobe tables DIR/lobe_a, DIR/lobe_b): the same bits across tilings, threads, runs
+#     stopped and resumed, and (under MPIEXEC) 2 ranks; the one-lobe table's bits unchanged;
 #   - --base both (the default: specular table in DIR, diffuse in DIR/diffuse): stopped by --max-tiles
 #     in either table and rerun, it writes the same bits as an uninterrupted run, and the specular
 #     checkpoint stays until the diffuse table is written.
@@ -104,6 +106,21 @@ ok '[ $nw -eq 14 ]' "the manifest holds the gate's 14 places, own fit's five (te
 ok 'same "$tmp/th1" "$tmp/th2" manifest && same "$tmp/th1" "$tmp/th3" manifest' "--threads 1, 2, 3: the same bits, manifest included"
 ok 'diff <(grep "^mfkit prefilter: \(gate\|reported\)" "$tmp/th1.log") <(grep "^mfkit prefilter: \(gate\|reported\)" "$tmp/th3.log")' \
    "--threads 1 and 3 print the same gate figures"
+# --lobes 2 (the halves DIR/lobe_a and DIR/lobe_b; half b assembled through the two-lobe gate, which reads
+# half a's checkpoint, then half a): --tile 4 on 2 threads and --tile 16 on 1 write the same bits in all
+# three tables (the manifests differ in their tiling record), and a --tile 4 run stopped by --max-tiles 15
+# three times (in the one-lobe table, in half a's fits, in half b's, then finished) the same bits as the
+# uninterrupted one, manifests (the two-lobe gate's record) included, and no checkpoint is left
+two=(prefilter "$src/tests/data/normalmaps/bump_16.png" --base ggx --views 3x4 --samples 128 --lobes 2)
+"$mfkit" "${two[@]}" --tile 16 --out "$tmp/l16" 2>"$tmp/l16.log"; rc1=$?
+"$mfkit" "${two[@]}" --tile 4 --threads 2 --out "$tmp/l4" 2>"$tmp/l4.log"; rc2=$?
+for i in 1 2 3 4; do "$mfkit" "${two[@]}" --tile 4 --max-tiles 15 --out "$tmp/lr" 2>"$tmp/lr$i.log"; eval "rs$i=\$?"; done
+same_two() { same "$1" "$2" ${3:-} && same "$1/lobe_a" "$2/lobe_a" ${3:-} && same "$1/lobe_b" "$2/lobe_b" ${3:-}; } # [manifest]
+ok '[ $rc1 -eq 0 ] && [ $rc2 -eq 0 ] && same_two "$tmp/l16" "$tmp/l4" && grep -q "\"two_lobe_gate\": {\"passed\": true" "$tmp/l4/lobe_a/prefilter.json"' \
+   "--lobes 2: --tile 4 on 2 threads and --tile 16 on 1 write the same bits in DIR, lobe_a and lobe_b (rc $rc1 $rc2): $(grep two-lobe "$tmp/l4.log" | head -c 300)"
+ok '[ $rs1 -eq 75 ] && [ $rs2 -eq 75 ] && [ $rs3 -eq 75 ] && [ $rs4 -eq 0 ] && same_two "$tmp/l4" "$tmp/lr" manifest && [ -z "$(find "$tmp/lr" -name .prefilter-work)" ]' \
+   "--lobes 2 stopped three times and resumed: the same bits, no checkpoint left (rc $rs1 $rs2 $rs3 $rs4): $(tail -1 "$tmp/lr3.log")"
+ok 'same "$tmp/l16" "$tmp/th1" manifest' "--lobes 2 leaves the one-lobe table's bits and manifest as --lobes 1 writes them"
 # the gate across tiles: the region tiles' reference R is computed where they are fitted and read back
 # by the assembly (docs/prefilter.md, "The gate across ranks"): --tile 4 (levels 1-2 from 16 region
 # tiles, 3-4 computed from their children) and --tile 16 (one region tile, levels 1-4) give the same gate
@@ -157,6 +174,12 @@ else
      "bump map: 2 ranks and the resumed run write 1 process's bits (manifest included), --tile 16 the same files"
   ok 'same_gate "$tmp/g1" "$tmp/g2" && same_gate "$tmp/g1" "$tmp/g3" && same_gate "$tmp/g1" "$tmp/g4"' \
      "bump map: the same gate record, places included, on 1 process, 2 ranks, 2 tilings and resumed: $(diff <(gate_rec "$tmp/g1") <(gate_rec "$tmp/g3") | head -c 600)"
+  # --lobes 2 on 2 ranks: the three tables as one process writes them, manifests included
+  two=(prefilter "$src/tests/data/normalmaps/bump_16.png" --base ggx --views 3x4 --samples 128 --lobes 2 --tile 4)
+  "$mfkit" "${two[@]}" --out "$tmp/l1" 2>"$tmp/l1.log"; rc1=$?
+  "${mpi[@]}" "$mfkit" "${two[@]}" --out "$tmp/l2" >"$tmp/l2.log" 2>&1; rc2=$?
+  ok '[ $rc1 -eq 0 ] && [ $rc2 -eq 0 ] && same "$tmp/l1" "$tmp/l2" manifest && same "$tmp/l1/lobe_a" "$tmp/l2/lobe_a" manifest && same "$tmp/l1/lobe_b" "$tmp/l2/lobe_b" manifest' \
+     "--lobes 2 on 2 ranks: the same bits in DIR, lobe_a and lobe_b (rc $rc1 $rc2): $(tail -2 "$tmp/l2.log")"
   "${mpi[@]}" "$mfkit" "${args[@]}" --tile 3 --out "$tmp/mbad" >"$tmp/mb.log" 2>&1
   ok '[ "$(grep -c "mfkit prefilter: --tile" "$tmp/mb.log")" -eq 1 ] && [ ! -e "$tmp/mbad" ]' \
      "2 ranks: a usage error is reported once, nothing written: $(head -c 600 "$tmp/mb.log")"

@@ -609,7 +609,14 @@ typedef struct {
     long ntiles;
     int ranks, lambert, force;
     const double *normals; /* the map, for the gate's reference */
+    const char *pair;      /* --lobes 2, half b: half a's table directory, whose checkpoint holds its tiles (the
+                              two-lobe gate, pf_assemble); NULL otherwise */
 } pf_assembly;
+
+/* The two-lobe gate's result (--lobes 2): set by half b's assembly (rank 0), written into both halves'
+ * manifests (half a is assembled after it) */
+static mf_prefilter_gate g_pf_pair;
+static int g_pf_pair_ran;
 
 static int pf_open_tile(const char *dir, long k, int rec, FILE **f, pf_rec *r, char *msg, size_t msg_size)
 {
@@ -800,7 +807,50 @@ typedef struct {
     pf_rec *recs;
     float *rm, *ra, *rb; /* one row: matrices, magnitudes, albedos */
     double *rr;          /* a region level's row of the gate's reference R, from its tiles (NULL: the gate computes it) */
+    FILE **pt;           /* --lobes 2, half b: half a's open tiles of the band, their records, its row, the pair's row */
+    pf_rec *precs;
+    float *pm, *pa, *pb, *qm, *qa, *qb;
 } pf_lvasm;
+
+/* Row rr of a tile (seg entries) from its open file: matrices, magnitudes, albedos. */
+static int pf_read_tile_row(FILE *f, const pf_rec *rec, int rr, size_t seg, float *rm, float *ra, float *rb)
+{
+    return fseek(f, (long)(rec->off_m + (int64_t)(rr * seg * 9 * sizeof(float))), SEEK_SET) == 0 &&
+           fread(rm, sizeof(float), 9 * seg, f) == 9 * seg &&
+           fseek(f, (long)(rec->off_mag + (int64_t)(rr * seg * sizeof(float))), SEEK_SET) == 0 &&
+           fread(ra, sizeof(float), seg, f) == seg &&
+           fseek(f, (long)(rec->off_alb + (int64_t)(rr * seg * sizeof(float))), SEEK_SET) == 0 &&
+           fread(rb, sizeof(float), seg, f) == seg;
+}
+
+/* --lobes 2: half a's row r of level P, read from its checkpoint's tiles (the same plan: the same map,
+ * tile size and views), for the two-lobe gate.  pt: the band's open tiles (opened at the band's first
+ * row, closed at the level's last), precs their records. */
+static int pf_pair_row(const char *pair, const pf_plan *P, int nv, int r, FILE **pt, pf_rec *precs, float *pm,
+                       float *pa, float *pb, char *msg, size_t msz)
+{
+    int gy = r / P->th, rr = r % P->th, ok = 1;
+    if (rr == 0) {
+        for (int gx = 0; gx < P->nx; ++gx)
+            if (pt[gx])
+                fclose(pt[gx]), pt[gx] = NULL;
+        for (int gx = 0; gx < P->nx && ok; ++gx) {
+            long k = P->base + (long)gy * P->nx + gx;
+            ok = pf_open_tile(pair, k, P->rec, &pt[gx], &precs[gx], msg, msz);
+            if (ok && (precs[gx].level != P->level || precs[gx].w != P->tw || precs[gx].h != P->th))
+                ok = 0, snprintf(msg, msz, "%.900s/" PF_WORK ": tile %ld does not hold level %d", pair, k, P->level);
+        }
+    }
+    size_t seg = (size_t)P->tw * nv;
+    for (int gx = 0; gx < P->nx && ok; ++gx)
+        if (!(ok = pf_read_tile_row(pt[gx], &precs[gx], rr, seg, pm + gx * seg * 9, pa + gx * seg, pb + gx * seg)))
+            snprintf(msg, msz, "%.900s/" PF_WORK ": tile %ld truncated", pair, P->base + (long)gy * P->nx + gx);
+    if (r == P->h - 1)
+        for (int gx = 0; gx < P->nx; ++gx)
+            if (pt[gx])
+                fclose(pt[gx]), pt[gx] = NULL;
+    return ok;
+}
 
 /* Streams the levels from the tile files row by row, in the gate's order (level l's row r right after
  * rows 2r, 2r + 1 of level l - 1: mf_prefilter_gate_stream_next), into the output files and the
@@ -872,6 +922,17 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
             ok = 0, snprintf(msg, sizeof msg, "out of memory");
             break;
         }
+        if (A->pair) {
+            V->pt = calloc((size_t)P->nx, sizeof *V->pt);
+            V->precs = malloc(sizeof(pf_rec) * (size_t)P->nx);
+            V->pm = malloc(sizeof(float) * 9 * row), V->pa = malloc(sizeof(float) * row);
+            V->pb = malloc(sizeof(float) * row), V->qm = malloc(sizeof(float) * 18 * row);
+            V->qa = malloc(sizeof(float) * 2 * row), V->qb = malloc(sizeof(float) * row);
+            if (!V->pt || !V->precs || !V->pm || !V->pa || !V->pb || !V->qm || !V->qa || !V->qb) {
+                ok = 0, snprintf(msg, sizeof msg, "out of memory");
+                break;
+            }
+        }
         gl[li] = (mf_prefilter_level){.level = P->level, .width = P->w, .height = P->h, .n_theta = o->n_theta,
                                       .n_phi = o->n_phi};
     }
@@ -886,6 +947,17 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
     if (ok && mf_prefilter_gate_stream_begin_regions(gl, nl, A->normals, A->W, A->H, A->W < A->T ? A->W : A->T,
                                                      A->H < A->T ? A->H : A->T, nreg, o, &g, &gs) != MF_OK)
         ok = 0, snprintf(msg, sizeof msg, "the gate could not run (out of memory, or no region tiles)");
+    /* --lobes 2, half b: the two-lobe gate, on the sum of half a's lobes (read from its checkpoint) and
+     * this half's: a whole stream (it computes its reference), fed the same rows in the same order */
+    mf_prefilter_gate g2;
+    mf_prefilter_gate_bounds_default(&g2);
+    mf_prefilter_gate_stream *gs2 = NULL;
+    mf_prefilter_options o2 = *o;
+    o2.lobe = 0;
+    if (ok && A->pair &&
+        (mf_prefilter_gate_stream_begin(gl, nl, A->normals, A->W, A->H, &o2, &g2, &gs2) != MF_OK ||
+         mf_prefilter_gate_stream_set_lobes(gs2, 2) != MF_OK))
+        ok = 0, snprintf(msg, sizeof msg, "the two-lobe gate could not run (out of memory)");
     int lvi, r;
     while (ok && mf_prefilter_gate_stream_next(gs, &lvi, &r)) {
         const pf_plan *P = &A->plans[lvi];
@@ -925,12 +997,7 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
         size_t seg = (size_t)P->tw * nv;
         for (int gx = 0; gx < P->nx && ok; ++gx) {
             FILE *f = tf[gx];
-            ok = fseek(f, (long)(recs[gx].off_m + (int64_t)(rr * seg * 9 * sizeof(float))), SEEK_SET) == 0 &&
-                 fread(rm + gx * seg * 9, sizeof(float), 9 * seg, f) == 9 * seg &&
-                 fseek(f, (long)(recs[gx].off_mag + (int64_t)(rr * seg * sizeof(float))), SEEK_SET) == 0 &&
-                 fread(ra + gx * seg, sizeof(float), seg, f) == seg &&
-                 fseek(f, (long)(recs[gx].off_alb + (int64_t)(rr * seg * sizeof(float))), SEEK_SET) == 0 &&
-                 fread(rb + gx * seg, sizeof(float), seg, f) == seg;
+            ok = pf_read_tile_row(f, &recs[gx], rr, seg, rm + gx * seg * 9, ra + gx * seg, rb + gx * seg);
             const size_t nref = MF_PREFILTER_GATE_NLIGHTS * seg;
             if (ok && V->rr) { /* the kept entries of the row (pf_ref_kept); the others NaN, never read */
                 double *dst = V->rr + gx * nref;
@@ -955,6 +1022,17 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
         if (mf_prefilter_gate_stream_row_ref(gs, lvi, r, rm, ra, rb, V->rr) != MF_OK) {
             ok = 0, snprintf(msg, sizeof msg, "the gate could not run (rows out of order)");
             break;
+        }
+        if (A->pair) {
+            if (!pf_pair_row(A->pair, P, nv, r, V->pt, V->precs, V->pm, V->pa, V->pb, msg, sizeof msg))
+                ok = 0;
+            else {
+                mf_prefilter_gate_pair_row(V->pm, V->pa, V->pb, rm, ra, rb, row, V->qm, V->qa, V->qb);
+                if (mf_prefilter_gate_stream_row(gs2, lvi, r, V->qm, V->qa, V->qb) != MF_OK)
+                    ok = 0, snprintf(msg, sizeof msg, "the two-lobe gate could not run (rows out of order)");
+            }
+            if (!ok)
+                break;
         }
         for (size_t i = 0; i < 9 * row; ++i)
             S->nonfinite += !isfinite(rm[i]);
@@ -1009,6 +1087,21 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
             ok = 0, snprintf(msg, sizeof msg, "the gate could not run (rows missing)");
     }
     mf_prefilter_gate_stream_free(gs);
+    if (ok && gs2) {
+        mf_status gst = mf_prefilter_gate_stream_end(gs2);
+        gs2 = NULL;
+        if (gst != MF_OK)
+            ok = 0, snprintf(msg, sizeof msg, "the two-lobe gate could not run (rows missing)");
+        g_pf_pair = g2, g_pf_pair_ran = 1;
+    }
+    mf_prefilter_gate_stream_free(gs2);
+    for (int l = 0; LA && l < nl; ++l) {
+        for (int gx = 0; LA[l].pt && gx < A->plans[l].nx; ++gx)
+            if (LA[l].pt[gx])
+                fclose(LA[l].pt[gx]);
+        free(LA[l].pt), free(LA[l].precs), free(LA[l].pm), free(LA[l].pa), free(LA[l].pb);
+        free(LA[l].qm), free(LA[l].qa), free(LA[l].qb);
+    }
     for (int l = 0; LA && l < nl; ++l) {
         for (int gx = 0; LA[l].tf && gx < A->plans[l].nx; ++gx)
             if (LA[l].tf[gx])
@@ -1022,7 +1115,7 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
     for (int l = 0; l < nl; ++l)
         lobes += stats[l].lobes, nonfinite += stats[l].nonfinite, magneg += stats[l].magnitude_neg,
             worst_alb = fmax(worst_alb, stats[l].worst_albedo_err);
-    int gate_ok = nonfinite == 0 && magneg == 0 && g.pass;
+    int gate_ok = nonfinite == 0 && magneg == 0 && g.pass && (!A->pair || g2.pass);
     /* a half table of two lobes (--lobes 2): its gate is energy and NaN (mf_prefilter_gate.half_table) */
 #define PF_VERDICT(p) ((p) ? "ok" : o->lobe ? "above it, not gated for a half table" : "FAIL")
     if (ok && o->lobe)
@@ -1080,6 +1173,23 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
     }
     if (ok && !g.pass_energy)
         fprintf(stderr, "mfkit prefilter: worst energy at %s\n", g.where_energy);
+    if (ok && A->pair) {
+        const mf_prefilter_gate *p = &g2;
+        fprintf(stderr,
+                "mfkit prefilter: two-lobe gate (the sum of lobe_a's and lobe_b's lobes) %s: energy %.4g %s, NaN %ld %s, "
+                "level %.4g %s, continuity across texels %.4g %s, own fit: texels %.4g, azimuths %.4g %s, elevations "
+                "%.4g %s (the one-lobe table's bounds); reported: largest error %.4g of the albedo\n",
+                p->pass ? "passed" : "FAILED", p->worst_energy, p->pass_energy ? "ok" : "FAIL", p->nan_entries,
+                p->pass_nan ? "ok" : "FAIL", p->worst_level, p->pass_level ? "ok" : "FAIL", p->worst_cont_excess,
+                p->pass_cont_excess ? "ok" : "FAIL", p->worst_cont_owner, p->worst_cont_owner_view,
+                p->pass_cont_owner ? "ok" : "FAIL", p->worst_cont_owner_theta,
+                p->pass_cont_owner_theta ? "ok" : p->owner_theta_gated ? "FAIL" : "above it", p->worst_ref_error);
+        const char *w = !p->pass_energy ? p->where_energy : !p->pass_level ? p->where_level
+                        : !p->pass_cont_excess ? p->where_cont_excess : !p->pass_cont_owner ? p->where_cont_owner
+                        : !p->pass_cont_owner_theta ? p->where_cont_owner_theta : NULL;
+        if (w)
+            fprintf(stderr, "mfkit prefilter: two-lobe gate: worst at %s\n", w);
+    }
     if (ok && !g.pass_level && !o->lobe)
         fprintf(stderr, "mfkit prefilter: worst level at %s\n", g.where_level);
     if (ok) {
@@ -1157,8 +1267,25 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
                           "\"each footprint's normals by 2-means (mf_prefilter_split_two), half a the larger mean n.x (then "
                           "n.y, n.z); albedo and magnitude are the half's share, so the two halves' shadings sum to the "
                           "footprint's; half b of a footprint with one distinct normal: identity, magnitude 0\", "
-                          "\"gate\": \"energy and NaN gated; level and continuity reported only\"},\n",
+                          "\"gate\": \"energy and NaN gated; level and continuity reported only; the two "
+                          "halves together: two_lobe_gate\"},\n",
                           "ab"[o->lobe - 1], "ba"[o->lobe - 1]);
+        if (o->lobe && g_pf_pair_ran) {
+            const mf_prefilter_gate *p = &g_pf_pair;
+            mf_buf_printf(&b,
+                          "  \"two_lobe_gate\": {\"passed\": %s, \"function\": \"mf_prefilter_gate_stream_set_lobes 2\", "
+                          "\"measures\": \"the one-lobe table's checks and bounds on each entry's shading summed over "
+                          "lobe_a and lobe_b\", \"energy\": %.6g, \"nan_entries\": %ld, \"level\": %.6g, "
+                          "\"excess\": %.6g, \"own_fit\": %.6g, \"own_fit_azimuths\": %.6g, \"own_fit_elevations\": %.6g, "
+                          "\"largest_error\": %.6g, \"where\": ",
+                          p->pass ? "true" : "false", p->worst_energy, p->nan_entries, p->worst_level,
+                          p->worst_cont_excess, p->worst_cont_owner, p->worst_cont_owner_view,
+                          p->worst_cont_owner_theta, p->worst_ref_error);
+            mf_json_string(&b, !p->pass_energy ? p->where_energy : !p->pass_level ? p->where_level
+                               : !p->pass_cont_excess ? p->where_cont_excess : !p->pass_cont_owner ? p->where_cont_owner
+                               : p->where_cont_owner_theta);
+            mf_buf_printf(&b, "},\n");
+        }
         mf_buf_printf(&b,
                       "  \"gate\": {\"passed\": %s, \"forced\": %s, \"function\": \"mf_prefilter_gate_run_ref\",%s\n"
                       "    \"energy\": {\"passed\": %s, \"worst\": %.6g, \"bound\": %.6g, \"where\": ",
@@ -1406,7 +1533,8 @@ static int pf_views(const char *opt, const char *text, mf_prefilter_options *o)
 }
 
 static int pf_table(const cli_val *v, const char *input, const char *dir, int lambert, mf_prefilter_options o, int T,
-                    long max_tiles, int green_down, int encoding, int keep_work, const pf_mpi *mpi);
+                    long max_tiles, int green_down, int encoding, int keep_work, int assemble, const char *pair,
+                    const pf_mpi *mpi);
 
 static int pf_main(int argc, char **argv, const pf_mpi *mpi)
 {
@@ -1461,34 +1589,45 @@ static int pf_main(int argc, char **argv, const pf_mpi *mpi)
         if (rc)
             return rc;
     }
-    /* the tables in order: the specular one (DIR), with --lobes 2 its halves (DIR/lobe_a, DIR/lobe_b), then the
-     * diffuse one (DIR/diffuse); a table that stops (gate failure, --max-tiles, interruption, error) ends the
-     * run, and a rerun resumes.  Every checkpoint but the last table's stays until the last table is written:
-     * a rerun after a stop in a later table only reassembles the earlier ones (the same bits) */
+    /* the steps in order: the specular table (DIR); with --lobes 2 its halves' fits (DIR/lobe_a, then
+     * DIR/lobe_b), half b assembled through the two-lobe gate (the sum of both halves' lobes, half a's read
+     * from its checkpoint), then half a assembled; then the diffuse table (DIR/diffuse).  A step that stops
+     * (gate failure, --max-tiles, interruption, error) ends the run, and a rerun resumes.  Every checkpoint
+     * stays until the last step is written: a rerun after a stop in a later step only reassembles the earlier
+     * tables (the same bits) */
     char la[4200], lb[4200];
     snprintf(la, sizeof la, "%s/lobe_a", dir);
     snprintf(lb, sizeof lb, "%s/lobe_b", dir);
-    const char *tdir[4];
-    int tlam[4], tlobe[4], nt = 0;
+    typedef struct { const char *dir; int lambert, lobe, assemble; const char *pair; } pf_step;
+    pf_step step[6];
+    int ns = 0;
     if (base != 1)
-        tdir[nt] = dir, tlam[nt] = 0, tlobe[nt++] = 0;
-    for (int k = 1; k <= 2 && nlobes == 2; ++k)
-        tdir[nt] = k == 1 ? la : lb, tlam[nt] = 0, tlobe[nt++] = k;
-    if (base != 0)
-        tdir[nt] = base == 1 ? dir : sub, tlam[nt] = 1, tlobe[nt++] = 0;
-    int rc = 0;
-    for (int t = 0; t < nt && !rc; ++t) {
-        mf_prefilter_options ot = o[tlam[t]];
-        ot.lobe = tlobe[t];
-        rc = pf_table(v, input, tdir[t], tlam[t], ot, T, max_tiles, green_down, encoding, t + 1 < nt, mpi);
+        step[ns++] = (pf_step){dir, 0, 0, 1, NULL};
+    if (nlobes == 2) {
+        step[ns++] = (pf_step){la, 0, 1, 0, NULL};
+        step[ns++] = (pf_step){lb, 0, 2, 1, la};
+        step[ns++] = (pf_step){la, 0, 1, 1, NULL};
     }
-    for (int t = 0; t + 1 < nt && !rc && mpi->rank == 0; ++t)
-        pf_remove_work(tdir[t]);
+    if (base != 0)
+        step[ns++] = (pf_step){base == 1 ? dir : sub, 1, 0, 1, NULL};
+    int rc = 0;
+    for (int t = 0; t < ns && !rc; ++t) {
+        mf_prefilter_options ot = o[step[t].lambert];
+        ot.lobe = step[t].lobe;
+        rc = pf_table(v, input, step[t].dir, step[t].lambert, ot, T, max_tiles, green_down, encoding, t + 1 < ns,
+                      step[t].assemble, step[t].pair, mpi);
+    }
+    for (int t = 0; t + 1 < ns && !rc && mpi->rank == 0; ++t)
+        pf_remove_work(step[t].dir);
     return rc;
 }
 
+/* One table: fits its tiles (those not in its checkpoint), then, with assemble, streams them into its files
+ * through the gate (rank 0); without, it stops there and keeps the checkpoint.  pair: --lobes 2, half b: half
+ * a's directory, whose checkpoint (fitted, not yet assembled) feeds the two-lobe gate. */
 static int pf_table(const cli_val *v, const char *input, const char *dir, int lambert, mf_prefilter_options o, int T,
-                    long max_tiles, int green_down, int encoding, int keep_work, const pf_mpi *mpi)
+                    long max_tiles, int green_down, int encoding, int keep_work, int assemble, const char *pair,
+                    const pf_mpi *mpi)
 {
     mf_image img;
     mf_image_info info;
@@ -1703,10 +1842,13 @@ static int pf_table(const cli_val *v, const char *input, const char *dir, int la
         rc = stopped;
         goto done;
     }
-    if (rc)
+    if (!rc && !assemble && mpi->rank == 0)
+        fprintf(stderr, "mfkit prefilter: %s: %ld tiles fitted (%ld resumed) in %.3f s wall; it is assembled after half b, "
+                        "whose assembly runs the two-lobe gate\n", dir, ntiles, resumed, secs);
+    if (rc || !assemble)
         goto done;
     if (mpi->rank == 0) {
-        pf_assembly A = {dir, input, W, H, nl, T, &o, plans, ntiles, mpi->size, lambert, v[P_FORCE].set, normals};
+        pf_assembly A = {dir, input, W, H, nl, T, &o, plans, ntiles, mpi->size, lambert, v[P_FORCE].set, normals, pair};
         if (prog.show)
             fprintf(stderr, "mfkit prefilter: %s: assembling the levels and running the gate\n", prog.what);
         rc = pf_assemble(&A, secs, resumed);
