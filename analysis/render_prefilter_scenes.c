@@ -7,7 +7,7 @@
  *
  *   render_prefilter_scenes --prefilter DIR [--map NORMALMAP] [--ltc-table FILE] [--size N] [--tiles T]
  *       [--distances D,D,...] [--light-half H] [--mc-samples K] [--images 0|1] [--seed S] [--out DIR] [--csv FILE]
- *       [--split none|LIST] [--aniso N] [--oracle STRIDE]
+ *       [--split none|LIST] [--aniso N] [--oracle STRIDE] [--lobes 1|2]
  * Run from the source directory: the default --ltc-table is tests/data/reference/ltc_code_ggx_64.csv
  * (Heitz et al. 2016's GGX table, the one the thesis shades with); the map is the manifest's (a path
  * relative to where mfkit prefilter ran) unless --map; it is decoded as mfkit prefilter's defaults do.
@@ -65,6 +65,9 @@
  * min(N, ceil(longer / shorter projected edge)) lookups spread along the pixel's longer edge, each at the
  * level of detail of longer edge / n, averaged (naive, Toksvig: the filtered normal; LEADR: the moments;
  * mfkit: M and magnitude; mfkit_taps and mfkit's level 0: the shading).
+ * --lobes 2: mfkit and mfkit_taps shade the two-lobe table instead (mfkit prefilter --lobes 2: DIR/lobe_a and
+ * DIR/lobe_b looked up the same way, their shadings summed, as a renderer calls mfpfLookup or mfpfLookupTap
+ * once per half's textures); the other methods are unchanged.
  * --oracle STRIDE (0: off): every STRIDE-th pixel in x and y also gets one lobe fitted to its own
  * footprint at its own view (shade_oracle: no interpolation of any kind), and
  * DIR/prefilter_scenes_oracle.csv gets every method's MSE against truth on those pixels.
@@ -275,6 +278,9 @@ static double an_t(int i) { return (i + 0.5) / g_an_n - 0.5; }
 static int g_oracle; /* --oracle STRIDE: every STRIDE-th pixel in x and y also gets shade_oracle (0: off) */
 static int g_split = MF_PREFILTER_SPLIT_TEXEL | MF_PREFILTER_SPLIT_LEVEL; /* mfkit_taps' axes (--split) */
 static mf_prefilter_lookup_levels g_pf;
+/* --lobes 2: the two-lobe tables (DIR/lobe_a, DIR/lobe_b); mfkit and mfkit_taps sum their shadings */
+static int g_lobes = 1;
+static mf_prefilter_lookup_levels g_pf2[2];
 static mf_prefilter_mix *g_mix; /* one per level-0 texel (the exact GGX of that normal) */
 
 /* pyr_trilinear averaged over the pixel's anisotropic taps (a texture unit's anisotropic filter) */
@@ -315,31 +321,34 @@ static double shade_mfkit(const scene *s, mf_vec3 P, double u, double v, double 
     for (int k = 0; k < 4; ++k)
         r[k] = v3(c * q[k].x + sn * q[k].y, -sn * q[k].x + c * q[k].y, q[k].z);
     mf_polygon poly = mf_polygon_make(4, r);
-    if (!split) { /* mfpfLookup: one blended M (the anisotropic taps' mean, as a texture unit filters) */
-        double M[9] = {0}, mag = 0.0;
-        for (int ia = 0; ia < g_an_n; ++ia) {
-            double Ma[9], ma;
-            mf_prefilter_lookup(&g_pf, u + an_t(ia) * g_an_u, v + an_t(ia) * g_an_v, lod, theta, phi, Ma, &ma);
-            for (int k = 0; k < 9; ++k)
-                M[k] += Ma[k] / g_an_n;
-            mag += ma / g_an_n;
-        }
-        mf_ltc ltc;
-        if (mf_ltc_init(&ltc, mf_ltc_matrix_general(M)) != MF_OK)
-            return NAN;
-        s1 = mag * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
-    } else { /* mfpfLookupTap (split texel + level) or --split: the corner lobes shaded one by one */
-        double M[32 * 9], mag[32], w[32];
-        for (int ia = 0; ia < g_an_n; ++ia) {
-            int nt = mf_prefilter_lookup_taps(&g_pf, u + an_t(ia) * g_an_u, v + an_t(ia) * g_an_v, lod, theta, phi, split,
-                                              M, mag, w);
-            for (int k = 0; k < nt; ++k) {
-                if (!(w[k] > 0.0))
-                    continue;
-                mf_ltc ltc;
-                if (mf_ltc_init(&ltc, mf_ltc_matrix_general(M + 9 * k)) != MF_OK)
-                    return NAN;
-                s1 += w[k] / g_an_n * mag[k] * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
+    for (int h = 0; h < g_lobes; ++h) { /* the one-lobe table, or each half of the two-lobe table */
+        const mf_prefilter_lookup_levels *pf = g_lobes == 2 ? &g_pf2[h] : &g_pf;
+        if (!split) { /* mfpfLookup: one blended M (the anisotropic taps' mean, as a texture unit filters) */
+            double M[9] = {0}, mag = 0.0;
+            for (int ia = 0; ia < g_an_n; ++ia) {
+                double Ma[9], ma;
+                mf_prefilter_lookup(pf, u + an_t(ia) * g_an_u, v + an_t(ia) * g_an_v, lod, theta, phi, Ma, &ma);
+                for (int k = 0; k < 9; ++k)
+                    M[k] += Ma[k] / g_an_n;
+                mag += ma / g_an_n;
+            }
+            mf_ltc ltc;
+            if (mf_ltc_init(&ltc, mf_ltc_matrix_general(M)) != MF_OK)
+                return NAN;
+            s1 += mag * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
+        } else { /* mfpfLookupTap (split texel + level) or --split: the corner lobes shaded one by one */
+            double M[32 * 9], mag[32], w[32];
+            for (int ia = 0; ia < g_an_n; ++ia) {
+                int nt = mf_prefilter_lookup_taps(pf, u + an_t(ia) * g_an_u, v + an_t(ia) * g_an_v, lod, theta, phi, split,
+                                                  M, mag, w);
+                for (int k = 0; k < nt; ++k) {
+                    if (!(w[k] > 0.0))
+                        continue;
+                    mf_ltc ltc;
+                    if (mf_ltc_init(&ltc, mf_ltc_matrix_general(M + 9 * k)) != MF_OK)
+                        return NAN;
+                    s1 += w[k] / g_an_n * mag[k] * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
+                }
             }
         }
     }
@@ -495,7 +504,7 @@ int main(int argc, char **argv)
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             printf("usage: " PROG " --prefilter DIR [--map NORMALMAP] [--ltc-table FILE] [--size N] [--tiles T] [--distances D,D,...] "
                    "[--light-half H] [--mc-samples K] [--images 0|1] [--seed S] [--out DIR] [--csv FILE] [--split none|LIST] "
-                   "[--aniso N] [--oracle STRIDE]\n");
+                   "[--aniso N] [--oracle STRIDE] [--lobes 1|2]\n");
             return 0;
         }
         if (!val)
@@ -518,6 +527,10 @@ int main(int argc, char **argv)
             g_aniso = (int)strtol(val, &e, 10);
             if (*e || g_aniso < 1 || g_aniso > 64)
                 return die("--aniso %s: expected a tap count in [1, 64] (1: off)%s", val, "");
+        } else if (!strcmp(a, "--lobes")) {
+            g_lobes = (int)strtol(val, &e, 10);
+            if (*e || g_lobes < 1 || g_lobes > 2)
+                return die("--lobes %s: expected 1 or 2 (2: the two-lobe tables DIR/lobe_a and lobe_b)%s", val, "");
         } else if (!strcmp(a, "--oracle")) {
             g_oracle = (int)strtol(val, &e, 10);
             if (*e || g_oracle < 0 || g_oracle > 4096)
@@ -633,25 +646,34 @@ int main(int argc, char **argv)
     pyr_build(&g_mom, 5, mom);
     free(mom);
 
-    /* the prefiltered levels */
-    static mf_prefilter_lookup_level lev[16];
-    int nlev = 0, nt = 0, np = 0;
-    for (int k = 1; k < NL && k <= 16; ++k) {
-        long d[6], dm[4];
-        snprintf(path, sizeof path, "%s/ltc_mip%d.npy", pfdir, k);
-        float *m = mf_prefilter_read_npy(path, 6, d, msg, sizeof msg);
-        snprintf(path, sizeof path, "%s/magnitude_mip%d.npy", pfdir, k);
-        float *g = mf_prefilter_read_npy(path, 4, dm, msg, sizeof msg);
-        if (!m || !g || d[0] != (H >> k ? H >> k : 1) || d[1] != (W >> k ? W >> k : 1) || d[4] != 3 || d[5] != 3 ||
-            (k > 1 && (d[2] != nt || d[3] != np)) || dm[0] != d[0] || dm[1] != d[1])
-            return die("%s: missing or not the shape of level %s of the map", path, k == 1 ? "1" : ">1"), 3;
-        nt = (int)d[2], np = (int)d[3];
-        lev[nlev].w = (int)d[1], lev[nlev].h = (int)d[0], lev[nlev].m = m, lev[nlev].mag = g;
-        ++nlev;
+    /* the prefiltered levels: the one-lobe table, with --lobes 2 also its halves */
+    static mf_prefilter_lookup_level lev[3][16];
+    for (int t = 0; t < (g_lobes == 2 ? 3 : 1); ++t) {
+        char tdir[4200];
+        snprintf(tdir, sizeof tdir, t ? "%s/lobe_%c" : "%s", pfdir, "ab"[t ? t - 1 : 0]);
+        mf_prefilter_lookup_levels *pf = t ? &g_pf2[t - 1] : &g_pf;
+        int nlev = 0, nt = 0, np = 0;
+        for (int k = 1; k < NL && k <= 16; ++k) {
+            long d[6], dm[4];
+            snprintf(path, sizeof path, "%s/ltc_mip%d.npy", tdir, k);
+            float *m = mf_prefilter_read_npy(path, 6, d, msg, sizeof msg), *g = NULL;
+            if (m) { /* else the message names the matrices' file */
+                snprintf(path, sizeof path, "%s/magnitude_mip%d.npy", tdir, k);
+                g = mf_prefilter_read_npy(path, 4, dm, msg, sizeof msg);
+            }
+            if (!m || !g || d[0] != (H >> k ? H >> k : 1) || d[1] != (W >> k ? W >> k : 1) || d[4] != 3 || d[5] != 3 ||
+                (k > 1 && (d[2] != nt || d[3] != np)) || dm[0] != d[0] || dm[1] != d[1])
+                return die("%s: missing or not the shape of level %s of the map", path, k == 1 ? "1" : ">1"), 3;
+            nt = (int)d[2], np = (int)d[3];
+            lev[t][nlev].w = (int)d[1], lev[t][nlev].h = (int)d[0], lev[t][nlev].m = m, lev[t][nlev].mag = g;
+            ++nlev;
+        }
+        pf->nlev = nlev, pf->n_theta = nt, pf->n_phi = np, pf->lev = lev[t];
+        if (nlev < 1 || nt < 2)
+            return die("%s: no prefiltered level with >= 2 elevations%s", tdir, "");
+        if (t && (nlev != g_pf.nlev || nt != g_pf.n_theta || np != g_pf.n_phi))
+            return die("%s: not the levels and views of %s", tdir, pfdir);
     }
-    g_pf.nlev = nlev, g_pf.n_theta = nt, g_pf.n_phi = np, g_pf.lev = lev;
-    if (nlev < 1 || nt < 2)
-        return die("%s: no prefiltered level with >= 2 elevations%s", pfdir, "");
 
     /* exact GGX per texel for truth_mc */
     const mf_brdf_model *ggx = mf_brdf_model_find("ggx");
@@ -870,8 +892,9 @@ int main(int argc, char **argv)
         for (int t = 0; t < W * H; ++t)
             mf_prefilter_mix_free(&g_mix[t]);
     free(g_mix);
-    for (int k = 0; k < nlev; ++k)
-        free((void *)lev[k].m), free((void *)lev[k].mag);
+    for (int t = 0; t < (g_lobes == 2 ? 3 : 1); ++t)
+        for (int k = 0; k < (t ? g_pf2[t - 1].nlev : g_pf.nlev); ++k)
+            free((void *)lev[t][k].m), free((void *)lev[t][k].mag);
     for (int k = 0; k < NL; ++k)
         free(g_nrm.d[k]), free(g_mom.d[k]);
     free(g_n);

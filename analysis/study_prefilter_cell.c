@@ -19,9 +19,9 @@
  *            the footprint's normals are y-mirror symmetric on the 3/255 grid, snapped pairwise):
  *            whether the stored lobe is the fit's own answer at this view or a product of the
  *            warm-start chain and the continuity rule;
- *   two      two lobes instead of one (not a format mfkit writes; what a second lobe per entry would
- *            give): the footprint's normals split in two by 2-means (started from the normal farthest
- *            from the mean and the one farthest from that), each half's mixture fitted at the view as
+ *   two      two lobes instead of one, fitted fresh at this view (what `mfkit prefilter --lobes 2` stores
+ *            comes from its chains instead): the footprint's normals split in two by the prefilter's
+ *            2-means (mf_prefilter_split_two), each half's mixture fitted at the view as
  *            `fresh` is (without the mirror symmetry), with the magnitude of its own albedo over its
  *            horizon mass, the two shadings weighted by the halves' texel counts;
  *   naive, toksvig  the baselines of prefilter-eval, on the same light points.
@@ -162,49 +162,6 @@ static int mirror_snap_pairs(double *n, int count)
     return ok;
 }
 
-static double dist2(const double *a, const double *b)
-{
-    return (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]);
-}
-
-/* 2-means on count unit normals: side[q] in {0, 1}; returns the size of cluster 1 (0: one cluster).
- * Starts from the normal farthest from the mean and the normal farthest from that; 50 rounds at most. */
-static int split_two(const double *n, int count, const double mean[3], int *side)
-{
-    int a = 0, b = 0;
-    double best = -1.0;
-    for (int q = 0; q < count; ++q)
-        if (dist2(n + 3 * q, mean) > best)
-            best = dist2(n + 3 * q, mean), a = q;
-    best = -1.0;
-    for (int q = 0; q < count; ++q)
-        if (dist2(n + 3 * q, n + 3 * a) > best)
-            best = dist2(n + 3 * q, n + 3 * a), b = q;
-    if (!(best > 0.0))
-        return 0;
-    double c[2][3] = {{n[3 * a], n[3 * a + 1], n[3 * a + 2]}, {n[3 * b], n[3 * b + 1], n[3 * b + 2]}};
-    int n1 = 0;
-    for (int round = 0; round < 50; ++round) {
-        int changed = 0;
-        double sum[2][3] = {{0, 0, 0}, {0, 0, 0}};
-        int cnt[2] = {0, 0};
-        for (int q = 0; q < count; ++q) {
-            int sd = dist2(n + 3 * q, c[1]) < dist2(n + 3 * q, c[0]);
-            changed |= round == 0 || side[q] != sd;
-            side[q] = sd;
-            cnt[sd]++;
-            for (int i = 0; i < 3; ++i)
-                sum[sd][i] += n[3 * q + i];
-        }
-        n1 = cnt[1];
-        if (!changed || cnt[0] == 0 || cnt[1] == 0)
-            break;
-        for (int k = 0; k < 2; ++k)
-            for (int i = 0; i < 3; ++i)
-                c[k][i] = sum[k][i] / cnt[k];
-    }
-    return n1 > 0 && n1 < count ? n1 : 0;
-}
 
 /* `fresh` for the mixture of `count` normals: magnitude x the fitted lobe's shading per light (out[nl]);
  * returns 0, or -1 if the mixture or the fit failed. */
@@ -418,7 +375,7 @@ int main(int argc, char **argv)
     double *half = malloc(sizeof(double) * 3 * (size_t)count), two[CELL_MAX_LIGHTS];
     if (!side || !half)
         return 3;
-    int n1 = split_two(nrm, count, mean, side), nh[2] = {count - n1, n1};
+    int n1 = mf_prefilter_split_two(nrm, count, side), nh[2] = {count - n1, n1}; /* the prefilter's --lobes 2 split */
     for (int k = 0; k < nl; ++k)
         two[k] = n1 ? 0.0 : lobe_shading(e.m, magf, theta, hs[k]);
     for (int c = 0; c < 2 && n1; ++c) {

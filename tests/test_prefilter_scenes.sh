@@ -94,11 +94,38 @@ ok '[ $rc -eq 0 ] && [ -s "$tmp/fig/prefilter_scenes.png" ] && [ -s "$tmp/fig/pr
 "$render" "${args[@]}" --images 0 --out "$tmp/sc2" >/dev/null 2>&1
 ok 'cmp -s <(tail -n +2 "$tmp/sc/prefilter_scenes.csv") <(tail -n +2 "$tmp/sc2/prefilter_scenes.csv")' \
    "a rerun gives the same CSV"
+# --lobes 2: the constant map's footprints hold one normal, so half a is the whole footprint and half b
+# is empty: mfkit and mfkit_taps from the summed halves must equal the one-lobe rows to 1e-5 relative in
+# MSE (half a's fit sees its texels' mean albedo, the one-lobe fit the pyramid's: an ulp apart), every
+# other row the same bits
+"$mfkit" prefilter "$tmp/const_4.png" --base ggx --views 8x16 --lobes 2 --out "$tmp/pf2" >"$tmp/pf2.log" 2>&1; rc=$?
+args2=(--prefilter "$tmp/pf2" --map "$tmp/const_4.png" --ltc-table "$table" --size 24 --distances 0.3,1.2,5 --mc-samples 16)
+"$render" "${args2[@]}" --lobes 2 --images 0 --out "$tmp/sc3" >"$tmp/sc3.log" 2>&1; rc2=$?
+res=$($py - "$tmp/sc2/prefilter_scenes.csv" "$tmp/sc3/prefilter_scenes.csv" <<'PY'
+import csv, sys
+def rows(f):
+    return [r for r in csv.DictReader(l for l in open(f) if not l.startswith("#"))]
+a, b = rows(sys.argv[1]), rows(sys.argv[2])
+out = [] if len(a) == len(b) and a else ["%d rows against %d" % (len(b), len(a))]
+for x, y in zip(a, b):
+    if x["method"] in ("mfkit", "mfkit_taps"):
+        for k in ("mse", "mse_mc"):
+            if not abs(float(y[k]) - float(x[k])) <= 1e-5 * float(x[k]):
+                out.append("%s %s %s: %s against %s" % (x["scene"], x["distance"], x["method"], y[k], x[k]))
+    elif x != y:
+        out.append("%s %s %s differs" % (x["scene"], x["distance"], x["method"]))
+print("; ".join(out) if out else "ok")
+PY
+)
+ok '[ $rc -eq 0 ] && [ $rc2 -eq 0 ] && [ "$res" = ok ]' "--lobes 2 on the constant map: the one-lobe rows (rc $rc, $rc2): $res"
 
 mfkit="$render"
+expect_error "--lobes 3" 2 "\-\-lobes 3" --prefilter "$tmp/pf2" --lobes 3 --out "$tmp/bad4"
+expect_error "--lobes 2 without the halves" 3 "lobe_a/ltc_mip1.npy" --prefilter "$tmp/pf" --ltc-table "$table" --lobes 2 \
+  --out "$tmp/bad5"
 expect_error "bad --distances" 2 "\-\-distances" --prefilter "$tmp/pf" --ltc-table "$table" --distances 1,-2 --out "$tmp/bad1"
 expect_error "missing prefilter directory" 3 "nonexistent/prefilter.json" --prefilter "$tmp/nonexistent" \
   --ltc-table "$table" --out "$tmp/bad2"
 expect_error "bad table" 3 "\-\-ltc-table" --prefilter "$tmp/pf" --ltc-table "$tmp/const_4.png" --out "$tmp/bad3"
-ok '[ ! -e "$tmp/bad1" ] && [ ! -e "$tmp/bad2" ] && [ ! -e "$tmp/bad3" ]' "refusals write nothing: $(ls "$tmp")"
+ok '[ ! -e "$tmp/bad1" ] && [ ! -e "$tmp/bad2" ] && [ ! -e "$tmp/bad3" ] && [ ! -e "$tmp/bad4" ] && [ ! -e "$tmp/bad5" ]' "refusals write nothing: $(ls "$tmp")"
 finish test_prefilter_scenes
