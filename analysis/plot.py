@@ -813,6 +813,8 @@ def plot_prefilter_eval(d, out_dir, made):
     light size (its error against light size), each averaged over the tabulated view elevations."""
     methods = [("mfkit", "mfkit lobes", "C3"), ("naive", "naive (mean normal)", "C0"),
                ("toksvig", "Toksvig", "C1"), ("leadr", "LEADR", "C2")]
+    if d.has("mse_mfkit_two_lobes"):  # prefilter_eval_data.sh: the two-lobe table (--lobes 2)
+        methods.insert(1, ("mfkit_two_lobes", "mfkit, two lobes", "C4"))
     levels = np.unique(d["level"])
     lights = np.unique(d["light_half_side"])
     fig, axes = new_figure(2, 1, width=5.6)

@@ -1,8 +1,8 @@
 #!/bin/bash
 # prefilter_figures_data.sh BUILD DATA_DIR [--gzip] -- the data of the four prefilter figures (issue 13;
 # docs/figures.md, docs/prefilter.md "Evaluation" and "Scene renders") from ONE `mfkit prefilter` run of
-# the demo map tests/data/normalmaps/vgroove_16.png with the default specular views (--base ggx --views 8x16
-# --threads 2, about 18 s of CPU):
+# the demo map tests/data/normalmaps/vgroove_16.png with the default specular views and the two-lobe table
+# (--base ggx --views 8x16 --threads 2 --lobes 2, about 40 s of CPU):
 #   prefilter_scenes.csv         render_prefilter_scenes --prefilter PF (128 x 128, 6 distances, both truths,
 #                                images in a scratch directory; about 15 s of CPU)
 #   prefilter_scenes_ssim.csv    prefilter_scenes_ssim.py on those images (python3-skimage; about 1 s)
@@ -37,9 +37,9 @@ mkdir -p "$data"
 work=$(mktemp -d "${TMPDIR:-/tmp}/mfkit_pffig.XXXXXX")
 trap 'rm -rf "$work"' EXIT
 map=tests/data/normalmaps/vgroove_16.png
-pfcmd="mfkit prefilter $map --base ggx --views 8x16 --threads 2 --out PF"
+pfcmd="mfkit prefilter $map --base ggx --views 8x16 --threads 2 --lobes 2 --out PF"
 echo "== $pfcmd"
-"$mfkit" prefilter "$map" --base ggx --views 8x16 --threads 2 --out "$work/pf" >/dev/null
+"$mfkit" prefilter "$map" --base ggx --views 8x16 --threads 2 --lobes 2 --out "$work/pf" >/dev/null 2>&1
 ver=$("$mfkit" --version | awk '{print $2}')
 rev=$(sed -n 's/.*"fitter_revision": *\([0-9]*\).*/\1/p' "$work/pf/prefilter.json" | head -n 1)
 echo "== render_prefilter_scenes, prefilter_scenes_ssim.py"

@@ -1127,7 +1127,7 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
         fprintf(stderr,
                 "mfkit prefilter: gate %s: energy %.4g (bound %.3g) %s, non-finite %ld %s, negative magnitudes %ld, "
                 "level %.4g (bound %.3g) %s; reported only: view spike %.4g (%.3g), texel spike %.4g (%.3g)\n",
-                gate_ok ? "passed" : "FAILED", g.worst_energy, g.max_energy, g.pass_energy ? "ok" : "FAIL",
+                nonfinite == 0 && magneg == 0 && g.pass ? "passed" : "FAILED", g.worst_energy, g.max_energy, g.pass_energy ? "ok" : "FAIL",
                 g.nan_entries + nonfinite, g.pass_nan && !nonfinite ? "ok" : "FAIL", magneg, g.worst_level, g.max_level,
                 PF_VERDICT(g.pass_level), g.worst_view_spike, g.max_view_spike, g.worst_texel_spike, g.max_texel_spike);
     }
