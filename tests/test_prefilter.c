@@ -36,6 +36,18 @@ static double shade(const float *m9, double mag, double theta_l, double phi_l, d
     return mag * mf_ltc_integrate_polygon(&ltc, &p, MF_POLYGON_ONE_SIDED);
 }
 
+/* count random unit normals, slopes uniform in [-spread / 2, spread / 2]^2 (fixed seed) */
+static void random_normals(double *n, int count, double spread, uint64_t seed)
+{
+    mf_pcg32 rng;
+    mf_pcg32_seed(&rng, seed, 1);
+    for (int t = 0; t < count; ++t) {
+        double x = spread * (mf_pcg32_next_double(&rng) - 0.5), y = spread * (mf_pcg32_next_double(&rng) - 0.5);
+        double l = sqrt(x * x + y * y + 1.0);
+        n[3 * t] = x / l, n[3 * t + 1] = y / l, n[3 * t + 2] = 1.0 / l;
+    }
+}
+
 static void fill(double *n, int w, int h, double tilt, int period)
 {
     for (int j = 0; j < h; ++j)
@@ -171,13 +183,7 @@ static void test_vgroove(void)
 static void test_threads(void)
 {
     double n[4 * 4 * 3];
-    mf_pcg32 rng;
-    mf_pcg32_seed(&rng, 3, 1);
-    for (int t = 0; t < 16; ++t) {
-        double x = 0.4 * (mf_pcg32_next_double(&rng) - 0.5), y = 0.4 * (mf_pcg32_next_double(&rng) - 0.5);
-        double l = sqrt(x * x + y * y + 1.0);
-        n[3 * t] = x / l, n[3 * t + 1] = y / l, n[3 * t + 2] = 1.0 / l;
-    }
+    random_normals(n, 16, 0.4, 3);
     mf_prefilter_options o;
     mf_prefilter_options_default(&o);
     o.n_theta = 2, o.n_phi = 2;
@@ -518,13 +524,7 @@ static void test_two_lobes(void)
     CHECK(mf_prefilter_run(na, 4, 4, &o, &e, &ne, msg, sizeof msg) == MF_ERR_DOMAIN && strstr(msg, "lobe 3"));
     /* a random map: the halves' albedos sum to the whole footprint's (to float rounding) */
     double r[8 * 8 * 3];
-    mf_pcg32 rng;
-    mf_pcg32_seed(&rng, 7, 1);
-    for (int t = 0; t < 64; ++t) {
-        double sx = 0.6 * (mf_pcg32_next_double(&rng) - 0.5), sy = 0.6 * (mf_pcg32_next_double(&rng) - 0.5);
-        double l = sqrt(sx * sx + sy * sy + 1.0);
-        r[3 * t] = sx / l, r[3 * t + 1] = sy / l, r[3 * t + 2] = 1.0 / l;
-    }
+    random_normals(r, 64, 0.6, 7);
     o.n_theta = 2, o.n_phi = 2, o.samples = 256;
     mf_prefilter_level *w[3];
     int nw[3];

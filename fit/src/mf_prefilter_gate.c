@@ -62,16 +62,21 @@ static void gate_lights(double theta, mf_polygon *out)
 /* magnitude * the LTC integral of each gate light, summed over the entry's nl lobes (9 floats of m and
  * one magnitude each: two for a two-lobe table, mf_prefilter_gate_stream_set_lobes); NAN where a
  * matrix is not invertible. */
+static int gate_ltc(const float *m9, mf_ltc *ltc) /* 1 when the row-major M is invertible */
+{
+    mf_mat3 m;
+    for (int i = 0; i < 9; ++i)
+        m.m[i / 3][i % 3] = m9[i];
+    return mf_ltc_init(ltc, m) == MF_OK;
+}
+
 static void gate_shade(const float *m9, const float *mag, int nl, const mf_polygon *lights, double *s)
 {
     for (int k = 0; k < GATE_NLIGHTS; ++k)
         s[k] = 0.0;
     for (int j = 0; j < nl; ++j) {
-        mf_mat3 m;
-        for (int i = 0; i < 9; ++i)
-            m.m[i / 3][i % 3] = m9[9 * j + i];
         mf_ltc ltc;
-        int ok = mf_ltc_init(&ltc, m) == MF_OK;
+        int ok = gate_ltc(m9 + 9 * j, &ltc);
         for (int k = 0; k < GATE_NLIGHTS; ++k)
             s[k] += ok ? mag[j] * mf_ltc_integrate_polygon(&ltc, &lights[k], MF_POLYGON_ONE_SIDED) : NAN;
     }
@@ -89,11 +94,8 @@ static void gate_shade_theta(const float *m9, const float *mag, int nl, const mf
     for (int k = 0; k < 2 * GATE_MIRROR; ++k)
         x[k] = 0.0;
     for (int j = 0; j < nl; ++j) {
-        mf_mat3 m;
-        for (int i = 0; i < 9; ++i)
-            m.m[i / 3][i % 3] = m9[9 * j + i];
         mf_ltc ltc;
-        int ok = mf_ltc_init(&ltc, m) == MF_OK;
+        int ok = gate_ltc(m9 + 9 * j, &ltc);
         for (int q = 0; q < 2; ++q) {
             const mf_polygon *L = q ? hi : lo;
             for (int k = 0; k < GATE_MIRROR; ++k)
