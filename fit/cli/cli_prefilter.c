@@ -1184,7 +1184,7 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
                 p->pass_cont_excess ? "ok" : "FAIL", p->worst_cont_owner, p->worst_cont_owner_view,
                 p->pass_cont_owner ? "ok" : "FAIL", p->worst_cont_owner_theta,
                 p->pass_cont_owner_theta ? "ok" : p->owner_theta_gated ? "FAIL" : "above it", p->worst_ref_error);
-        const char *w = !p->pass_energy ? p->where_energy : !p->pass_level ? p->where_level
+        const char *w = p->pass ? NULL : !p->pass_energy ? p->where_energy : !p->pass_level ? p->where_level
                         : !p->pass_cont_excess ? p->where_cont_excess : !p->pass_cont_owner ? p->where_cont_owner
                         : !p->pass_cont_owner_theta ? p->where_cont_owner_theta : NULL;
         if (w)
@@ -1281,9 +1281,13 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
                           p->pass ? "true" : "false", p->worst_energy, p->nan_entries, p->worst_level,
                           p->worst_cont_excess, p->worst_cont_owner, p->worst_cont_owner_view,
                           p->worst_cont_owner_theta, p->worst_ref_error);
-            mf_json_string(&b, !p->pass_energy ? p->where_energy : !p->pass_level ? p->where_level
-                               : !p->pass_cont_excess ? p->where_cont_excess : !p->pass_cont_owner ? p->where_cont_owner
-                               : p->where_cont_owner_theta);
+            /* where: the first failing check's place (null when it passed) */
+            if (p->pass)
+                mf_buf_printf(&b, "null");
+            else
+                mf_json_string(&b, !p->pass_energy ? p->where_energy : !p->pass_nan ? "a non-finite shading"
+                                   : !p->pass_level ? p->where_level : !p->pass_cont_excess ? p->where_cont_excess
+                                   : !p->pass_cont_owner ? p->where_cont_owner : p->where_cont_owner_theta);
             mf_buf_printf(&b, "},\n");
         }
         mf_buf_printf(&b,
