@@ -7,7 +7,8 @@
 #   options) and refuses, in one line naming the directory and the field, the wrong view count (what the
 #   scripts ask: 8 x 16), another map, another seed and a missing manifest;
 # - the eval and light-size scripts given that 2 x 2 run with --prefilter refuse it (exit 2, one line, no
-#   output file, no temporary file left);
+#   output file, no temporary file left); the eval script refuses a run of the recorded views without the
+#   two-lobe table (lobe_a/, lobe_b/) the same way;
 # - pf_stamp: SOURCE_DATE_EPOCH=0 gives 1970-01-01T00:00:00Z, 1700000000 gives 2023-11-14T22:13:20Z, a
 #   non-number is refused in one line, and the eval script then writes nothing;
 # - usage errors of the three scripts exit 2.
@@ -45,6 +46,18 @@ refuse "pf_check refuses a directory without a manifest" "$tmp/none/prefilter.js
 refuse "prefilter_eval_data.sh --prefilter (2 x 2 views) refused" "elevations is 2, expected 8" \
   analysis/prefilter_eval_data.sh --prefilter "$tmp/pf" "$mfkit" "$tmp/eval.csv.gz"
 ok '[ ! -e "$tmp/eval.csv.gz" ] && [ ! -e "$tmp/eval.csv.gz.tmp" ]' "refused eval: no output, no temporary file"
+# a reused run without the two-lobe table (the eval's last columns need it): a manifest that passes pf_check
+# (its axes rewritten to the recorded 8 x 16 views) but no lobe_a/, lobe_b/: refused in one line, no output
+mkdir -p "$tmp/pf816"
+/usr/bin/python3 - "$tmp/pf/prefilter.json" "$tmp/pf816/prefilter.json" <<'PY'
+import json, math, sys
+m = json.load(open(sys.argv[1]))
+m["axes"] = {"theta": [i / 7 * 0.999 * math.pi / 2 for i in range(8)], "phi": [2 * math.pi * j / 16 for j in range(16)]}
+json.dump(m, open(sys.argv[2], "w"))
+PY
+refuse "prefilter_eval_data.sh --prefilter without the two-lobe table refused" "no two-lobe table (lobe_a/prefilter.json)" \
+  analysis/prefilter_eval_data.sh --prefilter "$tmp/pf816" "$mfkit" "$tmp/eval3.csv.gz"
+ok '[ ! -e "$tmp/eval3.csv.gz" ] && [ ! -e "$tmp/eval3.csv.gz.tmp" ]' "refused eval without the halves: no output, no temporary file"
 refuse "prefilter_scenes_lights.sh --prefilter (2 x 2 views) refused" "elevations is 2, expected 8" \
   analysis/prefilter_scenes_lights.sh --prefilter "$tmp/pf" "$build" "$tmp/lights.csv.gz"
 ok '[ ! -e "$tmp/lights.csv.gz" ] && [ ! -e "$tmp/lights.csv.gz.tmp" ]' "refused light sizes: no output, no temporary file"
