@@ -197,8 +197,14 @@ ok '[ $rc -eq 0 ] && [ "$res" = ok ] && grep -q "^mfkit: the two-lobe table" "$t
    "prefilter-eval --lobes 2: the baselines' records unchanged, level 1 the one lobe, levels 2-4 at most a fifth of its MSE (rc=$rc): $res"
 expect_error "--lobes 2 without the two-lobe tables" 3 "lobe_a/prefilter.json" prefilter-eval "$tmp/pfv" --lobes 2 --out "$tmp/bad7"
 mkdir -p "$tmp/fake" && cp "$tmp/pfv"/* "$tmp/fake/" && mkdir -p "$tmp/fake/lobe_a" "$tmp/fake/lobe_b" && cp "$tmp/pfv"/* "$tmp/fake/lobe_a/"
-expect_error "--lobes 2 with a lobe_a that is not a half table" 2 "is not half a of a two-lobe table" \
+expect_error "--lobes 2 with a lobe_a that is not a half table" 2 "is not half a of this table's two-lobe table" \
    prefilter-eval "$tmp/fake" --lobes 2 --out "$tmp/bad8"
+# halves of another run (--seed 2) beside this table's one-lobe files: refused, naming what differs
+"$mfkit" prefilter "$src/tests/data/normalmaps/vgroove_16.png" --base ggx --views 3x4 --samples 256 --lobes 2 --seed 2 \
+    --out "$tmp/pfs2" >/dev/null 2>&1
+mkdir -p "$tmp/mixed" && cp "$tmp/pfv2"/*.* "$tmp/mixed/" && cp -r "$tmp/pfs2/lobe_a" "$tmp/pfs2/lobe_b" "$tmp/mixed/"
+expect_error "--lobes 2 with the halves of another run" 2 "another map, base BRDF, views or fit settings" \
+   prefilter-eval "$tmp/mixed" --lobes 2 --out "$tmp/bad10"
 expect_error "--lobes 3" 2 "\-\-lobes" prefilter-eval "$tmp/pfv2" --lobes 3 --out "$tmp/bad9"
 # odd --samples: the estimator draws half its points on the light, half from the BRDF
 expect_error "odd --samples" 2 "\-\-samples 17: must be even" prefilter-eval "$tmp/pfv" --samples 17 --out "$tmp/bad6"

@@ -548,6 +548,16 @@ static int pe_main(int argc, char **argv)
         free(js);
         return cli_error(k_cmd, "%s: base_brdf is neither GGX with an alpha in (0, 1] nor Lambert", path);
     }
+    /* --lobes 2: the halves must be of this run (the same map, base BRDF, axes and fit settings: the
+     * manifest's lines of those keys compared as text) */
+    const char *const same_keys[4] = {"\"map\": ", "\"base_brdf\": ", "\"axes\": ", "\"fit\": "};
+    static char own_lines[4][16384]; /* a longer line (views beyond about 256 x 256) compares its start */
+    for (int k = 0; k < 4; ++k) {
+        const char *at = strstr(js, same_keys[k]);
+        size_t n = at ? strcspn(at, "\n") : 0;
+        n = n < sizeof own_lines[k] - 1 ? n : sizeof own_lines[k] - 1;
+        memcpy(own_lines[k], at ? at : "", n), own_lines[k][n] = '\0';
+    }
     free(js);
     if (lambert && v[E_LTC_TABLE].set)
         return cli_error(k_cmd, "--ltc-table: only for a GGX table (%s is a Lambert table)", dir);
@@ -561,10 +571,13 @@ static int pe_main(int argc, char **argv)
         if (!hj)
             return cli_error(k_cmd, "--lobes 2: %s (run mfkit prefilter --lobes 2)", msg), CLI_EXIT_IO;
         snprintf(want, sizeof want, "\"two_lobes\": {\"half\": \"%c\"", "ab"[k]);
-        int good = strstr(hj, want) != NULL;
+        int good = strstr(hj, want) != NULL, same = 1;
+        for (int q = 0; q < 4; ++q)
+            same &= own_lines[q][0] && strstr(hj, own_lines[q]) != NULL;
         free(hj);
-        if (!good)
-            return cli_error(k_cmd, "--lobes 2: %s is not half %c of a two-lobe table", hp, "ab"[k]);
+        if (!good || !same)
+            return cli_error(k_cmd, "--lobes 2: %s is not half %c of this table's two-lobe table%s", hp, "ab"[k],
+                             good ? " (another map, base BRDF, views or fit settings)" : "");
     }
 
     /* the normal map, decoded as mfkit prefilter does */

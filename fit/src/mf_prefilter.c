@@ -1622,7 +1622,7 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
     int nc = 0;
     /* share: the part of the footprint's texels this table fits (options.lobe: a half; 1 otherwise); the
      * fits see the half's own mixture (its albedos alb, the mean over its texels), the stored albedos
-     * and magnitudes are scaled by share (store_alb) */
+     * and magnitudes are scaled by share (at store) */
     double share = 1.0;
     size_t base_idx = ((size_t)row * lv->width + col) * nv;
     if (st == MF_OK) {
