@@ -1274,7 +1274,8 @@ mf_status mf_prefilter_gate_run_pair(const mf_prefilter_level *la, const mf_pref
         return MF_ERR_DOMAIN;
     for (int l = 0; l < nlevels; ++l)
         if (la[l].width != lb[l].width || la[l].height != lb[l].height || la[l].n_theta != lb[l].n_theta ||
-            la[l].n_phi != lb[l].n_phi || !la[l].m || !lb[l].m || !la[l].albedo || !lb[l].albedo)
+            la[l].n_phi != lb[l].n_phi || !la[l].m || !lb[l].m || !la[l].magnitude || !lb[l].magnitude ||
+            !la[l].albedo || !lb[l].albedo)
             return MF_ERR_DOMAIN;
     mf_prefilter_gate_stream *s;
     mf_status st = mf_prefilter_gate_stream_begin(la, nlevels, normals, width, height, o, g, &s);

@@ -599,7 +599,7 @@ void mf_prefilter_gate_pair_row(const float *ma, const float *ga, const float *a
                                 const float *ab, size_t n, float *m, float *mag, float *alb);
 /* The gate of a two-lobe table held whole: the levels of its halves a and b (mf_prefilter_run with
  * options.lobe 1 and 2; o: their options with lobe 0), fed with set_lobes 2.  MF_ERR_DOMAIN on levels of
- * different shapes or without albedos. */
+ * different shapes or without arrays (matrices, magnitudes, albedos). */
 mf_status mf_prefilter_gate_run_pair(const mf_prefilter_level *la, const mf_prefilter_level *lb, int nlevels,
                                      const double *normals, int width, int height, const mf_prefilter_options *o,
                                      mf_prefilter_gate *g) MF_WARN_UNUSED;
