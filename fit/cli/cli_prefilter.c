@@ -122,7 +122,8 @@ static const cli_command k_prefilter_cmd = {
         "interrupted command resumes it.  Under mpirun (MFKIT_WITH_MPI builds) the ranks share the tiles\n"
         "and write the same bits as one process.  --lobes 2 adds the two-lobe specular table: DIR/lobe_a and\n"
         "DIR/lobe_b, one table per half of each footprint's 2-means split of its normals; a renderer shades both\n"
-        "and sums (their gates check energy and NaN; the one-lobe table keeps the whole gate).\n",
+        "and sums.  Each half is gated on energy and NaN, and the two-lobe gate runs the one-lobe gate's checks\n"
+        "on the halves' summed shading before either is written.\n",
     .opts = k_opts,
     .nopts = P_NOPTS,
     .epilog = "exit status: 0 success, 1 gate failed, 2 usage or input error, 3 I/O error, 4 fit failure,\n"
