@@ -1118,7 +1118,6 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
             worst_alb = fmax(worst_alb, stats[l].worst_albedo_err);
     int gate_ok = nonfinite == 0 && magneg == 0 && g.pass && (!A->pair || g2.pass);
     /* a half table of two lobes (--lobes 2): its gate is energy and NaN (mf_prefilter_gate.half_table) */
-#define PF_VERDICT(p) ((p) ? "ok" : o->lobe ? "above it, not gated for a half table" : "FAIL")
     if (ok && o->lobe)
         fprintf(stderr,
                 "mfkit prefilter: half %c of two lobes: gated on energy and NaN; the level and continuity checks are "
@@ -1130,7 +1129,7 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
                 "level %.4g (bound %.3g) %s; reported only: view spike %.4g (%.3g), texel spike %.4g (%.3g)\n",
                 nonfinite == 0 && magneg == 0 && g.pass ? "passed" : "FAILED", g.worst_energy, g.max_energy, g.pass_energy ? "ok" : "FAIL",
                 g.nan_entries + nonfinite, g.pass_nan && !nonfinite ? "ok" : "FAIL", magneg, g.worst_level, g.max_level,
-                PF_VERDICT(g.pass_level), g.worst_view_spike, g.max_view_spike, g.worst_texel_spike, g.max_texel_spike);
+                g.pass_level ? "ok" : o->lobe ? "above it, not gated for a half table" : "FAIL", g.worst_view_spike, g.max_view_spike, g.worst_texel_spike, g.max_texel_spike);
     }
     if (ok && !o->lobe) { /* the checks against the reference (a half table's: in its manifest, not gated) */
         if (g.cont_gated)
@@ -1405,7 +1404,6 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
                 lobes, A->ntiles, resumed, A->ranks, A->ranks > 1 ? "s" : "", o->threads, o->threads > 1 ? "s" : "", secs,
                 lobes ? 1e3 * secs / lobes : 0.0, aw, ac, lobes ? 1e6 * ac / lobes : 0.0);
     }
-#undef PF_VERDICT
     mf_buf_free(&b);
     free(gl); /* shapes only: no arrays */
     free(files), free(stats);

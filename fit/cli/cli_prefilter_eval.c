@@ -283,9 +283,9 @@ static int eval_record(const mf_brdf_model *ggx, const pe_itab *itab, double alp
     const mf_vec3 wo = su.wo, c = su.c, e1 = su.e1, e2 = su.e2, *v = su.v;
     const mf_polygon poly = su.poly;
     const mf_ltc ltc = su.ltc;
-    r->est[M_MFKIT] = (double)magnitude * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
-    if (two) { /* --lobes 2: the sum of the two halves' lobes instead */
-        r->est[M_MFKIT] = 0.0;
+    /* mfkit: the one lobe, or with --lobes 2 the sum of the two halves' lobes */
+    r->est[M_MFKIT] = two ? 0.0 : (double)magnitude * mf_ltc_integrate_polygon(&ltc, &poly, MF_POLYGON_TWO_SIDED);
+    if (two) {
         for (int k = 0; k < 2; ++k) {
             pe_setup sk;
             if (record_setup(theta, hside, lmax, two[k], &sk) != MF_OK) {
