@@ -5,8 +5,10 @@ vgroove_16.png, whose 2 x 2 footprints hold one normal each):
     h(x, y) = A sin(2 pi x / 8) cos(2 pi y / 16) + B sin(2 pi (x + y) / 5.3),  A = 0.6, B = 0.25,
 at texel centres (x, y) = (i + 0.5, j + 0.5) (j = row from the top, y up the image as the map's
 green channel), n = (-dh/dx, -dh/dy, 1) / |...| (slopes up to about 0.9).  The same field as
-tests/test_prefilter_gate.c's "bump" map.  Standard library only (zlib PNG encoder).
-Usage: make_bump.py OUT.png [N]"""
+tests/test_prefilter_gate.c's "bump" map.  SCALE (default 1) multiplies A and B, so the slopes: 0.5 and
+0.25 give gentler maps whose footprints' normals lie closer together (docs/prefilter.md, "One lobe or two,
+per footprint").  Standard library only (zlib PNG encoder).
+Usage: make_bump.py OUT.png [N [SCALE]]"""
 import math, struct, sys, zlib
 
 def png(path, w, h, rows):
@@ -23,8 +25,19 @@ def png(path, w, h, rows):
 def enc(x):
     return int(round((x * 0.5 + 0.5) * 255.0))
 
-n = int(sys.argv[2]) if len(sys.argv) > 2 else 16
-A, B = 0.6, 0.25
+if not 2 <= len(sys.argv) <= 4 or sys.argv[1] in ("-h", "--help"):
+    sys.stderr.write(__doc__ + "\n")
+    sys.exit(0 if len(sys.argv) == 2 else 2)
+try:
+    n = int(sys.argv[2]) if len(sys.argv) > 2 else 16
+    scale = float(sys.argv[3]) if len(sys.argv) > 3 else 1.0
+except ValueError as e:
+    sys.stderr.write("make_bump.py: %s (usage: make_bump.py OUT.png [N [SCALE]])\n" % e)
+    sys.exit(2)
+if not (1 <= n <= 4096 and 0.0 <= scale <= 4.0):
+    sys.stderr.write("make_bump.py: N %d, SCALE %g: need N in 1..4096 and SCALE in [0, 4]\n" % (n, scale))
+    sys.exit(2)
+A, B = 0.6 * scale, 0.25 * scale
 k1, k2, k3 = 2 * math.pi / 8, 2 * math.pi / 16, 2 * math.pi / 5.3
 rows = []
 for j in range(n):
