@@ -810,11 +810,18 @@ def main(argv):
 def plot_prefilter_eval(d, out_dir, made):
     """mfkit prefilter-eval's summary: mean squared shading error of the prefiltered lobes and the
     baselines against the Monte Carlo truth, per MIP level (the thesis' error against distance) and per
-    light size (its error against light size), each averaged over the tabulated view elevations."""
+    light size (its error against light size), each averaged over the tabulated view elevations.  Naive
+    and Toksvig solid: exact integrals; dashed (columns mse_naive_ltc, mse_toksvig_ltc, when present):
+    as a renderer shades them, with the isotropic LTC."""
     methods = [("mfkit", "mfkit lobes", "C3"), ("naive", "naive (mean normal)", "C0"),
                ("toksvig", "Toksvig", "C1"), ("leadr", "LEADR", "C2")]
     if d.has("mse_mfkit_two_lobes"):  # prefilter_eval_data.sh: the two-lobe table (--lobes 2)
         methods.insert(1, ("mfkit_two_lobes", "mfkit, two lobes", "C4"))
+    # naive and Toksvig as a renderer shades them (the isotropic LTC at the mean normal), dashed
+    extra = [(k, lab, c) for k, lab, c in (("naive_ltc", "naive, LTC-shaded", "C0"), ("toksvig_ltc", "Toksvig, LTC-shaded",
+                                                                                      "C1")) if d.has("mse_" + k)]
+    methods = methods + extra
+    style = {k: "o--" for k, _, _ in extra}
     levels = np.unique(d["level"])
     lights = np.unique(d["light_half_side"])
     fig, axes = new_figure(2, 1, width=5.6)
@@ -822,7 +829,7 @@ def plot_prefilter_eval(d, out_dir, made):
     mid = lights[len(lights) // 2]
     for key, label, colour in methods:
         ys = [np.mean(d["mse_" + key][(d["level"] == k) & (d["light_half_side"] == mid)]) for k in levels]
-        ax.plot(levels, np.maximum(ys, 1e-12), "o-", color=colour, label=label)
+        ax.plot(levels, np.maximum(ys, 1e-12), style.get(key, "o-"), color=colour, label=label)
     ax.set_yscale("log")
     ax.set_xlabel("MIP level (footprint 2^k x 2^k texels)")
     ax.set_ylabel("MSE vs Monte Carlo truth (mean over elevations)")
@@ -832,7 +839,7 @@ def plot_prefilter_eval(d, out_dir, made):
     ax = axes[0][1]
     for key, label, colour in methods:
         ys = [np.mean(d["mse_" + key][d["light_half_side"] == h]) for h in lights]
-        ax.plot(lights, np.maximum(ys, 1e-12), "o-", color=colour, label=label)
+        ax.plot(lights, np.maximum(ys, 1e-12), style.get(key, "o-"), color=colour, label=label)
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("light half side (square at distance 1)")

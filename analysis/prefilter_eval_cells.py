@@ -7,7 +7,9 @@ Two readings of "mfkit beats every baseline in mean squared error at every level
   per cell   cells won per level, and the cells lost (light, elevation, the baseline that beat it);
   per level  the level's mean MSE (over its lights and elevations) of mfkit and of each baseline.
 Both against the Monte Carlo truth (mse_<method>) and against the thesis' per-texel LTC truth
-(mse_ltc_<method>).  Markdown tables on stdout; standard library only."""
+(mse_ltc_<method>); then, when the summary has them, against naive and Toksvig as a renderer shades them
+(mse_naive_ltc, mse_toksvig_ltc: the isotropic LTC at the mean normal).  Markdown tables on stdout;
+standard library only."""
 import csv
 import gzip
 import sys
@@ -63,6 +65,25 @@ def main(argv):
                 k, *(fmt(mean[m]) for m in METHODS),
                 "yes" if all(mean["mfkit"] < mean[b] for b in BASELINES) else "no",
                 len(rs) - len(lost), len(rs), lost_text))
+    # the baselines as a renderer shades them (prefilter-eval's naive_ltc and toksvig_ltc: the isotropic
+    # LTC at the mean normal), when the summary has them
+    if {"mse_naive_ltc", "mse_toksvig_ltc"} <= set(rows[0]):
+        rend = ("naive_ltc", "toksvig_ltc")
+        print("\nAgainst the Monte Carlo truth, the baselines shaded as a renderer does (isotropic LTC at the mean "
+              "normal; mse_naive_ltc, mse_toksvig_ltc):\n")
+        # with the two-lobe columns of prefilter_eval_data.sh, the two-lobe table's reading too
+        ours = ("mfkit", "mfkit_two_lobes") if "mse_mfkit_two_lobes" in rows[0] else ("mfkit",)
+        print("| level | %s | naive, LTC | Toksvig, LTC | %s |" % (" | ".join(ours), " | ".join(
+            "%s: level mean best, cells won" % o for o in ours)))
+        print("|---" * (3 + 2 * len(ours)) + "|")
+        for k in levels:
+            rs = [r for r in rows if int(r["level"]) == k]
+            mean = {m: sum(float(r["mse_" + m]) for r in rs) / len(rs) for m in ours + rend}
+            verdict = []
+            for o in ours:
+                won = sum(all(float(r["mse_" + o]) < float(r["mse_" + b]) for b in rend) for r in rs)
+                verdict.append("%s, %d / %d" % ("yes" if all(mean[o] < mean[b] for b in rend) else "no", won, len(rs)))
+            print("| %d | %s | %s |" % (k, " | ".join(fmt(mean[m]) for m in ours + rend), " | ".join(verdict)))
     return 0
 
 

@@ -6,7 +6,9 @@
 # side 0.05, 0.2, 0.5, 4096 Monte Carlo points per record, seed 1); the per level / light / elevation
 # summary (mean squared and relative RMS error of mfkit's lobes, naive, Toksvig and LEADR against both
 # truths: the Monte Carlo one (mse_*, relrms_*) and the thesis' per-texel LTC shading (mean_truth_ltc,
-# mse_truth_ltc, mse_ltc_*, relrms_ltc_*), with the prefilter's fitter revision in the provenance line,
+# mse_truth_ltc, mse_ltc_*, relrms_ltc_*), then naive and Toksvig as a renderer shades them (the isotropic LTC at
+# the mean normal: mse_naive_ltc, relrms_naive_ltc, mse_ltc_naive_ltc, relrms_ltc_naive_ltc and the same for
+# toksvig_ltc), with the prefilter's fitter revision in the provenance line,
 # gzip -n -9.  The prefilter runs with --lobes 2 and the evaluation twice: the last three columns,
 # mse_mfkit_two_lobes, relrms_mfkit_two_lobes and mse_unbiased_mfkit_two_lobes, are mfkit's against the
 # Monte Carlo truth with the two-lobe table (prefilter-eval --lobes 2: the same records, mfkit's shading

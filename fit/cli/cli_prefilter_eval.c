@@ -27,7 +27,15 @@
  *            (mf_toksvig_beckmann_alpha, applied to GGX's alpha as renderers do);
  *   leadr    mfkit's LEADR specular [Dupuy 2013, Eq. 17], Fresnel 1: Gaussian slopes with the
  *            footprint's mean and covariance of the texel slopes (-n.x/n.z, -n.y/n.z) plus the base
- *            roughness as a Beckmann slope variance alpha^2/2 per axis.
+ *            roughness as a Beckmann slope variance alpha^2/2 per axis;
+ *   naive_ltc, toksvig_ltc  naive and Toksvig as a real-time renderer shades them under a polygonal
+ *            light: the isotropic LTC (the per-texel truth's table) at the normalised mean normal, at the
+ *            base's alpha and at Toksvig's alpha' (clamped to 1; without --ltc-table from a second table
+ *            of 16 roughness columns over [alpha, 1]): Nahmias 2022's own naive baseline [Sec. 4.1: "a
+ *            naive baseline that also use[s] LTC for area light integration"].  The exact naive and
+ *            Toksvig above are what those filters could give with an exact area-light integral; these are
+ *            what a renderer gets.  They are reported beside the others (records: the last two columns;
+ *            summary: mse_, relrms_, mse_ltc_, relrms_ltc_ of each, last) and have their own level line.
  *
  * A diffuse (Lambert) table (manifest base_brdf {"model": "lambert"}) gets its own methods:
  *   truth    (1/N) sum_q integral_light max(0, n_q.wi) / pi dwi over wi.z > 0: the diffuse mixture of
@@ -92,7 +100,8 @@ static const cli_opt k_opts[E_NOPTS] = {
     {.name = "--ltc-table", .metavar = "FILE", .kind = CLI_OPT_STRING,
      .def = "a 64-elevation column fitted here at the base's alpha",
      .help = "isotropic GGX LTC table (an mfkit table file or the reference CSV layout) for the per-texel LTC "
-             "truth (GGX tables only)"},
+             "truth and the baselines naive_ltc and toksvig_ltc (GGX tables only; without it, toksvig_ltc's "
+             "roughnesses from a second table fitted here, 16 columns from the base's alpha to 1)"},
     {.name = "--light-elevation-max", .metavar = "DEG", .kind = CLI_OPT_DOUBLE, .dlo = 0.0, .dhi = 90.0, .lo_open = 1,
      .def = "75",
      .help = "the lights' centres follow the view's mirror direction up to this elevation from the normal (90: "
@@ -110,14 +119,17 @@ static const cli_command k_eval_cmd = {
         "Shading error of the prefiltered lobes (magnitude x LTC integral over square lights) against the\n"
         "ground truth (the footprint average of the exact base-GGX integral, Monte Carlo with its standard\n"
         "error: light and BRDF samples, balance heuristic) and against the thesis' per-texel LTC shading,\n"
-        "beside the baselines naive (mean normal), Toksvig (mean normal, widened roughness) and LEADR.\n"
+        "beside the baselines naive (mean normal), Toksvig (mean normal, widened roughness) and LEADR, each\n"
+        "an exact integral, and naive and Toksvig as a renderer shades them under an area light (the isotropic\n"
+        "LTC at the mean normal: naive_ltc, toksvig_ltc; Nahmias 2022's naive baseline).\n"
         "A diffuse (Lambert) table (mfkit prefilter's DIR/diffuse, or --base lambert) is compared with the exact\n"
         "truth (the footprint average of each texel's Lambert integral over the light, in closed form), beside\n"
         "naive (Lambert at the mean normal) and LEADR's diffuse; its files have their own columns.\n"
         "Reads PREFILTER_DIR/prefilter.json, ltc_mip<k>.npy, magnitude_mip<k>.npy and the normal map (with\n"
         "--lobes 2 also those of PREFILTER_DIR/lobe_a and lobe_b, whose summed shading is mfkit's).\n"
-        "Prints one line per level: each method's mean MSE over the level's cells (light x elevation), the\n"
-        "cells where mfkit's lobes beat every baseline, and whether their level mean does.\n",
+        "Prints two lines per level: each method's mean MSE over the level's cells (light x elevation), the\n"
+        "cells where mfkit's lobes beat every baseline, and whether their level mean does; then the same\n"
+        "against naive_ltc and toksvig_ltc (GGX tables; a Lambert table has the first line only).\n",
     .opts = k_opts,
     .nopts = E_NOPTS,
     .epilog = "exit status: 0 success, 2 usage or input error, 3 I/O error\n",
@@ -189,11 +201,13 @@ static int parse_lights(const char *s, double *h, int *n)
 
 typedef struct pe_acc {
     double se2[5], sr[5], st, sse, cnt, se2l[4], stl, sll, un[4];
+    double re2[2], re2l[2]; /* naive_ltc, toksvig_ltc: squared errors against the truth and truth_ltc */
 } pe_acc;
 
 enum { M_MFKIT, M_NAIVE, M_TOKSVIG, M_LEADR, M_TRUTH_SE, M_N };
 static const char *const k_method[4] = {"mfkit", "naive", "toksvig", "leadr"};
 static const char *const k_method_lambert[3] = {"mfkit", "naive", "leadr"}; /* a Lambert table's methods */
+static const char *const k_rend[2] = {"naive_ltc", "toksvig_ltc"};           /* pe_rec.rend */
 
 /* The level's line on stdout: per method the level mean of the cells' MSE against the truth (GGX: Monte
  * Carlo; Lambert: exact)
@@ -226,8 +240,28 @@ static void print_level(int lev, int lambert, const pe_acc *acc, int ncell, char
         if (k > 0 && !(mean[0] < mean[k]))
             level_best = 0;
     }
-    snprintf(buf + o, o < bsz ? bsz - o : 0, " mfkit best in %d of %d cells (light x elevation), best level mean: %s\n",
-             won, ncell, level_best ? "yes" : "no");
+    o += (size_t)snprintf(buf + o, o < bsz ? bsz - o : 0,
+                          " mfkit best in %d of %d cells (light x elevation), best level mean: %s\n", won, ncell,
+                          level_best ? "yes" : "no");
+    if (lambert)
+        return;
+    /* the baselines as a renderer shades them (isotropic LTC): the same reading against naive_ltc and
+     * toksvig_ltc */
+    double rmean[2] = {0.0, 0.0};
+    won = 0;
+    for (int c = 0; c < ncell; ++c) {
+        int best = 1;
+        for (int k = 0; k < 2; ++k) {
+            rmean[k] += acc[c].re2[k] / acc[c].cnt / ncell;
+            if (!(acc[c].se2[0] < acc[c].re2[k]))
+                best = 0;
+        }
+        won += best;
+    }
+    snprintf(buf + o, o < bsz ? bsz - o : 0,
+             "level %d: the baselines shaded with the isotropic LTC as a renderer does: naive_ltc %.3g, toksvig_ltc "
+             "%.3g; mfkit best in %d of %d cells, best level mean: %s\n",
+             lev, rmean[0], rmean[1], won, ncell, mean[0] < rmean[0] && mean[0] < rmean[1] ? "yes" : "no");
 }
 
 /* One record: truth (MC), truth_ltc (per-texel LTC) and the four estimates; dse[k] the standard error of
@@ -235,12 +269,14 @@ static void print_level(int lev, int lambert, const pe_acc *acc, int ncell, char
  * differences, the two sharing the samples). */
 typedef struct pe_rec {
     double truth, se, truth_ltc, est[4], dse[4];
+    double rend[2]; /* naive_ltc, toksvig_ltc: the baselines as a renderer shades them (isotropic LTC) */
 } pe_rec;
 
-/* The per-texel LTC table and its field indices. */
+/* The per-texel LTC table and its field indices; wide: the table of toksvig_ltc (roughness from the
+ * base's alpha to 1; the same table as t with --ltc-table), wfield its field indices. */
 typedef struct pe_itab {
-    mf_table t;
-    int field[5];
+    mf_table t, wide;
+    int field[5], wfield[5], own_wide;
 } pe_itab;
 
 /* A record's view wo (in the xz plane at elevation theta), its light (a square of half side hside
@@ -317,6 +353,14 @@ static int eval_record(const mf_brdf_model *ggx, const pe_itab *itab, double alp
     if (len > 1.0)
         len = 1.0;
     double alpha_t = mf_toksvig_beckmann_alpha(len, alpha);
+    /* the baselines as a real-time renderer shades them under a polygonal light [Nahmias 2022, Sec. 4.1:
+     * "a naive baseline that also use[s] LTC for area light integration": the MIP-averaged normal shaded
+     * with the standard technique of Heitz et al. 2016]: the isotropic LTC of the per-texel truth at the
+     * normalised mean normal, at the base's alpha (naive_ltc) and at Toksvig's alpha', clamped to 1, the
+     * table's end (toksvig_ltc; the table interpolates between its roughness columns as a renderer's) */
+    mf_vec3 nb = mf_vec3_make(nbar[0], nbar[1], nbar[2]);
+    r->rend[0] = mf_prefilter_texel_ltc(&itab->t, itab->field, nb, alpha, wo, v, 4);
+    r->rend[1] = mf_prefilter_texel_ltc(&itab->wide, itab->wfield, nb, fmin(alpha_t, 1.0), wo, v, 4);
     mf_gaussian_slopes g;
     g.mean_x = sx / count, g.mean_y = sy / count;
     g.var_x = sxx / count - g.mean_x * g.mean_x + 0.5 * alpha * alpha;
@@ -372,9 +416,9 @@ static int eval_record(const mf_brdf_model *ggx, const pe_itab *itab, double alp
     r->est[M_NAIVE] = s[1] / samples;
     r->est[M_TOKSVIG] = s[2] / samples;
     r->est[M_LEADR] = s[3] / samples;
-    for (int k = 0; k < 4; ++k)
-        if (!isfinite(r->est[k]) || !isfinite(r->truth) || !isfinite(r->truth_ltc)) {
-            snprintf(msg, msz, "a non-finite shading value (%s)", k_method[k]);
+    for (int k = 0; k < 6; ++k)
+        if (!isfinite(k < 4 ? r->est[k] : r->rend[k - 4]) || !isfinite(r->truth) || !isfinite(r->truth_ltc)) {
+            snprintf(msg, msz, "a non-finite shading value (%s)", k < 4 ? k_method[k] : k_rend[k - 4]);
             return CLI_EXIT_IO;
         }
     return 0;
@@ -496,6 +540,37 @@ static int pe_itab_make(pe_itab *it, const char *path, const mf_brdf_model *ggx,
         mf_table_free(&it->t);
         return CLI_EXIT_USAGE;
     }
+    /* toksvig_ltc's table: a given table covers every roughness; the fitted column does not, so a second
+     * table of 16 roughness columns from the base's alpha to 1 (r = sqrt(alpha) evenly spaced: 0.046 apart at
+     * alpha 0.1, about three times a 64-column table's spacing; about 1.4 s of CPU) */
+    if (path) {
+        it->wide = it->t;
+        memcpy(it->wfield, it->field, sizeof it->field);
+        return 0;
+    }
+    mf_ltcfit_options o;
+    mf_ltcfit_options_default(&o);
+    o.n_r = 16, o.n_u = 64, o.threads = 2;
+    o.r_lo = sqrt(alpha) < 1.0 - 1e-3 ? sqrt(alpha) : 1.0 - 1e-3, o.r_hi = 1.0;
+    mf_ltcfit_result res;
+    memset(&res, 0, sizeof res);
+    st = mf_ltcfit_table(ggx, &o, &it->wide, &res, msg, msz);
+    int interrupted = res.interrupted;
+    mf_ltcfit_result_free(&res);
+    if (st == MF_OK && interrupted)
+        st = MF_ERR_INTERNAL;
+    for (int k = 0; k < 5 && st == MF_OK; ++k)
+        if ((it->wfield[k] = mf_table_field(&it->wide, mf_ltc_table_fields[k])) < 0)
+            st = MF_ERR_INTERNAL;
+    if (st != MF_OK) {
+        char m2[1200];
+        snprintf(m2, sizeof m2, "%s", msg[0] ? msg : mf_status_str(st));
+        snprintf(msg, msz, "the toksvig_ltc table (fitted): %s", m2);
+        mf_table_free(&it->t);
+        mf_table_free(&it->wide);
+        return CLI_EXIT_IO;
+    }
+    it->own_wide = 1;
     return 0;
 }
 
@@ -676,7 +751,7 @@ static int pe_main(int argc, char **argv)
         fprintf(fs, ",mean_leadr_se\n");
     } else {
         fprintf(fr, "level,row,col,i_theta,theta,i_phi,phi,light_half_side,truth,truth_se,mfkit,naive,toksvig,leadr,"
-                    "truth_ltc,se_diff_naive,se_diff_toksvig,se_diff_leadr\n");
+                    "truth_ltc,se_diff_naive,se_diff_toksvig,se_diff_leadr,naive_ltc,toksvig_ltc\n");
         fprintf(fs, "level,light_half_side,i_theta,theta,records,mean_truth,mean_truth_se");
         for (int k = 0; k < 4; ++k)
             fprintf(fs, ",mse_%s,relrms_%s", k_method[k], k_method[k]);
@@ -685,6 +760,8 @@ static int pe_main(int argc, char **argv)
             fprintf(fs, ",mse_ltc_%s,relrms_ltc_%s", k_method[k], k_method[k]);
         for (int k = 0; k < 4; ++k)
             fprintf(fs, ",mse_unbiased_%s", k_method[k]);
+        for (int k = 0; k < 2; ++k)
+            fprintf(fs, ",mse_%s,relrms_%s,mse_ltc_%s,relrms_ltc_%s", k_rend[k], k_rend[k], k_rend[k], k_rend[k]);
         fprintf(fs, "\n");
     }
 
@@ -778,9 +855,13 @@ static int pe_main(int argc, char **argv)
                         }
                         fprintf(fr,
                                 "%d,%d,%d,%d,%.17g,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,"
-                                "%.17g,%.17g,%.17g\n",
+                                "%.17g,%.17g,%.17g,%.17g,%.17g\n",
                                 lev, row, col, a, theta, b, phi, hs[l], r.truth, r.se, r.est[0], r.est[1], r.est[2],
-                                r.est[3], r.truth_ltc, r.dse[1], r.dse[2], r.dse[3]);
+                                r.est[3], r.truth_ltc, r.dse[1], r.dse[2], r.dse[3], r.rend[0], r.rend[1]);
+                        for (int k = 0; k < 2; ++k) {
+                            A->re2[k] += (r.rend[k] - r.truth) * (r.rend[k] - r.truth);
+                            A->re2l[k] += (r.rend[k] - r.truth_ltc) * (r.rend[k] - r.truth_ltc);
+                        }
                         for (int k = 0; k < 4; ++k) {
                             double e2 = (r.est[k] - r.truth) * (r.est[k] - r.truth);
                             A->se2[k] += e2, A->un[k] += e2 - r.dse[k] * r.dse[k];
@@ -819,6 +900,11 @@ static int pe_main(int argc, char **argv)
                 }
                 for (int k = 0; k < 4; ++k)
                     fprintf(fs, ",%.17g", A->un[k] / A->cnt);
+                for (int k = 0; k < 2; ++k) {
+                    double mse = A->re2[k] / A->cnt, msel = A->re2l[k] / A->cnt;
+                    fprintf(fs, ",%.17g,%.17g,%.17g,%.17g", mse, mt > 0.0 ? sqrt(mse) / mt : 0.0, msel,
+                            mtl > 0.0 ? sqrt(msel) / mtl : 0.0);
+                }
                 fprintf(fs, "\n");
             }
         if (rc == 0)
@@ -844,8 +930,11 @@ done:
     free(acc), free(lm), free(mg), free(normals), free(foot);
     for (int k = 0; k < 2; ++k)
         free(tm[k]), free(tg[k]);
-    if (have_itab)
+    if (have_itab) {
         mf_table_free(&itab.t);
+        if (itab.own_wide)
+            mf_table_free(&itab.wide);
+    }
     mf_image_free(&img);
     mf_image_info_free(&info);
     if (rc == 0)
