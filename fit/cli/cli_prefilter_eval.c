@@ -499,6 +499,23 @@ static int eval_record_lambert(const mf_brdf_model *leadr, const double *nrm, in
     return 0;
 }
 
+/* An isotropic GGX LTC table of n_r roughness columns r in [r_lo, r_hi] (alpha = r^2) x 64 view elevations,
+ * fitted by mfkit's isotropic fitter on 2 threads (the fit does not depend on them). */
+static mf_status pe_fit_table(const mf_brdf_model *ggx, int n_r, double r_lo, double r_hi, mf_table *t, char *msg,
+                              size_t msz)
+{
+    mf_ltcfit_options o;
+    mf_ltcfit_options_default(&o);
+    o.n_r = n_r, o.n_u = 64, o.threads = 2;
+    o.r_lo = r_lo, o.r_hi = r_hi;
+    mf_ltcfit_result res;
+    memset(&res, 0, sizeof res);
+    mf_status st = mf_ltcfit_table(ggx, &o, t, &res, msg, msz);
+    int interrupted = res.interrupted;
+    mf_ltcfit_result_free(&res);
+    return st == MF_OK && interrupted ? MF_ERR_INTERNAL : st;
+}
+
 /* The isotropic LTC table of the per-texel truth: FILE, or (path NULL) a 2 x 64 table fitted by
  * mf_ltcfit_table whose first roughness texel is the base's alpha (the lookup lands on it exactly). */
 static int pe_itab_make(pe_itab *it, const char *path, const mf_brdf_model *ggx, double alpha, char *msg, size_t msz)
@@ -510,20 +527,9 @@ static int pe_itab_make(pe_itab *it, const char *path, const mf_brdf_model *ggx,
         st = mf_table_format_from_path(path) == MF_TABLE_FORMAT_CSV ? mf_ltc_reference_read_csv(path, &it->t, msg, msz)
                                                                      : mf_table_read(path, &it->t, NULL, msg, msz);
     } else {
-        mf_ltcfit_options o;
-        mf_ltcfit_options_default(&o);
         double r = sqrt(alpha);
-        o.n_r = 2, o.n_u = 64, o.threads = 2;
-        o.r_lo = r, o.r_hi = r + 1e-3;
-        if (o.r_hi > 1.0)
-            o.r_lo = 1.0 - 1e-3, o.r_hi = 1.0;
-        mf_ltcfit_result res;
-        memset(&res, 0, sizeof res);
-        st = mf_ltcfit_table(ggx, &o, &it->t, &res, msg, msz);
-        int interrupted = res.interrupted;
-        mf_ltcfit_result_free(&res);
-        if (st == MF_OK && interrupted)
-            st = MF_ERR_INTERNAL;
+        st = r + 1e-3 > 1.0 ? pe_fit_table(ggx, 2, 1.0 - 1e-3, 1.0, &it->t, msg, msz)
+                            : pe_fit_table(ggx, 2, r, r + 1e-3, &it->t, msg, msz);
     }
     if (st != MF_OK) {
         char m2[1200];
@@ -548,17 +554,7 @@ static int pe_itab_make(pe_itab *it, const char *path, const mf_brdf_model *ggx,
         memcpy(it->wfield, it->field, sizeof it->field);
         return 0;
     }
-    mf_ltcfit_options o;
-    mf_ltcfit_options_default(&o);
-    o.n_r = 16, o.n_u = 64, o.threads = 2;
-    o.r_lo = sqrt(alpha) < 1.0 - 1e-3 ? sqrt(alpha) : 1.0 - 1e-3, o.r_hi = 1.0;
-    mf_ltcfit_result res;
-    memset(&res, 0, sizeof res);
-    st = mf_ltcfit_table(ggx, &o, &it->wide, &res, msg, msz);
-    int interrupted = res.interrupted;
-    mf_ltcfit_result_free(&res);
-    if (st == MF_OK && interrupted)
-        st = MF_ERR_INTERNAL;
+    st = pe_fit_table(ggx, 16, sqrt(alpha) < 1.0 - 1e-3 ? sqrt(alpha) : 1.0 - 1e-3, 1.0, &it->wide, msg, msz);
     for (int k = 0; k < 5 && st == MF_OK; ++k)
         if ((it->wfield[k] = mf_table_field(&it->wide, mf_ltc_table_fields[k])) < 0)
             st = MF_ERR_INTERNAL;
