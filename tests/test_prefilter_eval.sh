@@ -18,9 +18,10 @@
 #   the MC truth's integrand here).  --ltc-table with the reference CSV runs; an unreadable table is refused.
 # - The baselines as a renderer shades them (naive_ltc, toksvig_ltc: the isotropic LTC at the mean normal):
 #   here the mean normal is each texel's, so naive_ltc is truth_ltc (the same lookup; 1e-14 relative: the
-#   footprint average of up to 16 equal terms rounds by up to 16 ulps, 3.6e-15; measured 1.7e-15) and toksvig_ltc is naive_ltc (alpha' = alpha
-#   up to the rounding of the mean normal's length, 1e-16, which moves the lookup by 1e-14 of a roughness
-#   column; its table's first column is the same fit as naive's: 1e-12 relative); the summary's
+#   footprint average of up to 16 equal terms rounds by up to 16 ulps, 3.6e-15; measured 1.7e-15) and
+#   toksvig_ltc is naive_ltc (alpha' = alpha up to the rounding of the mean normal's length, 1e-16, which
+#   moves the lookup by about 3e-14 of a roughness column; its table's first column is the same fit as
+#   naive's: 1e-12 relative); the summary's
 #   mse_ltc_naive_ltc is 0 to that rounding and mse_naive_ltc equals mse_truth_ltc (1e-9 relative).  The
 #   same with --ltc-table (one table for both).
 # - Refusals: one line, non-zero exit, no output directory.
@@ -196,7 +197,7 @@ for lev, line in zip(levels, rlines):
     if (int(n.group(2)), int(n.group(3)), n.group(4)) != (won, len(cells), best):
         out.append("level %d: renderer line %s of %s cells, %s; the file: %d of %d, %s" % (lev, n.group(2), n.group(3),
                    n.group(4), won, len(cells), best))
-# toksvig_ltc is Toksvig's widened lobe: on the groove's levels 2-4 (both facets: alpha' about 0.75), seen
+# toksvig_ltc is Toksvig's widened lobe: on the groove's levels 2-4 (facets 30 deg off: alpha' 0.57), seen
 # along the normal (i_theta 0), it is within the isotropic LTC's own error of the exact Toksvig
 # (relative RMS measured 0.012 to 0.033; bound 0.1); shaded at the base's alpha instead it would read
 # naive's lobe, about 7 times Toksvig's shading there
