@@ -516,6 +516,14 @@ static mf_status pe_fit_table(const mf_brdf_model *ggx, int n_r, double r_lo, do
     return st == MF_OK && interrupted ? MF_ERR_INTERNAL : st;
 }
 
+/* Prefixes msg (the failed step's own message, or st's text when it left none) with "<what><name>: ". */
+static void pe_table_error(char *msg, size_t msz, const char *what, const char *name, mf_status st)
+{
+    char m2[1200];
+    snprintf(m2, sizeof m2, "%s", msg[0] ? msg : mf_status_str(st));
+    snprintf(msg, msz, "%s%s: %s", what, name, m2);
+}
+
 /* The isotropic LTC table of the per-texel truth: FILE, or (path NULL) a 2 x 64 table fitted by
  * mf_ltcfit_table whose first roughness texel is the base's alpha (the lookup lands on it exactly). */
 static int pe_itab_make(pe_itab *it, const char *path, const mf_brdf_model *ggx, double alpha, char *msg, size_t msz)
@@ -532,9 +540,7 @@ static int pe_itab_make(pe_itab *it, const char *path, const mf_brdf_model *ggx,
                             : pe_fit_table(ggx, 2, r, r + 1e-3, &it->t, msg, msz);
     }
     if (st != MF_OK) {
-        char m2[1200];
-        snprintf(m2, sizeof m2, "%s", msg[0] ? msg : mf_status_str(st));
-        snprintf(msg, msz, "--ltc-table %s: %s", path ? path : "(fitted)", m2);
+        pe_table_error(msg, msz, "--ltc-table ", path ? path : "(fitted)", st);
         return CLI_EXIT_IO;
     }
     int ok = it->t.naxes == 2 && it->t.axes[0].mapping == MF_AXIS_SQUARE &&
@@ -559,9 +565,7 @@ static int pe_itab_make(pe_itab *it, const char *path, const mf_brdf_model *ggx,
         if ((it->wfield[k] = mf_table_field(&it->wide, mf_ltc_table_fields[k])) < 0)
             st = MF_ERR_INTERNAL;
     if (st != MF_OK) {
-        char m2[1200];
-        snprintf(m2, sizeof m2, "%s", msg[0] ? msg : mf_status_str(st));
-        snprintf(msg, msz, "the toksvig_ltc table (fitted): %s", m2);
+        pe_table_error(msg, msz, "the toksvig_ltc table ", "(fitted)", st);
         mf_table_free(&it->t);
         mf_table_free(&it->wide);
         return CLI_EXIT_IO;

@@ -59,9 +59,6 @@ static void gate_lights(double theta, mf_polygon *out)
     }
 }
 
-/* magnitude * the LTC integral of each gate light, summed over the entry's nl lobes (9 floats of m and
- * one magnitude each: two for a two-lobe table, mf_prefilter_gate_stream_set_lobes); NAN where a
- * matrix is not invertible. */
 static int gate_ltc(const float *m9, mf_ltc *ltc) /* 1 when the row-major M is invertible */
 {
     mf_mat3 m;
@@ -70,6 +67,9 @@ static int gate_ltc(const float *m9, mf_ltc *ltc) /* 1 when the row-major M is i
     return mf_ltc_init(ltc, m) == MF_OK;
 }
 
+/* magnitude * the LTC integral of each gate light, summed over the entry's nl lobes (9 floats of m and
+ * one magnitude each: two for a two-lobe table, mf_prefilter_gate_stream_set_lobes); NAN where a
+ * matrix is not invertible. */
 static void gate_shade(const float *m9, const float *mag, int nl, const mf_polygon *lights, double *s)
 {
     for (int k = 0; k < GATE_NLIGHTS; ++k)
