@@ -17,6 +17,7 @@
 #include "mfkit/fit/mf_ltcfit_aniso.h"
 
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
@@ -685,9 +686,58 @@ static void test_gradient_written_out(void)
     CHECK(mf_ltcfit_aniso_gradient_compare(bad, v3, 3, &dv, &dg) == -1);
 }
 
+/* A fit reads only memory it has written.  The proximal residual of a fit without a warm start once read
+ * its unset centre (0 times it: NaN when the heap held a NaN there), so the lobe depended on what the
+ * process had freed before; the prefilter's tables then changed with the thread count on a 128 x 128
+ * map.  Here the heap is filled with NaN bytes (0xff) or with zeros and freed (several blocks up to
+ * just under the allocator's mmap threshold, so the fit's own blocks are carved from that memory), then
+ * the same entry is fitted from the closed-form start, by the one-entry API and by the prefilter's
+ * path: the lobes must be the same bits. */
+/* memset through a volatile pointer: the stores into blocks about to be freed are not dropped */
+static void *(*volatile poison_fill)(void *, int, size_t) = memset;
+
+static void test_heap_history(void)
+{
+    mf_ltcfit_aniso_options o;
+    mf_ltcfit_aniso_options_default(&o);
+    o.samples = 1024;
+    mf_brdf_params prm = {0.1, 0.1};
+    mf_ltcfit_aniso_entry e[2][2];
+    mf_status st[2][2];
+    for (int k = 0; k < 2; ++k) {
+        /* glibc serves blocks above its mmap threshold (128 KB at first) with fresh zero pages, and raises
+         * the threshold to the size of an mmap'ed block freed: a freed 8 MB block lets the blocks below
+         * come from the heap, as they do in a long run */
+        void *volatile big = malloc((size_t)8 << 20);
+        free(big);
+        enum { NB = 8 };
+        void *volatile blk[NB];
+        for (int b = 0; b < NB; ++b) {
+            size_t sz = (size_t)1 << 20; /* 8 blocks of 1 MB */
+            blk[b] = malloc(sz);
+            if (blk[b])
+                poison_fill(blk[b], k ? 0x00 : 0xff, sz);
+        }
+        for (int b = NB - 1; b >= 0; --b)
+            free(blk[b]);
+        st[k][0] = mf_ltcfit_aniso_entry_fit_general(ggx(), prm, 0.7, 0.4, 0.9, 0.0, NULL, &o, &e[k][0]);
+        st[k][1] = mf_ltcfit_aniso_entry_fit_mirrored(ggx(), prm, 0.7, 0, 0.9, 0.0, NULL, NULL, &o, &e[k][1]);
+    }
+    for (int q = 0; q < 2; ++q) {
+        int same = st[0][q] == MF_OK && st[1][q] == MF_OK && !memcmp(e[0][q].m, e[1][q].m, sizeof e[0][q].m) &&
+                   e[0][q].iterations == e[1][q].iterations;
+        if (!same)
+            printf("heap history, %s: after NaN bytes m00 %.17g (%d iterations), after zeros %.17g (%d)\n",
+                   q ? "the prefilter's path" : "one-entry fit", e[0][q].m[0], e[0][q].iterations, e[1][q].m[0],
+                   e[1][q].iterations);
+        CHECK(same);
+    }
+}
+
 int main(void)
 {
     test_gradient_written_out();
+    test_heap_history();
     test_patterns();
     test_threads();
     test_resume();

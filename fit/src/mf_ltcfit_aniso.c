@@ -1404,8 +1404,10 @@ static int residual_fn(void *user, const double *p, double *res, double *jac)
                 jac[NP * k + j] = (mag * g[j] + (t->hmin > 0.0 ? e * dmag[j] : 0.0)) * t->inv_weight[k];
     }
     for (int i = 0; i < NP; ++i) {
+        /* without a proximal centre (prox 0) prox_at is not set: it is not read (0 times an unset value was
+         * NaN when the memory held one, and the solve then depended on the heap's history) */
         double w = t->prox > 0.0 ? (is_scale(i) ? t->prox / t->prox_at[i] : t->prox) : 0.0;
-        res[t->k + i] = w * (p[i] - t->prox_at[i]);
+        res[t->k + i] = t->prox > 0.0 ? w * (p[i] - t->prox_at[i]) : 0.0;
         if (jac)
             for (int j = 0; j < NP; ++j)
                 jac[NP * (t->k + i) + j] = j == i ? w : 0.0;

@@ -121,8 +121,11 @@ extern "C" {
 
 #define MF_PREFILTER_COS_MIN 0.001
 /* Names the fitted values: bump it whenever they change (objective, starts, constants), so that a
- * resumed `mfkit prefilter` refuses tiles of another revision. */
-#define MF_PREFILTER_REVISION 11
+ * resumed `mfkit prefilter` refuses tiles of another revision.  12: a fit without a warm start no
+ * longer reads its unset proximal centre (mf_ltcfit_aniso.c, residual_fn), which made such a fit stop
+ * at its start, unconverged, when the heap held a NaN there; the lobes are revision 11's wherever
+ * revision 11's were reproducible (docs/prefilter.md, "Fitter revision 12"). */
+#define MF_PREFILTER_REVISION 12
 #define MF_PREFILTER_ALBEDO_N 64
 #define MF_PREFILTER_THETA_MAX (0.999 * 0.5 * MF_PI)
 /* Footprints of at least MF_PREFILTER_CLUSTER_MIN texels are fitted to a clustered mixture: cells
