@@ -545,6 +545,81 @@ static void test_two_lobes(void)
         mf_prefilter_levels_free(h[k], nh[k]), mf_prefilter_levels_free(c[k], ncst[k]);
 }
 
+/* options.reuse: a footprint whose fit inputs equal, bit for bit, those of a footprint fitted before in
+ * the same call gets a copy of its lobes.  The copies must be the bits its own fits give: on a 16 x 16 map
+ * made of one 8 x 8 patch of random normals repeated 2 x 2 (its first 2 x 2 block one normal: a uniform
+ * footprint; the level-3 footprints, 64 texels, are clustered), every level's matrices, magnitudes,
+ * albedos and fit statistics equal those of a run without reuse, for the one-lobe table, both halves and
+ * the Lambert table, with 1 and 2 threads.  With one thread the copies are exactly the repeats: per
+ * level the footprints less the patch's own (64 - 16, 16 - 4, 4 - 1, 1 - 1), times the views. */
+static void test_reuse(void)
+{
+    double patch[8 * 8 * 3], n[16 * 16 * 3];
+    random_normals(patch, 64, 0.6, 11);
+    for (int t = 1; t < 4; ++t) { /* the 2 x 2 block at the patch's corner: texels 0, 1, 8, 9 */
+        int q = t == 1 ? 1 : t == 2 ? 8 : 9;
+        memcpy(patch + 3 * q, patch, sizeof(double) * 3);
+    }
+    for (int y = 0; y < 16; ++y)
+        for (int x = 0; x < 16; ++x)
+            memcpy(n + 3 * (y * 16 + x), patch + 3 * ((y % 8) * 8 + x % 8), sizeof(double) * 3);
+    char msg[256];
+    for (int run = 0; run < 4; ++run) {
+        mf_prefilter_options o;
+        if (run == 3)
+            mf_prefilter_options_default_diffuse(&o);
+        else
+            mf_prefilter_options_default(&o), o.lobe = run;
+        CHECK(o.reuse == 1);
+        o.n_theta = 2, o.n_phi = 2, o.samples = 256, o.keep_albedo = 1;
+        int nv = o.n_theta * o.n_phi;
+        mf_prefilter_level *r[3];
+        int nr[3];
+        for (int k = 0; k < 3; ++k) { /* 0: no reuse; 1: reuse, 1 thread; 2: reuse, 2 threads */
+            o.reuse = k > 0;
+            o.threads = k == 2 ? 2 : 1;
+            CHECK(mf_prefilter_run(n, 16, 16, &o, &r[k], &nr[k], msg, sizeof msg) == MF_OK && nr[k] == 4);
+        }
+        long copies = 0;
+        for (int l = 0; l < 4; ++l) {
+            const mf_prefilter_level *a = &r[0][l];
+            size_t cnt = (size_t)a->width * a->height * nv;
+            CHECK(a->reused == 0);
+            for (int k = 1; k < 3; ++k) {
+                const mf_prefilter_level *b = &r[k][l];
+                int same = !memcmp(a->m, b->m, 9 * cnt * sizeof(float)) &&
+                           !memcmp(a->magnitude, b->magnitude, cnt * sizeof(float)) &&
+                           !memcmp(a->albedo, b->albedo, cnt * sizeof(float)) && a->iterations == b->iterations &&
+                           a->not_converged == b->not_converged && a->lobes == b->lobes &&
+                           !memcmp(&a->worst_residual, &b->worst_residual, sizeof(double)) &&
+                           !memcmp(&a->worst_albedo_err, &b->worst_albedo_err, sizeof(double));
+                if (!same)
+                    printf("reuse: run %d (lobe %d, %s), level %d, %d thread(s): not the bits of the run without reuse\n",
+                           run, o.lobe, run == 3 ? "lambert" : "ggx", l + 1, k);
+                CHECK(same);
+            }
+            long want = ((long)a->width * a->height - (long)(a->width / 2 > 0 ? a->width / 2 : 1) *
+                                                         (a->height / 2 > 0 ? a->height / 2 : 1)) * nv;
+            if (run == 0 && r[1][l].reused != want)
+                printf("reuse: level %d: %ld lobes copied with one thread, expected %ld\n", l + 1, r[1][l].reused, want);
+            if (run == 0)
+                CHECK(r[1][l].reused == want);
+            copies += r[1][l].reused;
+        }
+        if (!(copies > 0))
+            printf("reuse: run %d copied no lobe\n", run);
+        CHECK(copies > 0);
+        for (int k = 0; k < 3; ++k)
+            mf_prefilter_levels_free(r[k], nr[k]);
+    }
+    mf_prefilter_options o;
+    mf_prefilter_options_default(&o);
+    o.reuse = 2;
+    mf_prefilter_level *e;
+    int ne;
+    CHECK(mf_prefilter_run(n, 16, 16, &o, &e, &ne, msg, sizeof msg) == MF_ERR_DOMAIN && strstr(msg, "reuse 2"));
+}
+
 int main(void)
 {
     test_constant();
@@ -555,5 +630,6 @@ int main(void)
     test_clusters();
     test_albedo_pyramid();
     test_two_lobes();
+    test_reuse();
     MF_TEST_MAIN_END();
 }

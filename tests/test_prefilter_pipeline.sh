@@ -21,6 +21,7 @@
 #     files and gate record;
 #   - --lobes 2 (the two-lobe tables DIR/lobe_a, DIR/lobe_b): the same bits across tilings, threads, runs
 #     stopped and resumed, and (under MPIEXEC) 2 ranks; the one-lobe table's bits unchanged;
+#   - identical footprints fitted once (the default): --no-reuse writes the same bits, the manifest included;
 #   - --base both (the default: specular table in DIR, diffuse in DIR/diffuse): stopped by --max-tiles
 #     in either table and rerun, it writes the same bits as an uninterrupted run, and the specular
 #     checkpoint stays until the diffuse table is written.
@@ -54,6 +55,14 @@ if [ -z "$mpiexec" ]; then
 "$mfkit" "${args[@]}" --tile 16 --out "$tmp/one" 2>"$tmp/one.log"; rc=$?
 ok '[ $rc -eq 0 ]' "one tile exits 0 (rc=$rc): $(tail -2 "$tmp/one.log")"
 ok 'same "$tmp/one" "$tmp/t4"' "--tile 4 and --tile 16 write the same bits"
+
+# identical footprints are fitted once (options.reuse, the default): the groove repeats every 4 texels, so
+# most footprints are copies; --no-reuse fits each and writes the same bits, the manifest included
+"$mfkit" "${args[@]}" --tile 16 --no-reuse --out "$tmp/noreuse" 2>"$tmp/noreuse.log"; rc=$?
+copied=$(sed -n 's/.*(\([0-9]*\) lobes copied from identical footprints.*/\1/p' "$tmp/one.log")
+ok '[ $rc -eq 0 ] && same "$tmp/one" "$tmp/noreuse" with-manifest' "--no-reuse writes the default run's bits (rc=$rc)"
+ok '[ "${copied:-0}" -gt 0 ] && grep -q "(0 lobes copied from identical footprints" "$tmp/noreuse.log"' \
+   "the default run copies lobes (${copied:-none}), --no-reuse none: $(tail -1 "$tmp/noreuse.log")"
 
 # --max-tiles: stop, keep the checkpoint, no output
 "$mfkit" "${args[@]}" --tile 4 --max-tiles 5 --out "$tmp/r" 2>"$tmp/r1.log"; rc=$?

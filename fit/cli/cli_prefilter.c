@@ -57,7 +57,7 @@ static const char *const k_green_names[] = {"up", "down", NULL};
 static const char *const k_encoding_names[] = {"auto", "unorm", "raw", NULL};
 static const char *const k_base_names[] = {"ggx", "lambert", "both", NULL};
 
-enum { P_OUT, P_ROUGHNESS, P_VIEWS, P_GREEN, P_ENCODING, P_TOLERANCE, P_THREADS, P_SAMPLES, P_TILE, P_MAX_TILES, P_BASE, P_NO_KEEP_ALBEDO, P_FORCE, P_DIFFUSE_VIEWS, P_QUIET, P_SEED, P_LOBES, P_NOPTS };
+enum { P_OUT, P_ROUGHNESS, P_VIEWS, P_GREEN, P_ENCODING, P_TOLERANCE, P_THREADS, P_SAMPLES, P_TILE, P_MAX_TILES, P_BASE, P_NO_KEEP_ALBEDO, P_FORCE, P_DIFFUSE_VIEWS, P_QUIET, P_SEED, P_LOBES, P_NO_REUSE, P_NOPTS };
 static const cli_opt k_opts[P_NOPTS] = {
     {.name = "--out", .metavar = "DIR", .kind = CLI_OPT_STRING, .required = 1,
      .help = "output directory (created if missing)"},
@@ -98,6 +98,9 @@ static const cli_opt k_opts[P_NOPTS] = {
      .help = "2: also two lobes per entry for the specular table, DIR/lobe_a and DIR/lobe_b (the 2-means halves "
              "of each footprint's normals; a renderer sums their shading), each a table of the same files "
              "(docs/prefilter.md, \"Two lobes per entry\"); about 2x the specular fitting time"},
+    {.name = "--no-reuse", .kind = CLI_OPT_FLAG,
+     .help = "fit every footprint, also those identical to one fitted before in the same tile (by default they "
+             "get a copy of its lobes: the same bits; docs/prefilter.md, \"Identical footprints are fitted once\")"},
 };
 static const cli_command k_prefilter_cmd = {
     .name = "prefilter",
@@ -327,10 +330,12 @@ static int pf_read_base(const char *dir, size_t nv, pf_base *ab)
     return 0;
 }
 
-/* Fits tile t and writes its file atomically.  Returns a CLI exit code (0 ok), message printed. */
+/* Fits tile t and writes its file atomically; *reused gets the count of its lobes copied from identical
+ * footprints (options.reuse).  Returns a CLI exit code (0 ok), message printed. */
 static int pf_run_tile(const double *normals, int W, int H, const mf_prefilter_options *o, const pf_tile *t,
-                       const pf_base *ab, const char *path, const char *input)
+                       const pf_base *ab, const char *path, const char *input, long *reused)
 {
+    *reused = 0;
     char msg[1024];
     size_t nv = (size_t)o->n_theta * o->n_phi;
     double *sub = malloc(sizeof(double) * 3 * (size_t)t->w * t->h);
@@ -424,6 +429,8 @@ static int pf_run_tile(const double *normals, int W, int H, const mf_prefilter_o
             ok = mf_io_atomic_commit(&a, msg, sizeof msg) == MF_OK;
         }
     }
+    for (int i = 0; i < nrec; ++i)
+        *reused += lv[t->first - 1 + i].reused;
     mf_prefilter_levels_free(lv, nl);
     for (int i = 0; i < nrec; ++i)
         free(ref[i]);
@@ -440,6 +447,7 @@ typedef struct {
     int blocks;
     const char *dir, *input;
     long *todo, ntodo, next, max_tiles;
+    long reused; /* lobes copied from identical footprints in the tiles fitted (options.reuse) */
     int rc, stopped;
     pthread_mutex_t lock;
 } pf_queue;
@@ -505,14 +513,14 @@ static void *pf_worker(void *arg)
             block_path(path, sizeof path, q->dir, k);
         else
             tile_path(path, sizeof path, q->dir, k);
+        long reused = 0;
         int r = q->blocks ? pf_run_block(q->normals, q->W, &q->o, q->ab, k, path, q->input)
-                          : pf_run_tile(q->normals, q->W, q->H, &q->o, &q->tiles[k], q->ab, path, q->input);
-        if (r) {
-            pthread_mutex_lock(&q->lock);
-            if (!q->rc)
-                q->rc = r;
-            pthread_mutex_unlock(&q->lock);
-        }
+                          : pf_run_tile(q->normals, q->W, q->H, &q->o, &q->tiles[k], q->ab, path, q->input, &reused);
+        pthread_mutex_lock(&q->lock);
+        if (r && !q->rc)
+            q->rc = r;
+        q->reused += reused;
+        pthread_mutex_unlock(&q->lock);
     }
 }
 
@@ -856,7 +864,7 @@ static int pf_pair_row(const char *pair, const pf_plan *P, int nv, int r, FILE *
 /* Streams the levels from the tile files row by row, in the gate's order (level l's row r right after
  * rows 2r, 2r + 1 of level l - 1: mf_prefilter_gate_stream_next), into the output files and the
  * gate, which holds a few rows per level; writes the manifest and snippets, commits all. */
-static int pf_assemble(const pf_assembly *A, double secs, long resumed)
+static int pf_assemble(const pf_assembly *A, double secs, long resumed, long reused)
 {
     const mf_prefilter_options *o = A->o;
     const char *dir = A->dir;
@@ -1399,9 +1407,11 @@ static int pf_assemble(const pf_assembly *A, double secs, long resumed)
         double aw = (double)(w1.tv_sec - w0.tv_sec) + 1e-9 * (double)(w1.tv_nsec - w0.tv_nsec);
         double ac = (double)(c1.tv_sec - c0.tv_sec) + 1e-9 * (double)(c1.tv_nsec - c0.tv_nsec);
         fprintf(stderr,
-                "mfkit prefilter: %ld lobes in %ld tiles (%ld resumed) on %d rank%s x %d thread%s, %.3f s fitting wall "
-                "(%.3f ms per lobe); assembly and gate %.3f s wall, %.3f s CPU (%.2f us per lobe)\n",
-                lobes, A->ntiles, resumed, A->ranks, A->ranks > 1 ? "s" : "", o->threads, o->threads > 1 ? "s" : "", secs,
+                "mfkit prefilter: %ld lobes in %ld tiles (%ld resumed) on %d rank%s x %d thread%s (%ld lobes copied from "
+                "identical footprints in the tiles this run fitted), %.3f s fitting wall (%.3f ms per lobe); assembly and gate %.3f s wall, %.3f s "
+                "CPU (%.2f us per lobe)\n",
+                lobes, A->ntiles, resumed, A->ranks, A->ranks > 1 ? "s" : "", o->threads, o->threads > 1 ? "s" : "", reused,
+                secs,
                 lobes ? 1e3 * secs / lobes : 0.0, aw, ac, lobes ? 1e6 * ac / lobes : 0.0);
     }
     mf_buf_free(&b);
@@ -1576,6 +1586,7 @@ static int pf_main(int argc, char **argv, const pf_mpi *mpi)
         else
             mf_prefilter_options_default(&o[t]);
         o[t].keep_albedo = !v[P_NO_KEEP_ALBEDO].set;
+        o[t].reuse = !v[P_NO_REUSE].set;
         if (!lambert && v[P_ROUGHNESS].set)
             o[t].alpha = v[P_ROUGHNESS].d;
         if (v[P_THREADS].set)
@@ -1831,6 +1842,7 @@ static int pf_table(const cli_val *v, const char *input, const char *dir, int la
     rc = pf_mpi_max(mpi, rc);
     stopped = pf_mpi_max(mpi, stopped);
     resumed = pf_mpi_sum(mpi, resumed);
+    long reused = pf_mpi_sum(mpi, q.reused);
     secs = pf_mpi_maxd(mpi, secs);
     if (!rc && stopped) {
         long done_tiles = 0;
@@ -1846,15 +1858,16 @@ static int pf_table(const cli_val *v, const char *input, const char *dir, int la
         goto done;
     }
     if (!rc && !assemble && mpi->rank == 0)
-        fprintf(stderr, "mfkit prefilter: %s: %ld tiles fitted (%ld resumed) in %.3f s wall; it is assembled after half b, "
-                        "whose assembly runs the two-lobe gate\n", dir, ntiles, resumed, secs);
+        fprintf(stderr, "mfkit prefilter: %s: %ld tiles fitted (%ld resumed) (%ld lobes copied from identical footprints) "
+                        "in %.3f s wall; it is assembled after half b, whose assembly runs the two-lobe gate\n",
+                dir, ntiles, resumed, reused, secs);
     if (rc || !assemble)
         goto done;
     if (mpi->rank == 0) {
         pf_assembly A = {dir, input, W, H, nl, T, &o, plans, ntiles, mpi->size, lambert, v[P_FORCE].set, normals, pair};
         if (prog.show)
             fprintf(stderr, "mfkit prefilter: %s: assembling the levels and running the gate\n", prog.what);
-        rc = pf_assemble(&A, secs, resumed);
+        rc = pf_assemble(&A, secs, resumed, reused);
         if (!rc && !keep_work)
             pf_remove_work(dir);
     }

@@ -1029,6 +1029,7 @@ void mf_prefilter_options_default(mf_prefilter_options *o)
     o->cluster_cell = MF_PREFILTER_CLUSTER_CELL;
     o->keep_albedo = 0;
     o->level1_shift = MF_PREFILTER_LEVEL1_SHIFT;
+    o->reuse = 1;
 }
 
 void mf_prefilter_options_default_diffuse(mf_prefilter_options *o)
@@ -1054,6 +1055,23 @@ void mf_prefilter_levels_free(mf_prefilter_level *levels, int nlevels)
     free(levels);
 }
 
+/* options.reuse: one footprint's stored entries as its fits produced them (what store was given), so that
+ * an identical footprint stores the same bits without fitting */
+typedef struct {
+    double m[9], lobe[MF_LTCFIT_ANISO_NPARAMS], residual;
+    int converged, iterations;
+} memo_entry;
+
+typedef struct memo_node {
+    struct memo_node *next;
+    uint64_t hash;
+    size_t nkey;      /* doubles in key */
+    double *key;      /* the fit's inputs, bit for bit (memo_key) */
+    memo_entry *ent;  /* per view */
+} memo_node;
+
+#define MEMO_BUCKETS 4096
+
 typedef struct {
     const double *normals;
     int width, height, nlevels;
@@ -1073,6 +1091,10 @@ typedef struct {
     char *msg;
     size_t msg_size;
     pthread_mutex_t lock;
+    /* options.reuse: the fitted footprints by their inputs (NULL: off), their bytes, under memo_lock */
+    memo_node **memo;
+    size_t memo_bytes;
+    pthread_mutex_t memo_lock;
 } pjob;
 
 static void set_error(pjob *j, mf_status st, const char *text)
@@ -1413,6 +1435,99 @@ static void store(pjob *j, mf_prefilter_level *lv, size_t idx, const double m[9]
         j->o->progress(j->o->progress_user, 1);
 }
 
+/* store, and the entry as given into rec[v] (rec NULL: not recorded; options.reuse) */
+static void keep(pjob *j, mf_prefilter_level *lv, size_t base_idx, int v, const double m[9], const double lobe[7],
+                 double alb, double err, const mf_ltcfit_aniso_entry *e, memo_entry *rec)
+{
+    store(j, lv, base_idx + (size_t)v, m, lobe, alb, err, e, 1);
+    if (rec) {
+        memcpy(rec[v].m, m, sizeof rec[v].m);
+        memcpy(rec[v].lobe, lobe, sizeof rec[v].lobe);
+        rec[v].residual = e->residual;
+        rec[v].converged = e->converged;
+        rec[v].iterations = e->iterations;
+    }
+}
+
+/* options.reuse.  A footprint's fits read only: the directions' count fo.samples, the half's share, the
+ * components (normals cn and weights cw, nc of them, in their order) and the albedos alb (value and error
+ * per view); the options are the call's.  Everything else in fit_footprint is computed from these (the
+ * mirror and half-turn symmetries, the mixtures, the starts and chains within the footprint), with no
+ * input from its place or from other footprints (the parent's lobes as starts are off:
+ * PREFILTER_PARENT_STARTS), and a fit reads only memory it has written (test_ltcfit_aniso,
+ * heap_history), so equal inputs give the same stored bits.  The key is those inputs as doubles,
+ * compared bit for bit. */
+static double *memo_key(int samples, double share, int nc, const double *cn, const double *cw, const double *alb,
+                        int nv, size_t *nkey)
+{
+    size_t n = 3 + 4 * (size_t)nc + 2 * (size_t)nv;
+    double *k = malloc(sizeof(double) * n);
+    if (!k)
+        return NULL;
+    k[0] = samples, k[1] = share, k[2] = nc;
+    memcpy(k + 3, cn, sizeof(double) * 3 * (size_t)nc);
+    memcpy(k + 3 + 3 * (size_t)nc, cw, sizeof(double) * (size_t)nc);
+    memcpy(k + 3 + 4 * (size_t)nc, alb, sizeof(double) * 2 * (size_t)nv);
+    *nkey = n;
+    return k;
+}
+
+static uint64_t memo_hash(const double *k, size_t n) /* FNV-1a over the bytes */
+{
+    const unsigned char *b = (const unsigned char *)k;
+    uint64_t h = 14695981039346656037ull;
+    for (size_t i = 0; i < n * sizeof(double); ++i)
+        h = (h ^ b[i]) * 1099511628211ull;
+    return h;
+}
+
+/* The entries of the footprint with this key, copied into out (nv), or 0 if none is kept. */
+static int memo_find(pjob *j, uint64_t h, const double *k, size_t n, memo_entry *out, int nv)
+{
+    int found = 0;
+    pthread_mutex_lock(&j->memo_lock);
+    for (const memo_node *q = j->memo[h % MEMO_BUCKETS]; q && !found; q = q->next)
+        if (q->hash == h && q->nkey == n && !memcmp(q->key, k, sizeof(double) * n)) {
+            memcpy(out, q->ent, sizeof(memo_entry) * (size_t)nv);
+            found = 1;
+        }
+    pthread_mutex_unlock(&j->memo_lock);
+    return found;
+}
+
+/* Keeps key k (n doubles) and ent (nv entries), taking both, unless the key is there already (another
+ * thread fitted the same footprint: the same bits) or the memory is spent; frees what it does not keep. */
+static void memo_add(pjob *j, uint64_t h, double *k, size_t n, memo_entry *ent, int nv)
+{
+    size_t bytes = sizeof(memo_node) + sizeof(double) * n + sizeof(memo_entry) * (size_t)nv;
+    memo_node *q = malloc(sizeof *q);
+    pthread_mutex_lock(&j->memo_lock);
+    int keep_it = q && j->memo_bytes + bytes <= MF_PREFILTER_REUSE_BYTES;
+    for (const memo_node *r = j->memo[h % MEMO_BUCKETS]; r && keep_it; r = r->next)
+        if (r->hash == h && r->nkey == n && !memcmp(r->key, k, sizeof(double) * n))
+            keep_it = 0;
+    if (keep_it) {
+        *q = (memo_node){j->memo[h % MEMO_BUCKETS], h, n, k, ent};
+        j->memo[h % MEMO_BUCKETS] = q;
+        j->memo_bytes += bytes;
+    }
+    pthread_mutex_unlock(&j->memo_lock);
+    if (!keep_it)
+        free(q), free(k), free(ent);
+}
+
+static void memo_free(pjob *j)
+{
+    for (int b = 0; j->memo && b < MEMO_BUCKETS; ++b)
+        for (memo_node *q = j->memo[b]; q;) {
+            memo_node *nx = q->next;
+            free(q->key), free(q->ent), free(q);
+            q = nx;
+        }
+    free(j->memo);
+    j->memo = NULL;
+}
+
 /* The early accept of the continuity rule: the solve from the previous azimuth's lobe is taken alone,
  * without the solves from the previous elevation's lobe and the closed-form start, when its RMS
  * residual is at most MF_PREFILTER_ACCEPT times that neighbour's own (stored) residual.  Measured with
@@ -1684,6 +1799,34 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
                 st = MF_ERR_NO_CONVERGENCE;
             }
     }
+    /* options.reuse: the entries of an identical footprint fitted before in this call, if one is kept
+     * (memo_key says why they are this footprint's own bits); otherwise rec records this one's */
+    memo_entry *rec = NULL;
+    double *mkey = NULL;
+    size_t nkey = 0;
+    uint64_t mhash = 0;
+    if (st == MF_OK && j->memo) {
+        rec = malloc(sizeof(memo_entry) * (size_t)nv);
+        mkey = rec ? memo_key(fo.samples, share, nc, cn, cw, alb, nv, &nkey) : NULL;
+        if (!mkey)
+            st = MF_ERR_ALLOC;
+        else if (mhash = memo_hash(mkey, nkey), memo_find(j, mhash, mkey, nkey, rec, nv)) {
+            for (int v = 0; v < nv; ++v) {
+                mf_ltcfit_aniso_entry e;
+                memset(&e, 0, sizeof e);
+                e.residual = rec[v].residual;
+                e.converged = rec[v].converged;
+                e.iterations = rec[v].iterations;
+                store(j, lv, base_idx + (size_t)v, rec[v].m, rec[v].lobe, share * alb[2 * v], share * alb[2 * v + 1],
+                      &e, 1);
+            }
+            pthread_mutex_lock(&j->lock);
+            lv->reused += nv;
+            pthread_mutex_unlock(&j->lock);
+            free(rec), free(mkey), free(tex), free(cn), free(cw), free(alb), free(res);
+            return MF_OK;
+        }
+    }
     free(tex);
     tex = NULL;
     if (st == MF_OK && nc < nfoot) { /* give the footprint-sized memory back */
@@ -1738,7 +1881,7 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
                         m[3 * r + 2] = t[3 * r + 2];
                     }
                     int v = b; /* i_theta = 0 */
-                    store(j, lv, base_idx + v, b ? m : e.m, e.lobe, share * alb[2 * v], share * alb[2 * v + 1], &e, 1);
+                    keep(j, lv, base_idx, v, b ? m : e.m, e.lobe, share * alb[2 * v], share * alb[2 * v + 1], &e, rec);
                 }
             }
             mf_prefilter_mix_free(&mix);
@@ -1756,8 +1899,8 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
                 double m[9];
                 for (int i = 0; i < 9; ++i)
                     m[i] = lv->m[9 * (base_idx + u) + i];
-                store(j, lv, base_idx + v, m, j->lobes[level - 1] + MF_LTCFIT_ANISO_NPARAMS * (base_idx + u),
-                      share * alb[2 * v], share * alb[2 * v + 1], &e0, 1);
+                keep(j, lv, base_idx, (int)v, m, j->lobes[level - 1] + MF_LTCFIT_ANISO_NPARAMS * (base_idx + u),
+                     share * alb[2 * v], share * alb[2 * v + 1], &e0, rec);
             }
             continue;
         }
@@ -1812,7 +1955,7 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
                 st = MF_ERR_INTERNAL;
                 break;
             }
-            store(j, lv, base_idx + v, e.m, e.lobe, share * alb[2 * v], share * alb[2 * v + 1], &e, 1);
+            keep(j, lv, base_idx, v, e.m, e.lobe, share * alb[2 * v], share * alb[2 * v + 1], &e, rec);
             res[v] = e.residual;
             prev = j->lobes[level - 1] + MF_LTCFIT_ANISO_NPARAMS * (base_idx + v);
         }
@@ -1821,6 +1964,10 @@ static mf_status fit_footprint(pjob *j, int level, int row, int col)
         mf_prefilter_mix_free(&mix);
     }
     free(tex), free(cn), free(cw), free(rn), free(rw), free(un), free(uw), free(alb), free(key), free(res);
+    if (rec && st == MF_OK)
+        memo_add(j, mhash, mkey, nkey, rec, nv); /* takes mkey and rec */
+    else
+        free(rec), free(mkey);
     return st;
 }
 
@@ -1989,6 +2136,8 @@ static mf_status check_run(const double *normals, int width, int height, const m
         return FAIL("level1_shift %d not in 0..8", o->level1_shift);
     if (o->lobe < 0 || o->lobe > 2)
         return FAIL("lobe %d not in 0..2", o->lobe);
+    if (o->reuse != 0 && o->reuse != 1)
+        return FAIL("reuse %d is neither 0 nor 1", o->reuse);
     if (!is_pow2(width) || !is_pow2(height) || (width == 1 && height == 1) || width > 4096 || height > 4096)
         return FAIL("map size %d x %d: width and height must be powers of two, 1..4096, not both 1", width, height);
     for (long t = 0; t < (long)width * height; ++t) {
@@ -2118,7 +2267,11 @@ mf_status mf_prefilter_run_tile(const double *normals, int width, int height, co
         j.msg = msg;
         j.msg_size = msg_size;
         pthread_mutex_init(&j.lock, NULL);
-        st = albedo_pyramid(&j, albedo_base, base_level, first_level);
+        pthread_mutex_init(&j.memo_lock, NULL);
+        if (o->reuse && !(j.memo = calloc(MEMO_BUCKETS, sizeof *j.memo)))
+            st = MF_ERR_ALLOC;
+        if (st == MF_OK)
+            st = albedo_pyramid(&j, albedo_base, base_level, first_level);
         /* coarse to fine: each level's fits read the parent level's lobes */
         for (int l = nl; l >= first_level && st == MF_OK; --l) {
             j.level = l;
@@ -2126,6 +2279,8 @@ mf_status mf_prefilter_run_tile(const double *normals, int width, int height, co
             free(lalb[l - 1]);
             lalb[l - 1] = NULL;
         }
+        memo_free(&j);
+        pthread_mutex_destroy(&j.memo_lock);
         pthread_mutex_destroy(&j.lock);
     }
     free(j.alb), free(j.uniq);

@@ -283,7 +283,21 @@ typedef struct mf_prefilter_options {
                             half's own mixture (its texels at equal weights).  A footprint with one distinct
                             normal has no split: half a is all of it, half b empty (M the identity,
                             magnitude and albedo 0).  docs/prefilter.md, "Two lobes per entry" */
+    int reuse;           /* 1 (the default): a footprint whose fit has exactly the inputs of one already
+                            fitted in the same call (its normals or clusters in the same order, their
+                            weights, its albedos, its half's share and its number of directions, all bit
+                            for bit) gets a copy of that footprint's lobes and fit statistics instead of
+                            its own fits, which would compute the same bits (a fit depends on nothing
+                            else: not on the footprint's place, nor on the other footprints).  Within one
+                            call (one tile of the pipeline), at most MF_PREFILTER_REUSE_BYTES of copies
+                            kept.  0: every footprint fitted.  The lobes, albedos, magnitudes and
+                            statistics are the same bits either way (tested); only the time differs.
+                            docs/prefilter.md, "Identical footprints are fitted once" */
 } mf_prefilter_options;
+
+/* The memory for the copies of options.reuse within one call: about 20 KB per distinct footprint at
+ * 8 x 16 views, so a default region tile (64 x 64 texels, 1,365 footprints) keeps all of its own. */
+#define MF_PREFILTER_REUSE_BYTES ((size_t)96 << 20)
 
 #define MF_PREFILTER_LIGHTS_LADDER 0
 #define MF_PREFILTER_LIGHTS_LOBE 1
@@ -303,6 +317,7 @@ typedef struct mf_prefilter_level {
     double worst_residual, worst_albedo_err;
     int not_converged;
     long iterations, lobes;
+    long reused; /* of lobes, those copied from an identical footprint (options.reuse); not in the files */
 } mf_prefilter_level;
 
 /* Fits every level >= 1 of a width x height map of unit normals (xyz per texel, rows from the
