@@ -16,7 +16,7 @@
 # own integrand (MSE 1e-32; asserted below to be under 1e-20 of the mean squared truth, which is what makes
 # the exception) and naive_ltc and toksvig_ltc are truth_ltc's (MSE 0: asserted the same way).  Nowhere else
 # is a baseline left out.
-# Margins, measured at fitter revision 11 (smallest first): the demo's level 1 against truth_ltc, mfkit 3.55e-3
+# Margins, measured at fitter revision 12 (smallest first): the demo's level 1 against truth_ltc, mfkit 3.55e-3
 # against the exact naive's 3.80e-3 (7 %; both lobe and truth_ltc are closed forms, so this margin carries no
 # Monte Carlo noise; naive's MSE includes the truth's noise, which only adds to it: 3.83e-3 at 1024 points);
 # then bump_16's level 4 with one lobe, mfkit 1.36e-3 against LEADR's 3.16e-3 under truth_ltc (2.3 times) and
